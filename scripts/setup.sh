@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# One-shot, idempotent set-up on a fresh Debian machine:
+#   1. Debian packages (SUNDIALS for the FMU, a C toolchain, CMake),
+#   2. a virtual environment .venv with the project installed (editable),
+#   3. the FMUs in build/fmu/.
+# Each step is skipped when nothing it depends on changed, so a second run takes seconds.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+
+log() { printf '[setup] %s\n' "$*" >&2; }
+
+# --- 1. Debian packages -------------------------------------------------------------------
+apt_pkgs=(libsundials-dev build-essential cmake zip)
+missing=()
+for p in "${apt_pkgs[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+# cmake may come from pip instead of apt; accept any cmake >= 3.16 on PATH.
+if [[ " ${missing[*]} " == *" cmake "* ]] && command -v cmake >/dev/null; then
+    missing=("${missing[@]/cmake}")
+fi
+missing=($(printf '%s\n' "${missing[@]}" | sed '/^$/d'))
+if ((${#missing[@]})); then
+    log "installing Debian packages: ${missing[*]}"
+    sudo_cmd=()
+    [[ $(id -u) -eq 0 ]] || sudo_cmd=(sudo)
+    export DEBIAN_FRONTEND=noninteractive
+    "${sudo_cmd[@]}" apt-get update -qq
+    "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# --- 2. Python environment ----------------------------------------------------------------
+py=${PYTHON:-python3}
+if [[ ! -x .venv/bin/python ]]; then
+    log "creating .venv"
+    "$py" -m venv .venv
+fi
+stamp=.venv/.installed-$(sha256sum pyproject.toml | cut -c1-16)
+if [[ ! -f $stamp ]]; then
+    log "installing the project and its dependencies into .venv"
+    .venv/bin/python -m pip install -q --upgrade pip
+    .venv/bin/python -m pip install -q -e ".[dev]"
+    rm -f .venv/.installed-*
+    touch "$stamp"
+fi
+
+# --- 3. FMUs ------------------------------------------------------------------------------
+# CMake rebuilds only what changed.
+if [[ ! -f build/fmu/CMakeCache.txt ]]; then
+    cmake -S fmu_src -B build/fmu -DCMAKE_BUILD_TYPE=Release >/dev/null
+fi
+cmake --build build/fmu -j 2 >/dev/null
+log "FMU ready: build/fmu/ImpactOscillator.fmu"
