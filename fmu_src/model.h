@@ -1,0 +1,117 @@
+/*
+ * ImpactOscillator: the physics interface.
+ *
+ * The model is the non-dimensional driven oscillator of Molenaar, de Weger & van de Water (2001),
+ * eqs (3), (5), (40), (53):
+ *
+ *     u'' + nu u' + Omega^2 (u + 1) [+ kappa^2 u in contact] = (1 + sigma) F_g cos(2 pi t + phi)
+ *
+ * with F_g, phi from (5) so that the wall-free periodic orbit grazes u = 0 at t = n for sigma = 0.
+ *
+ * Everything the model knows lives in model.c (parameters, derivatives, Jacobian, event
+ * indicators, event update, get/set); solver_cvode.c integrates it and fmi2_cs.c is the FMI glue.
+ * Time inside the model is *local*: tau = t - origin with an integer origin, so the forcing
+ * phase cos(2 pi tau + phi) keeps full precision after 10^6 periods.
+ */
+#ifndef IMPACT_MODEL_H
+#define IMPACT_MODEL_H
+
+#include <stddef.h>
+
+#define MODEL_IDENTIFIER ImpactOscillator
+#define MODEL_GUID "{6c1f8a52-3d0e-4b8e-9a57-1e0f0b7c2a11}"
+
+/* Value references: the names in modelDescription.xml are the interface, these numbers its
+ * implementation. Keep both in step. */
+typedef enum {
+    VR_NU = 0,
+    VR_OMEGA = 1,
+    VR_SIGMA = 2,
+    VR_R = 3,
+    VR_GAMMA = 4,
+    VR_WALL = 5,
+    VR_U0 = 6,
+    VR_V0 = 7,
+    VR_RTOL = 8,
+    VR_ATOL = 9,
+    VR_F_G = 10,
+    VR_PHI = 11,
+    VR_KAPPA = 12,
+    VR_U = 13,
+    VR_V = 14,
+    VR_IMPACTS = 15,
+    VR_IN_CONTACT = 16,
+    VR_COUNT
+} ValueReference;
+
+typedef enum { WALL_NONE = 0, WALL_COMPLIANT = 1, WALL_RIGID = 2 } WallKind;
+
+/* The discrete state. CONTACT: inside the compliant wall. STICK: resting on the rigid wall after
+ * chatter, held there while the net force pushes into it. */
+typedef enum { MODE_FREE = 0, MODE_CONTACT = 1, MODE_STICK = 2 } ContactMode;
+
+/* Number of event indicators: g[0] the wall (or, when sticking, the net wall force), g[1] the
+ * velocity (turning points: the grazing guard). */
+#define MODEL_N_EVENTS 2
+
+typedef struct {
+    /* parameters */
+    double nu, Omega, sigma, r, Gamma;
+    int wall;
+    double u0, v0, rtol, atol;
+    /* calculated parameters, kept consistent by model_update_derived() */
+    double F_g, phi, kappa, Omega2, kappa2;
+    /* continuous state at the current local time */
+    double u, v;
+    /* discrete state */
+    int mode;
+    int impacts;
+} ModelData;
+
+/* What an event did, so that the solver knows whether to re-initialise. */
+typedef enum { EVENT_NONE = 0, EVENT_JUMP = 1 } EventResult;
+
+void model_set_defaults(ModelData *m);
+void model_update_derived(ModelData *m);
+
+/* Checks one value before it is stored; returns NULL if fine, else why not. */
+const char *model_check_real(int vr, double value);
+const char *model_check_integer(int vr, int value);
+/* Checks the parameters together (e.g. Gamma with a compliant wall), at the end of
+ * initialisation; returns NULL if fine. */
+const char *model_check_consistency(const ModelData *m, char *buf, size_t n);
+
+/* Sets the discrete state from (u0, v0) at the start time tau0. */
+void model_initialize_state(ModelData *m, double tau0);
+
+/* Net force pushing into the wall at u = v = 0 (positive: pushes into the wall). */
+double model_wall_force(const ModelData *m, double tau);
+
+void model_derivatives(const ModelData *m, double tau, const double y[2], double dy[2]);
+void model_jacobian(const ModelData *m, double J[2][2]);
+void model_event_indicators(const ModelData *m, double tau, const double y[2],
+                            double g[MODEL_N_EVENTS]);
+void model_root_directions(const ModelData *m, int dir[MODEL_N_EVENTS]);
+
+/* Applies the event of indicator `which` found at tau with state y (updated in place). */
+EventResult model_event_update(ModelData *m, double tau, double y[2], int which);
+
+/* True when, at a turning point (g[1] = 0) reached at state y, the wall indicator has the sign
+ * of the other side: a crossing pair was stepped over and must be located. */
+int model_missed_crossing(const ModelData *m, const double y[2]);
+
+/* True where the mode must change at once, without a crossing (a sticking mass whose
+ * holding force has vanished, e.g. after sigma was changed). */
+int model_release_now(ModelData *m, double tau);
+
+/* Typed access by value reference (fmi2GetReal & co.). Return NULL or an error message. */
+const char *model_get_real(const ModelData *m, int vr, double *value);
+const char *model_get_integer(const ModelData *m, int vr, int *value);
+const char *model_get_boolean(const ModelData *m, int vr, int *value);
+const char *model_set_real(ModelData *m, int vr, double value);
+const char *model_set_integer(ModelData *m, int vr, int value);
+/* Whether a variable may be set after initialisation (variability tunable). */
+int model_is_tunable(int vr);
+const char *model_variable_name(int vr);
+
+#endif
