@@ -449,10 +449,15 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
     if (fabs(t - now) > 1e-9 * fmax(1.0, fabs(now)))
         return fail(c, "fmi2DoStep", "currentCommunicationPoint %.17g differs from the FMU's "
                     "time %.17g", t, now);
+    const long guard_before = c->s.guard_hits, events_before = c->s.events;
     if (solver_advance(&c->s, &c->m, t + h) != 0) {
         c->state = ST_ERROR;
         return fail(c, "fmi2DoStep", "integration failed: %s", c->s.msg);
     }
+    if (c->s.events != events_before)
+        log_msg(c, fmi2OK, "logEvents", "fmi2DoStep: %ld wall events in (%.17g, %.17g], "
+                "%ld of them found by the grazing guard", c->s.events - events_before, t, t + h,
+                c->s.guard_hits - guard_before);
     return fmi2OK;
 }
 

@@ -37,8 +37,8 @@ void model_set_defaults(ModelData *m) {
     /* Start at rest, u = -1: valid for every wall model. */
     m->u0 = -1.0;
     m->v0 = 0.0;
-    m->rtol = 1e-10;
-    m->atol = 1e-12;
+    m->rtol = 1e-12;
+    m->atol = 1e-14;
     m->mode = MODE_FREE;
     m->impacts = 0;
     model_update_derived(m);
