@@ -1,0 +1,391 @@
+"""Closed-form (piecewise-linear) solution of the impact oscillator: the independent truth.
+
+Model (non-dimensional, forcing period 1; paper equations (3), (5), (40), (53)):
+
+    u'' + nu u' + Omega^2 (u + 1) [+ kappa^2 u while in contact] = (1 + sigma) F_g cos(2 pi t + phi)
+
+with F_g, phi from (5), so that p(t) = (1 + sigma) cos(2 pi t) - 1 (4) is the wall-free
+periodic solution; it grazes u = 0 at t = n when sigma = 0.
+
+Wall models (``wall=``):
+
+``"none"``
+    free oscillator (3).
+``"compliant"``
+    kappa^2 = Gamma Omega^2 acts for u > 0 (40).  On entering (u crossing 0 upward)
+    v -> r v (footnote 2); no jump on leaving.  A start with u0 > 0, or u0 == 0 and
+    v0 > 0, is taken to be inside the wall already (no jump applied at t0).
+``"rigid"``
+    at u = 0 with v > 0, v -> -r v (11).  Chatter (impacts accumulating in finite
+    time) is ended by *sticking*: if the post-impact speed is below ``v_stick``
+    (default 1e-9) and the net force F(t) - Omega^2 at u = v = 0 pushes into the
+    wall (> 0), the mass is held at u = v = 0 until that force changes sign, which
+    is computed in closed form.  The tiny impacts skipped this way change the state
+    by O(v_stick).  A start with u0 > 0 is rejected; u0 == 0, v0 > 0 impacts at t0.
+
+Between wall events the solution is exact: the particular solution of the linear ODE
+with the stiffness in force (in the wall the static offset is -Omega^2/(Omega^2 + kappa^2))
+plus the homogeneous propagator (FORMULAS.md section 2, valid at every damping).
+Displacements from an anchor point are computed as
+``(P(tau) - I)(z_a - q(t_a)) + (q(t) - q(t_a))`` with both brackets accurate to small
+relative error for small tau, so that chattering impacts 1e-8 apart are resolved.
+
+Wall crossings are found as in the paper's footnote 3: the closed form is sampled on a
+grid finer than every time scale, each interval is split at the zeros of the
+acceleration and then of the velocity (found by ``brentq``), so that u is monotone
+between consecutive points; a sign change of u between such points is then bracketed
+and solved by ``brentq``.  A contact only 1e-9 deep (a maximum of u just above 0) is
+therefore never missed.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .linear import propagator_minus_identity, propagator_minus_identity_scalar, spectral_rate
+
+__all__ = ["ExactOscillator", "forcing_amplitude_phase"]
+
+TWO_PI = 2.0 * math.pi
+_GRID_POINTS_PER_CHUNK = 48
+_RTOL = 4.0 * np.finfo(float).eps
+
+
+def forcing_amplitude_phase(nu: float, Omega: float) -> tuple[float, float]:
+    """F_g and phi of equation (5): the grazing forcing amplitude and its phase."""
+    re = Omega * Omega - 4.0 * math.pi ** 2
+    im = TWO_PI * nu
+    return math.hypot(re, im), math.atan2(im, re)
+
+
+class _Mode:
+    """Constants of one linear regime (free or in-wall) of the ODE."""
+
+    def __init__(self, nu: float, Omega: float, sigma: float, k2: float):
+        self.nu, self.k2, self.Om2 = nu, k2, Omega * Omega
+        self.amp = 1.0 + sigma
+        z0 = complex(self.Om2 - 4.0 * math.pi ** 2, TWO_PI * nu)  # F_g e^{i phi}
+        z1 = complex(k2 - 4.0 * math.pi ** 2, TWO_PI * nu)
+        g = 1.0 + 0.0j if k2 == self.Om2 else z0 / z1
+        # particular solution q = amp (gr cos th - gi sin th) + c0
+        self.gr, self.gi = g.real, g.imag
+        self.c0 = -self.Om2 / k2
+        self.fr, self.fi = z0.real, z0.imag  # external force amp (fr cos th - fi sin th)
+        rate = max(2.0 * math.pi, math.sqrt(k2), nu)
+        self.h = 0.1 / rate  # grid step: well below every time scale of the solution
+        self.rate = spectral_rate(nu, k2)
+
+    def q(self, th: float) -> tuple[float, float]:
+        c, s = math.cos(th), math.sin(th)
+        return (self.amp * (self.gr * c - self.gi * s) + self.c0,
+                self.amp * TWO_PI * (-self.gr * s - self.gi * c))
+
+    def force(self, th) -> np.ndarray:
+        """External force (1 + sigma) F_g cos(th + phi)."""
+        return self.amp * (self.fr * np.cos(th) - self.fi * np.sin(th))
+
+    def dforce(self, th) -> np.ndarray:
+        return self.amp * TWO_PI * (-self.fr * np.sin(th) - self.fi * np.cos(th))
+
+
+class _Segment:
+    """Closed-form solution of one mode, anchored at (t_a, u_a, v_a)."""
+
+    def __init__(self, mode: _Mode, t_a: float, u_a: float, v_a: float):
+        self.m, self.t_a, self.u_a, self.v_a = mode, t_a, u_a, v_a
+        # forcing phase from the fractional part of t: cos(2 pi t) is ill-conditioned at large t
+        self.th_a = TWO_PI * (t_a - math.floor(t_a))
+        qu, qv = mode.q(self.th_a)
+        self.wu, self.wv = u_a - qu, v_a - qv
+
+    def delta(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(u(t_a + tau) - u_a, v(t_a + tau) - v_a), accurate for small tau."""
+        m = self.m
+        E = propagator_minus_identity(tau, m.nu, m.k2)
+        half = math.pi * tau  # delta/2 with delta = 2 pi tau
+        s_half = np.sin(half)
+        mid = self.th_a + half
+        dcos = -2.0 * s_half * np.sin(mid)
+        dsin = 2.0 * s_half * np.cos(mid)
+        dqu = m.amp * (m.gr * dcos - m.gi * dsin)
+        dqv = m.amp * TWO_PI * (-m.gr * dsin - m.gi * dcos)
+        du = E[..., 0, 0] * self.wu + E[..., 0, 1] * self.wv + dqu
+        dv = E[..., 1, 0] * self.wu + E[..., 1, 1] * self.wv + dqv
+        return du, dv
+
+    def state(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        du, dv = self.delta(tau)
+        return self.u_a + du, self.v_a + dv
+
+    def accel(self, tau, u, v) -> np.ndarray:
+        m = self.m
+        return m.force(self.th_a + TWO_PI * tau) - m.nu * v - m.k2 * u - m.Om2
+
+    def jerk(self, tau, u, v, a) -> np.ndarray:
+        m = self.m
+        return m.dforce(self.th_a + TWO_PI * tau) - m.nu * a - m.k2 * v
+
+    # scalar helpers for brentq (pure Python: called ~10 times per root)
+    def scalar_state(self, tau: float) -> tuple[float, float]:
+        m = self.m
+        e11, e12, e21, e22 = propagator_minus_identity_scalar(tau, m.nu, m.k2, m.rate)
+        half = math.pi * tau
+        s_half = math.sin(half)
+        mid = self.th_a + half
+        dcos = -2.0 * s_half * math.sin(mid)
+        dsin = 2.0 * s_half * math.cos(mid)
+        du = e11 * self.wu + e12 * self.wv + m.amp * (m.gr * dcos - m.gi * dsin)
+        dv = e21 * self.wu + e22 * self.wv + m.amp * TWO_PI * (-m.gr * dsin - m.gi * dcos)
+        return self.u_a + du, self.v_a + dv
+
+    def u_at(self, tau: float) -> float:
+        return self.scalar_state(tau)[0]
+
+    def v_at(self, tau: float) -> float:
+        return self.scalar_state(tau)[1]
+
+    def a_at(self, tau: float) -> float:
+        u, v = self.scalar_state(tau)
+        m = self.m
+        th = self.th_a + TWO_PI * tau
+        return m.amp * (m.fr * math.cos(th) - m.fi * math.sin(th)) - m.nu * v - m.k2 * u - m.Om2
+
+
+def _root(f, lo: float, hi: float) -> float:
+    # xtol relative to the bracket: ~1e-16 of its width, plus brentq's 4 eps relative
+    return brentq(f, lo, hi, xtol=max(1e-16 * (hi - lo), 1e-300), rtol=_RTOL, maxiter=200)
+
+
+def _refine(tau: np.ndarray, vals: np.ndarray, f) -> list[float]:
+    """Roots of f in every grid interval where ``vals`` changes sign strictly."""
+    idx = np.nonzero(vals[:-1] * vals[1:] < 0)[0]
+    return [_root(f, tau[i], tau[i + 1]) for i in idx]
+
+
+def _first_crossing(seg: _Segment, sgn: float, tau_end: float) -> float | None:
+    """Smallest tau in [0, tau_end] where sgn*u becomes > 0, or None.
+
+    ``sgn = +1`` looks for entering the wall (u rising through 0), ``-1`` for leaving.
+    An anchor on the wall (u = 0 just after an event, or rounding noise across it)
+    counts as a crossing at tau = 0 only if its velocity heads across; a release
+    from sticking (v = 0) never does.
+    """
+    h = seg.m.h
+    released = seg.u_a == 0.0 and seg.v_a == 0.0
+    tau_s = 0.0
+    while tau_s < tau_end:
+        tau_e = min(tau_end, tau_s + _GRID_POINTS_PER_CHUNK * h)
+        n = max(2, int(math.ceil((tau_e - tau_s) / h)))
+        tau = np.linspace(tau_s, tau_e, n + 1)
+        u, v = seg.state(tau)
+        a = seg.accel(tau, u, v)
+        # split at inflection points, so that v is monotone between points ...
+        pts = np.unique(np.array(list(tau) + _refine(tau, a, seg.a_at)))
+        u, v = seg.state(pts)
+        # ... then at turning points, so that u is monotone between points
+        extra = _refine(pts, v, seg.v_at)
+        if extra:
+            pts = np.unique(np.concatenate([pts, extra]))
+            u, v = seg.state(pts)
+        g = sgn * u
+        first = tau_s == 0.0
+        if first:
+            g[0] = min(sgn * seg.u_a, 0.0)
+        hits = np.nonzero((g[:-1] <= 0.0) & (g[1:] > 0.0))[0]
+        if released:
+            # after a release from sticking u ~ -|jerk| tau^3/6 is below rounding noise for
+            # a while; the net force pulls away for at least half a period (it is
+            # F - Omega^2 with Omega^2 > 0), so no real contact occurs within one grid step.
+            hits = hits[pts[hits + 1] > h]
+        for i in hits:
+            if g[i] == 0.0:
+                if first and i == 0:
+                    if sgn * seg.v_a > 0.0:
+                        return 0.0
+                    continue  # on the wall but heading away: rounding noise in g[1]
+                return float(pts[i])
+            return _root(lambda x: sgn * seg.u_at(x), pts[i], pts[i + 1])
+        tau_s = tau_e
+    return None
+
+
+@dataclass
+class _State:
+    t: float
+    u: float
+    v: float
+    mode: str  # "out", "in" (compliant wall), "stuck" (rigid wall)
+    on_wall: bool = False
+    t_release: float = math.inf
+
+
+class ExactOscillator:
+    """Exact solution of the (piecewise-linear) grazing-impact oscillator.
+
+    Parameters
+    ----------
+    nu, Omega : float
+        Damping and natural frequency of (3).
+    sigma : float
+        Reduced forcing amplitude (5): F = (1 + sigma) F_g.
+    r : float
+        Restitution coefficient: rigid wall v -> -r v (11); compliant wall v -> r v on
+        entering (footnote 2).
+    Gamma : float
+        Wall stiffness ratio kappa^2 / Omega^2 (compliant wall only).
+    wall : {"none", "compliant", "rigid"}
+    v_stick : float
+        Rigid wall only: post-impact speed below which, with the net force pushing
+        into the wall, chatter is ended by sticking (see module docstring).
+    """
+
+    def __init__(self, nu: float, Omega: float, sigma: float, r: float = 0.9,
+                 Gamma: float = 10.0, wall: str = "compliant", v_stick: float = 1e-9):
+        if wall not in ("none", "compliant", "rigid"):
+            raise ValueError(f"wall must be 'none', 'compliant' or 'rigid', not {wall!r}")
+        self.nu, self.Omega, self.sigma = float(nu), float(Omega), float(sigma)
+        self.r, self.Gamma, self.wall, self.v_stick = float(r), float(Gamma), wall, float(v_stick)
+        self.kappa = math.sqrt(self.Gamma) * self.Omega
+        self.F_g, self.phi = forcing_amplitude_phase(self.nu, self.Omega)
+        Om2 = self.Omega ** 2
+        self._free = _Mode(self.nu, self.Omega, self.sigma, Om2)
+        self._wall = _Mode(self.nu, self.Omega, self.sigma, Om2 * (1.0 + self.Gamma))
+
+    # ------------------------------------------------------------------ helpers
+    def wall_free_orbit(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """p(t) and p'(t) of (4), the wall-free periodic solution."""
+        th = TWO_PI * np.mod(np.asarray(t, dtype=float), 1.0)
+        return (1.0 + self.sigma) * np.cos(th) - 1.0, -TWO_PI * (1.0 + self.sigma) * np.sin(th)
+
+    def net_wall_force(self, t) -> np.ndarray:
+        """F(t) - Omega^2: the acceleration at u = v = 0 (> 0 pushes into the wall)."""
+        th = TWO_PI * np.mod(np.asarray(t, dtype=float), 1.0)
+        return self._free.force(th) - self.Omega ** 2
+
+    def _release_time(self, t: float) -> float:
+        """First time >= t at which F(t) - Omega^2 turns negative (rigid-wall sticking)."""
+        c = self.Omega ** 2 / ((1.0 + self.sigma) * self.F_g)
+        if c >= 1.0:
+            return t  # the force can never push in
+        if c <= -1.0:
+            return math.inf
+        # F - Omega^2 < 0 for phase th + phi in (arccos c, 2 pi - arccos c): release at arccos c
+        s = (t - math.floor(t) + self.phi / TWO_PI) % 1.0
+        s_r = math.acos(c) / TWO_PI
+        dt = (s_r - s) % 1.0
+        # at the release point itself rounding may put s just past s_r: release now,
+        # not a period later (the force is decreasing through zero there)
+        return t if dt > 1.0 - 1e-9 else t + dt
+
+    def _initial_state(self, u0: float, v0: float, t0: float) -> tuple[_State, list]:
+        events: list = []
+        pushes_in = u0 == 0.0 and v0 == 0.0 and self.net_wall_force(t0) > 0.0
+        if self.wall == "compliant" and (u0 > 0.0 or (u0 == 0.0 and v0 > 0.0) or pushes_in):
+            return _State(t0, u0, v0, "in", on_wall=(u0 == 0.0)), events
+        if self.wall == "rigid":
+            if u0 > 0.0:
+                raise ValueError("rigid wall: u0 > 0 is inside the wall")
+            if u0 == 0.0 and v0 > 0.0:
+                st = _State(t0, 0.0, v0, "out")
+                return self._impact(st, events), events
+            if u0 == 0.0 and abs(v0) < self.v_stick and self.net_wall_force(t0) > 0.0:
+                return _State(t0, 0.0, 0.0, "stuck", True, self._release_time(t0)), events
+        return _State(t0, u0, v0, "out", on_wall=(u0 == 0.0)), events
+
+    def _impact(self, st: _State, events: list) -> _State:
+        vr = -self.r * st.v
+        events.append((st.t, "impact"))
+        if abs(vr) < self.v_stick and self.net_wall_force(st.t) > 0.0:
+            events.append((st.t, "stick"))
+            return _State(st.t, 0.0, 0.0, "stuck", True, self._release_time(st.t))
+        return _State(st.t, 0.0, vr, "out", True)
+
+    def _advance(self, st: _State, T: float, events: list) -> _State:
+        """Integrate from st to time T exactly, appending wall events."""
+        while True:
+            if st.mode == "stuck":
+                if T < st.t_release:
+                    return _State(T, 0.0, 0.0, "stuck", True, st.t_release)
+                events.append((st.t_release, "release"))
+                st = _State(st.t_release, 0.0, 0.0, "out", True)
+                continue
+            mode = self._wall if st.mode == "in" else self._free
+            seg = _Segment(mode, st.t, st.u, st.v)
+            tau_end = T - st.t
+            tau = None
+            if self.wall != "none" and tau_end > 0.0:
+                sgn = -1.0 if st.mode == "in" else 1.0
+                tau = _first_crossing(seg, sgn, tau_end)
+            if tau is None:
+                if tau_end <= 0.0:
+                    return st
+                u, v = seg.state(np.array([tau_end]))
+                return _State(T, float(u[0]), float(v[0]), st.mode)
+            t_c = st.t + tau
+            _, v = seg.state(np.array([tau]))
+            vc = float(v[0])
+            if self.wall == "compliant":
+                if st.mode == "out":
+                    events.append((t_c, "enter"))
+                    st = _State(t_c, 0.0, self.r * vc, "in", True)
+                else:
+                    events.append((t_c, "exit"))
+                    st = _State(t_c, 0.0, vc, "out", True)
+            else:
+                st = self._impact(_State(t_c, 0.0, vc, "out"), events)
+
+    # ------------------------------------------------------------------ public API
+    def strobe(self, u0: float, v0: float, times, t0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Exact states at the requested times.
+
+        Parameters
+        ----------
+        u0, v0 : float
+            State at ``t0``.
+        times : array_like
+            Sorted times, all >= t0.
+        t0 : float
+
+        Returns
+        -------
+        states : ndarray, shape (len(times), 2)
+            Exact (u, v) at each time.
+        impacts : ndarray of int, shape (len(times),)
+            Cumulative wall entries since t0 (compliant: entries into u > 0; rigid:
+            impacts, every chattering impact counted).
+        """
+        times = np.asarray(times, dtype=float).reshape(-1)
+        if times.size and (np.any(np.diff(times) < 0) or times[0] < t0):
+            raise ValueError("times must be sorted and >= t0")
+        events: list = []
+        st, events = self._initial_state(float(u0), float(v0), float(t0))
+        states = np.empty((times.size, 2))
+        counts = np.empty(times.size, dtype=int)
+        n_seen, count = 0, 0
+        for k, T in enumerate(times):
+            st = self._advance(st, float(T), events)
+            count += sum(1 for _, kind in events[n_seen:] if kind in ("enter", "impact"))
+            n_seen = len(events)
+            states[k] = st.u, st.v
+            counts[k] = count
+        return states, counts
+
+    def crossings(self, u0: float, v0: float, t0: float, t1: float) -> list[tuple[float, str]]:
+        """Wall events in [t0, t1], for diagnostics.
+
+        Returns
+        -------
+        list of (t, kind)
+            kind is "enter"/"exit" (compliant), "impact"/"stick"/"release" (rigid).
+        """
+        st, events = self._initial_state(float(u0), float(v0), float(t0))
+        self._advance(st, float(t1), events)
+        return [(t, k) for t, k in events if t <= t1]
+
+    def state_at(self, u0: float, v0: float, t0: float, t1: float) -> tuple[float, float, int]:
+        """Convenience: exact (u, v) at t1 and the number of wall entries/impacts."""
+        s, c = self.strobe(u0, v0, [t1], t0)
+        return float(s[0, 0]), float(s[0, 1]), int(c[0])

@@ -1,0 +1,290 @@
+"""Linear part of the oscillator: eigenvalues, propagator, (alpha, gamma) and its inverse.
+
+References are to Molenaar, de Weger & van de Water, Nonlinearity 14 (2001) 301
+("the paper") and to the verified formula sheet FORMULAS.md (section 2).
+
+The free oscillator (3), written for the deviation w = u - p from the periodic
+solution p(t) (4), is w'' + nu w' + k2 w = 0 with k2 = Omega^2.  Inside a
+compliant wall (40) the same form holds with k2 = Omega^2 + kappa^2, so every
+function here takes the stiffness ``k2`` (not Omega) where that is useful.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "eigenvalues",
+    "propagator",
+    "propagator_k2",
+    "propagator_minus_identity",
+    "alpha_gamma",
+    "AlphaGammaInverse",
+    "invert_alpha_gamma",
+    "underdamped_branches",
+]
+
+# Below this value of |d| t^2 (d = nu^2/4 - k2) the cosh/sinh (or cos/sin) form
+# loses relative accuracy in S = sinh(sqrt(d) t)/sqrt(d); a Taylor series in d t^2
+# is used instead (12 terms give < 1e-24 relative truncation error for |d t^2| <= 1).
+_SERIES_D = 1.0
+_N_SERIES = 12
+
+
+def eigenvalues(nu: float, Omega: float) -> tuple[complex, complex]:
+    """Roots s1, s2 of s^2 + nu s + Omega^2 = 0 (below (7)).
+
+    Returns
+    -------
+    s1, s2 : complex
+        ``s_{1,2} = (-nu +- sqrt(nu^2 - 4 Omega^2))/2``; complex conjugates when
+        the oscillator is underdamped (nu < 2 Omega).
+    """
+    disc = np.sqrt(complex(nu * nu - 4.0 * Omega * Omega))
+    return (-nu + disc) / 2.0, (-nu - disc) / 2.0
+
+
+def _c_and_s(t: np.ndarray, d: float) -> tuple[np.ndarray, np.ndarray]:
+    """C = cosh(sqrt(d) t), S = sinh(sqrt(d) t)/sqrt(d) for any sign of d.
+
+    Uses cos/sin for d < 0 and a series for small |d| t^2 (FORMULAS.md section 2).
+    Only called where e^{-nu t/2} does not need to be folded in (see propagator_k2).
+    """
+    z = d * t * t
+    C = np.empty_like(t)
+    S = np.empty_like(t)
+    small = np.abs(z) <= _SERIES_D
+    if np.any(small):
+        zs, ts = z[small], t[small]
+        c_sum = np.zeros_like(zs)
+        s_sum = np.zeros_like(zs)
+        term_c = np.ones_like(zs)
+        term_s = np.ones_like(zs)
+        for k in range(_N_SERIES):
+            c_sum += term_c
+            s_sum += term_s
+            term_c = term_c * zs / ((2 * k + 1) * (2 * k + 2))
+            term_s = term_s * zs / ((2 * k + 2) * (2 * k + 3))
+        C[small] = c_sum
+        S[small] = s_sum * ts
+    big = ~small
+    if np.any(big):
+        tb = t[big]
+        if d > 0:
+            q = np.sqrt(d)
+            C[big] = np.cosh(q * tb)
+            S[big] = np.sinh(q * tb) / q
+        else:
+            w = np.sqrt(-d)
+            C[big] = np.cos(w * tb)
+            S[big] = np.sin(w * tb) / w
+    return C, S
+
+
+def propagator_k2(t, nu: float, k2: float) -> np.ndarray:
+    """Propagator P(t) of w'' + nu w' + k2 w = 0, valid at every damping.
+
+    FORMULAS.md section 2, equivalent to the paper's (7):
+    ``P = e^{-nu t/2} [[C + nu S/2, S], [-k2 S, C - nu S/2]]`` with
+    ``d = nu^2/4 - k2``, ``C = cosh(sqrt(d) t)``, ``S = sinh(sqrt(d) t)/sqrt(d)``
+    (cos/sin when d < 0, a series near d t^2 = 0).  For overdamped motion at
+    large t the exponentials are combined so that nothing overflows.
+
+    Parameters
+    ----------
+    t : float or array_like
+        Elapsed time(s).
+    nu : float
+        Damping nu.
+    k2 : float
+        Stiffness (Omega^2 for the free oscillator, Omega^2 + kappa^2 in the wall).
+
+    Returns
+    -------
+    ndarray, shape ``np.shape(t) + (2, 2)``
+        ``P(t)`` mapping (w, w') at time 0 to (w, w') at time t.
+    """
+    t = np.asarray(t, dtype=float)
+    shape = t.shape
+    t = t.reshape(-1)
+    b = 0.5 * nu
+    d = b * b - k2
+    z = d * t * t
+    out = np.empty(t.shape + (2, 2))
+    C, S = _c_and_s(t, d)
+    E = np.exp(-b * t)
+    eC, eS = E * C, E * S
+    if d > 0:
+        # e^{-bt} cosh(qt) = (e^{(q-b)t} + e^{-(q+b)t})/2 avoids overflow of cosh
+        big = np.abs(z) > _SERIES_D
+        if np.any(big):
+            q = np.sqrt(d)
+            tb = t[big]
+            ep, em = np.exp((q - b) * tb), np.exp(-(q + b) * tb)
+            eC[big] = 0.5 * (ep + em)
+            eS[big] = 0.5 * (ep - em) / q
+    out[:, 0, 0] = eC + b * eS
+    out[:, 0, 1] = eS
+    out[:, 1, 0] = -k2 * eS
+    out[:, 1, 1] = eC - b * eS
+    return out.reshape(shape + (2, 2))
+
+
+def propagator(t, nu: float, Omega: float) -> np.ndarray:
+    """The paper's free propagator P(t), equation (7); see :func:`propagator_k2`."""
+    return propagator_k2(t, nu, Omega * Omega)
+
+
+def propagator_minus_identity(t, nu: float, k2: float) -> np.ndarray:
+    """``P(t) - I`` with small relative error also for small t.
+
+    Needed by the exact integrator: the displacement from an anchor point over a
+    short time (e.g. between chattering impacts 1e-8 apart) must not be computed
+    as a difference of O(1) numbers.  For ``rate * t <= 0.5`` the matrix series
+    ``sum_k M^k t^k / k!`` with ``M = [[0, 1], [-k2, -nu]]`` is summed using
+    ``M^k = a_k M + b_k I`` (from ``M^2 = -nu M - k2 I``); otherwise
+    ``propagator_k2(t) - I``.
+
+    Returns
+    -------
+    ndarray, shape ``np.shape(t) + (2, 2)``
+    """
+    t = np.asarray(t, dtype=float)
+    shape = t.shape
+    t = t.reshape(-1)
+    out = propagator_k2(t, nu, k2)
+    out[:, 0, 0] -= 1.0
+    out[:, 1, 1] -= 1.0
+    # spectral radius of M bounds the growth of the series terms
+    rate = spectral_rate(nu, k2)
+    small = rate * np.abs(t) <= 0.5
+    if np.any(small):
+        ts = t[small]
+        A = np.zeros_like(ts)
+        B = np.zeros_like(ts)
+        a_k, b_k = 1.0, 0.0
+        fac = ts.copy()  # t^k / k!
+        for k in range(1, 40):
+            A += a_k * fac
+            B += b_k * fac
+            a_k, b_k = -nu * a_k + b_k, -k2 * a_k
+            fac = fac * ts / (k + 1)
+        out[small, 0, 0] = B
+        out[small, 0, 1] = A
+        out[small, 1, 0] = -k2 * A
+        out[small, 1, 1] = B - nu * A
+    return out.reshape(shape + (2, 2))
+
+
+def alpha_gamma(nu: float, Omega: float) -> tuple[float, float]:
+    """alpha = Tr P(1), gamma = det P(1) = e^{-nu}, equation (9)."""
+    P = propagator(1.0, nu, Omega)
+    return float(P[0, 0] + P[1, 1]), float(np.exp(-nu))
+
+
+@dataclass(frozen=True)
+class AlphaGammaInverse:
+    """Result of inverting (9).
+
+    Attributes
+    ----------
+    nu, Omega : float
+        Damping and natural frequency.
+    branch : int or None
+        Index of the psi branch (underdamped case), None when P(1) has real
+        eigenvalues (the inverse is then unique).
+    psi : float or None
+        psi = sqrt(4 Omega^2 - nu^2)/2 on that branch (section 8 of the paper).
+    sign_P12 : float
+        sign(P12) = c1 of (39)/(48); +1 in the real-eigenvalue case.
+    """
+
+    nu: float
+    Omega: float
+    branch: int | None
+    psi: float | None
+    sign_P12: float
+
+
+def underdamped_branches(alpha: float, gamma: float, n: int) -> list[float]:
+    """The first ``n`` admissible psi > 0 with 2 gamma^{1/2} cos psi = alpha.
+
+    Ordered increasingly: psi0, 2pi - psi0, 2pi + psi0, 4pi - psi0, ... where
+    psi0 = arccos(alpha / (2 sqrt gamma)) in [0, pi].  Branch 0 is psi0.
+    """
+    c = alpha / (2.0 * np.sqrt(gamma))
+    if not -1.0 < c < 1.0:
+        raise ValueError("(alpha, gamma) has real eigenvalues: not underdamped")
+    psi0 = float(np.arccos(c))
+    out = []
+    for m in range(n):
+        k = (m + 1) // 2
+        out.append(2.0 * np.pi * k + (psi0 if m % 2 == 0 else -psi0))
+    return out
+
+
+def invert_alpha_gamma(alpha: float, gamma: float, branch: int | None = None) -> AlphaGammaInverse:
+    """Invert (9): (alpha, gamma) -> (nu, Omega).
+
+    nu = -ln gamma always.  If P(1) has real positive eigenvalues lambda_i the
+    inverse is unique: Omega^2 = ln(lambda_1) ln(lambda_2) (FORMULAS.md section 2).
+    If they are complex, psi (alpha = 2 gamma^{1/2} cos psi) is fixed only modulo
+    2 pi and up to sign, and the branch sets sign(P12) = c1 -- so the caller must
+    choose: ``branch`` indexes :func:`underdamped_branches`.
+
+    Raises
+    ------
+    ValueError
+        If underdamped and ``branch`` is None, or if (alpha, gamma) has real
+        negative eigenvalues (no real (nu, Omega)).
+    """
+    if not gamma > 0:
+        raise ValueError("gamma must be positive")
+    nu = -float(np.log(gamma))
+    disc = alpha * alpha - 4.0 * gamma
+    if disc >= 0:
+        if alpha <= 0:
+            raise ValueError("real negative eigenvalues: no (nu, Omega) gives this (alpha, gamma)")
+        r = np.sqrt(disc)
+        lam1 = (alpha + r) / 2.0
+        lam2 = gamma / lam1  # avoids cancellation in (alpha - r)/2
+        Om2 = float(np.log(lam1) * np.log(lam2))
+        return AlphaGammaInverse(nu, float(np.sqrt(Om2)), None, None, 1.0)
+    if branch is None:
+        raise ValueError(
+            "underdamped (alpha, gamma): the psi branch is ambiguous and sets sign(P12)=c1; "
+            "pass branch=0, 1, 2, ... (see underdamped_branches)"
+        )
+    psi = underdamped_branches(alpha, gamma, branch + 1)[branch]
+    Omega = float(np.sqrt(psi * psi + nu * nu / 4.0))
+    return AlphaGammaInverse(nu, Omega, int(branch), float(psi), float(np.sign(np.sin(psi))) or 1.0)
+
+
+def propagator_minus_identity_scalar(t: float, nu: float, k2: float, rate: float) -> tuple[float, float, float, float]:
+    """Scalar fast path of :func:`propagator_minus_identity` (for root finding).
+
+    ``rate`` is the spectral radius max|s_i| of the generator (precomputed by the caller).
+    Returns the entries (E11, E12, E21, E22) of P(t) - I.
+    """
+    if rate * abs(t) <= 0.5:
+        A = B = 0.0
+        a_k, b_k, fac = 1.0, 0.0, t
+        for k in range(1, 40):
+            A += a_k * fac
+            B += b_k * fac
+            a_k, b_k = -nu * a_k + b_k, -k2 * a_k
+            fac = fac * t / (k + 1)
+            if abs(fac) * (abs(a_k) + abs(b_k)) < 1e-18 * (abs(A) + abs(B)):
+                break
+        return B, A, -k2 * A, B - nu * A
+    P = propagator_k2(np.array([t]), nu, k2)[0]
+    return P[0, 0] - 1.0, P[0, 1], P[1, 0], P[1, 1] - 1.0
+
+
+def spectral_rate(nu: float, k2: float) -> float:
+    """max |s_i| for s^2 + nu s + k2 = 0."""
+    d = nu * nu / 4.0 - k2
+    if d >= 0:
+        return nu / 2.0 + float(np.sqrt(d))
+    return float(np.sqrt(k2))
