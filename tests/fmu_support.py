@@ -1,0 +1,114 @@
+"""Direct fmpy access to a built FMU for the FMU's own tests (independent of the harness).
+
+The harness has its own FMI layer; the FMU's tests drive fmpy's FMU2Slave by hand so that a bug
+in the harness cannot hide one in the FMU, and they capture the FMU's log messages.
+"""
+from __future__ import annotations
+
+import ctypes
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+from fmpy.logging import addLoggerProxy
+
+ROOT = Path(__file__).resolve().parents[1]
+FMU_PATH = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
+
+_libc = ctypes.CDLL(None)
+_libc.calloc.restype = ctypes.c_void_p
+_libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
+_libc.free.argtypes = [ctypes.c_void_p]
+
+WALLS = {"none": 0, "compliant": 1, "rigid": 2}
+
+
+@dataclass
+class LoggedSlave:
+    """An FMU2Slave whose log messages are collected in `messages` as (status, category, text)."""
+
+    path: Path = FMU_PATH
+    name: str = "test"
+    logging: bool = False
+    messages: list[tuple[int, str, str]] = field(default_factory=list)
+
+    def __post_init__(self) -> None:
+        self.md = read_model_description(str(self.path))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.types = {v.name: v.type for v in self.md.modelVariables}
+        self.slave = FMU2Slave(guid=self.md.guid, unzipDirectory=extract(str(self.path)),
+                               modelIdentifier=self.md.coSimulation.modelIdentifier,
+                               instanceName=self.name)
+
+        def log(env, instance, status, category, message):  # noqa: ANN001
+            self.messages.append((status, category.decode(), message.decode()))
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(log)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
+        addLoggerProxy(ctypes.byref(cb))
+        self._keep = (cb, log)  # the callbacks must outlive the instance
+        self.slave.instantiate(callbacks=cb, loggingOn=self.logging)
+        self.t = 0.0
+
+    # -- set-up ---------------------------------------------------------------------------------
+    def set(self, **values: float) -> None:
+        for k, x in values.items():
+            if k == "wall" and isinstance(x, str):
+                x = WALLS[x]
+            if self.types[k] == "Integer":
+                self.slave.setInteger([self.vr[k]], [int(x)])
+            else:
+                self.slave.setReal([self.vr[k]], [float(x)])
+
+    def start(self, t0: float = 0.0, **params: float) -> None:
+        """Reset, set the parameters, initialise at t0."""
+        self.slave.reset()
+        self.slave.setupExperiment(startTime=t0)
+        self.slave.enterInitializationMode()
+        self.set(**params)
+        self.slave.exitInitializationMode()
+        self.t = t0
+
+    # -- stepping -------------------------------------------------------------------------------
+    def step_to(self, t: float) -> None:
+        self.slave.doStep(self.t, t - self.t)
+        self.t = t
+
+    def state(self) -> np.ndarray:
+        return np.array(self.slave.getReal([self.vr["u"], self.vr["v"]]))
+
+    def impacts(self) -> int:
+        return int(self.slave.getInteger([self.vr["impacts"]])[0])
+
+    def in_contact(self) -> bool:
+        return bool(self.slave.getBoolean([self.vr["in_contact"]])[0])
+
+    def get(self, name: str) -> float:
+        return float(self.slave.getReal([self.vr[name]])[0])
+
+    def errors(self) -> list[str]:
+        return [m for s, _, m in self.messages if s >= 3]
+
+    def close(self) -> None:
+        self.slave.freeInstance()
+
+
+def expect_error(call, *args) -> None:  # noqa: ANN001
+    """Assert that an FMI call returns fmi2Error (fmpy raises FMICallException with status 3)."""
+    try:
+        call(*args)
+    except FMICallException as e:
+        assert e.status == 3, f"expected fmi2Error, got status {e.status}"
+        return
+    raise AssertionError(f"{call.__name__}{args} did not fail")
