@@ -1,0 +1,310 @@
+"""pythonfmu slave: the Python twin of the C FMU ``ImpactOscillator`` (FMI 2.0 Co-Simulation).
+
+Same variables (names, value references, causalities, variabilities, start values) as
+``fmu_src/modelDescription.xml``, so that the harness drives either FMU unchanged.  The physics
+and the CVODE driver live in ``impact_model.py`` (bundled into the FMU's resources); this file
+is only the FMI face.
+
+Error reporting: pythonfmu turns *any* Python exception raised in a callback into
+``fmi2Fatal`` (``PySlaveInstance::handle_py_exception`` throws ``cppfmu::FatalError``), with
+the exception's repr in the logged message; it has no way to return ``fmi2Error``.  The twin
+therefore logs a clear ``fmi2Error`` message first (delivered through the importer's logger)
+and then raises, so a rejected parameter stops the importer just as the C FMU's
+``fmi2Error`` does, with the same wording.
+
+Build with ``python fmu_src/pytwin/build.py --out build/fmu/ImpactOscillatorPy.fmu``.
+"""
+from __future__ import annotations
+
+import math
+import sys
+from typing import Any, Optional
+from xml.etree.ElementTree import Element, SubElement
+
+from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
+from pythonfmu.enums import Fmi2Status
+from pythonfmu.default_experiment import DefaultExperiment
+from pythonfmu.enums import Fmi2Initial
+from pythonfmu.variables import Boolean, Integer, Real
+
+from impact_model import (
+    MODE_FREE,
+    CvodeDriver,
+    ModelError,
+    OscillatorModel,
+    SolverError,
+)
+
+# (name, description, extra attributes of the type element) in value-reference order 0..16:
+# copied from the C FMU's modelDescription.xml, which is the reference.
+_PARAMETERS_REAL = {
+    "nu": ("damping nu = 2 pi c/(m omega), eq (3)", {"min": "0"}),
+    "Omega": (
+        "natural frequency over drive frequency, times 2 pi (Omega^2 = 4 pi^2 k/(m omega^2))",
+        {"min": "0"},
+    ),
+    "sigma": (
+        "bifurcation parameter sigma = (F - F_g)/F_g, eq (5); tunable between steps",
+        {"min": "-1"},
+    ),
+    "r": (
+        "restitution coefficient: rigid v -> -r v; compliant v -> r v on entering (footnote 2)",
+        {"min": "0", "max": "1"},
+    ),
+    "Gamma": ("wall stiffness ratio Gamma = kappa^2/Omega^2 (compliant wall)", {"min": "0"}),
+}
+_WALL_DESC = "wall model: 0 none, 1 compliant, 2 rigid"
+_START_REAL = {
+    "u0": ("position at the start time (rest position -1, wall at 0)", {}),
+    "v0": ("velocity at the start time", {}),
+    "rtol": ("CVODE relative tolerance", {"min": "0", "max": "1"}),
+    "atol": ("CVODE absolute tolerance", {"min": "0"}),
+}
+_CALCULATED = {
+    "F_g": ("grazing forcing amplitude, eq (5)", {}),
+    "phi": ("forcing phase, eq (5)", {"unit": "rad"}),
+    "kappa": ("wall frequency kappa = sqrt(Gamma) Omega, eq (40)", {}),
+}
+_OUTPUTS_REAL = {
+    "u": "position (wall at u = 0)",
+    "v": "velocity",
+}
+_IMPACTS_DESC = "wall entries (impacts) since the start time"
+_IN_CONTACT_DESC = "true while inside the compliant wall or sticking on the rigid one"
+
+#: See ImpactOscillatorPy._reject: references handed to pythonfmu's exception clean-up.
+_REFS_FOR_PYTHONFMU_CLEANUP: list[tuple[object, type, list]] = []
+
+#: InitialUnknowns with the C FMU's dependencies (1-based indices of ModelVariables).
+#: pythonfmu writes none by default, which ``fmpy validate`` rejects.
+_INITIAL_UNKNOWNS = (
+    (11, "1 2"),  # F_g <- nu, Omega
+    (12, "1 2"),  # phi <- nu, Omega
+    (13, "2 5"),  # kappa <- Omega, Gamma
+    (14, "7"),  # u <- u0
+    (15, "8"),  # v <- v0
+    (16, ""),  # impacts
+    (17, "1 2 3 6 7 8"),  # in_contact <- nu, Omega, sigma, wall, u0, v0
+)
+
+
+class ImpactOscillatorPy(Fmi2Slave):
+    """Driven oscillator with a rigid or compliant wall; CVODE (scikit-sundae) inside."""
+
+    author = "impact-grazing project"
+    description = (
+        "Python twin (pythonfmu, CVODE via scikit-sundae) of ImpactOscillator: periodically "
+        "driven harmonic oscillator with a rigid or compliant wall (Molenaar, de Weger and van "
+        "de Water, Nonlinearity 14 (2001) 301); wall crossings located by CVODE root finding"
+    )
+    default_experiment = DefaultExperiment(start_time=0.0, stop_time=100.0, step_size=1.0)
+    #: The C FMU's error category (pythonfmu's defaults name one per status instead).  The C
+    #: FMU's "logEvents" is left out: pythonfmu 0.7 cannot see fmi2SetDebugLogging, so the
+    #: twin could not keep per-step event messages quiet when logging is off.
+    log_categories = {
+        "logStatusError": "errors: bad parameters, calls in the wrong state, solver failures",
+    }
+
+    def __init__(self, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.model = OscillatorModel()
+        self.driver: Optional[CvodeDriver] = None
+        self.start_time = 0.0
+        self.initialized = False
+        # The order of registration is the value reference: keep it equal to model.h's enum.
+        for name, (desc, _) in _PARAMETERS_REAL.items():
+            self._register_real_parameter(name, desc, tunable=(name == "sigma"))
+        self.register_variable(
+            Integer(
+                "wall",
+                causality=Fmi2Causality.parameter,
+                variability=Fmi2Variability.fixed,
+                initial=Fmi2Initial.exact,
+                description=_WALL_DESC,
+                getter=lambda: self.model.wall,
+                setter=self._set_wall,
+            )
+        )
+        for name, (desc, _) in _START_REAL.items():
+            self._register_real_parameter(name, desc, tunable=False)
+        for name, (desc, _) in _CALCULATED.items():
+            self.register_variable(
+                Real(
+                    name,
+                    causality=Fmi2Causality.calculatedParameter,
+                    variability=Fmi2Variability.fixed,
+                    initial=Fmi2Initial.calculated,
+                    description=desc,
+                    getter=(lambda n=name: getattr(self.model, n)),
+                )
+            )
+        self.register_variable(
+            Real(
+                "u",
+                causality=Fmi2Causality.output,
+                variability=Fmi2Variability.continuous,
+                initial=Fmi2Initial.calculated,
+                description=_OUTPUTS_REAL["u"],
+                getter=lambda: self.model.u if self.initialized else self.model.u0,
+            )
+        )
+        self.register_variable(
+            Real(
+                "v",
+                causality=Fmi2Causality.output,
+                variability=Fmi2Variability.continuous,
+                initial=Fmi2Initial.calculated,
+                description=_OUTPUTS_REAL["v"],
+                getter=lambda: self.model.v if self.initialized else self.model.v0,
+            )
+        )
+        self.register_variable(
+            Integer(
+                "impacts",
+                causality=Fmi2Causality.output,
+                variability=Fmi2Variability.discrete,
+                initial=Fmi2Initial.calculated,
+                description=_IMPACTS_DESC,
+                getter=lambda: self.model.impacts,
+            )
+        )
+        self.register_variable(
+            Boolean(
+                "in_contact",
+                causality=Fmi2Causality.output,
+                variability=Fmi2Variability.discrete,
+                initial=Fmi2Initial.calculated,
+                description=_IN_CONTACT_DESC,
+                getter=lambda: self.model.mode != MODE_FREE,
+            )
+        )
+
+    # -- registration helpers --------------------------------------------------------------
+    def _register_real_parameter(self, name: str, desc: str, tunable: bool) -> None:
+        self.register_variable(
+            Real(
+                name,
+                causality=Fmi2Causality.parameter,
+                variability=Fmi2Variability.tunable if tunable else Fmi2Variability.fixed,
+                initial=Fmi2Initial.exact,
+                description=desc,
+                getter=(lambda: getattr(self.model, name)),
+                setter=(lambda x: self._set_real(name, x)),
+            )
+        )
+
+    def _reject(self, message: str) -> None:
+        """Log ``message`` as fmi2Error, then raise (pythonfmu returns fmi2Fatal).
+
+        pythonfmu's exception handler (``handle_py_exception``) releases one reference to this
+        instance, to its class and to its log queue (``cleanPyObject``) but keeps using the
+        pointers: a later ``fmi2Reset`` (the harness reuses instances) or ``fmi2FreeInstance``
+        would release them again and crash the importer.  One extra reference to each, taken
+        here for every exception that leaves a callback, keeps the counts balanced, so the
+        instance survives a rejected parameter exactly like the C FMU's does.
+        """
+        self.log(message, Fmi2Status.error, "logStatusError")
+        # pythonfmu 0.7 forwards log messages only while the importer has logging on; stderr
+        # makes sure the reason is seen even when it has not.
+        print(f"{self.instance_name}: {message}", file=sys.stderr, flush=True)
+        _REFS_FOR_PYTHONFMU_CLEANUP.append((self, type(self), self.log_queue))
+        raise ModelError(message)
+
+    def _set_real(self, name: str, x: float) -> None:
+        if self.initialized and name != "sigma":
+            self._reject(
+                f"fmi2SetReal: {name} cannot be set now: only sigma is tunable after "
+                "initialisation"
+            )
+        try:
+            self.model.set_real(name, x)
+        except ModelError as exc:
+            self._reject(f"fmi2SetReal: {exc} (value kept at its previous setting)")
+        if self.initialized and self.driver is not None:
+            # a new sigma changes the right-hand side from now on: CVODE restarts here
+            self.driver.needs_reinit = True
+
+    def _set_wall(self, x: int) -> None:
+        if self.initialized:
+            self._reject(
+                "fmi2SetInteger: wall cannot be set now: only sigma is tunable after "
+                "initialisation"
+            )
+        try:
+            self.model.set_wall(x)
+        except ModelError as exc:
+            self._reject(f"fmi2SetInteger: {exc}")
+
+    # -- model description -----------------------------------------------------------------
+    def to_xml(self, model_options: dict[str, str] = dict()) -> Element:  # noqa: B006
+        """pythonfmu's model description, completed to match the C FMU's.
+
+        Adds what pythonfmu cannot declare: ``InitialUnknowns`` (required by FMI 2.0 for
+        outputs with initial="calculated" and for calculated parameters), min/max and the
+        ``rad`` unit on the variables, and the flat naming convention of the C FMU.
+        """
+        root = super().to_xml(model_options)
+        root.set("variableNamingConvention", "flat")
+        extras = {**_PARAMETERS_REAL, **_START_REAL, **_CALCULATED}
+        for sv in root.iter("ScalarVariable"):
+            name = sv.get("name")
+            if name == "wall":
+                sv.find("Integer").attrib.update({"min": "0", "max": "2"})
+            elif name in extras:
+                sv.find("Real").attrib.update(extras[name][1])
+        # UnitDefinitions must precede LogCategories (FMI 2.0 schema order).
+        units = Element("UnitDefinitions")
+        SubElement(units, "Unit", {"name": "rad"})
+        children = list(root)
+        pos = next(i for i, el in enumerate(children) if el.tag == "CoSimulation") + 1
+        root.insert(pos, units)
+        structure = root.find("ModelStructure")
+        initial = SubElement(structure, "InitialUnknowns")
+        for index, deps in _INITIAL_UNKNOWNS:
+            SubElement(initial, "Unknown", {"index": str(index), "dependencies": deps})
+        return root
+
+    # -- FMI callbacks ---------------------------------------------------------------------
+    def setup_experiment(
+        self, start_time: float, stop_time: Optional[float] = None, tolerance: Optional[float] = None
+    ) -> None:
+        """Record the start time; the importer's tolerance tightens (never loosens) rtol."""
+        if start_time is None or not math.isfinite(start_time):
+            self._reject("fmi2SetupExperiment: startTime must be finite")
+        self.start_time = float(start_time)
+        if (
+            tolerance is not None
+            and math.isfinite(tolerance)
+            and 0.0 < tolerance < self.model.rtol
+        ):
+            self.model.rtol = float(tolerance)
+
+    def exit_initialization_mode(self) -> None:
+        """Check the parameters together, set the initial mode and create CVODE."""
+        try:
+            self.model.check_all()
+        except ModelError as exc:
+            self._reject(f"fmi2ExitInitializationMode: {exc}")
+        self.model.update_derived()
+        self.driver = CvodeDriver(self.model)
+        self.driver.start(self.start_time)
+        self.model.initialize_state(self.driver.tau)
+        self.initialized = True
+
+    def do_step(self, current_time: float, step_size: float) -> bool:
+        """Integrate from ``current_time`` to ``current_time + step_size``."""
+        if self.driver is None:
+            self._reject("fmi2DoStep: called before initialisation ended")
+        if not (math.isfinite(current_time) and math.isfinite(step_size)) or step_size < 0.0:
+            self._reject(f"fmi2DoStep: bad communication step (t = {current_time}, h = {step_size})")
+        now = self.driver.time
+        if abs(current_time - now) > 1e-9 * max(1.0, abs(now)):
+            self._reject(
+                f"fmi2DoStep: currentCommunicationPoint {current_time!r} differs from the FMU's "
+                f"time {now!r}"
+            )
+        try:
+            self.driver.advance(current_time + step_size)
+        except SolverError as exc:
+            self._reject(f"fmi2DoStep: integration failed: {exc}")
+        return True
