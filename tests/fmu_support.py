@@ -104,6 +104,16 @@ class LoggedSlave:
         self.slave.freeInstance()
 
 
+def on_orbit(sigma: float, t0: float) -> dict[str, float]:
+    """u0, v0 on the wall-free periodic orbit p(t) = (1+sigma) cos(2 pi t) - 1 (eq (4)) at t0.
+
+    At Figure 9's parameters the slow eigenvalue is 0.98 per period, so a start at rest takes
+    hundreds of periods to reach the wall; a start on p(t0) hits it in the first period.
+    """
+    w = 2 * np.pi
+    return dict(u0=(1 + sigma) * np.cos(w * t0) - 1, v0=-(1 + sigma) * w * np.sin(w * t0))
+
+
 def expect_error(call, *args) -> None:  # noqa: ANN001
     """Assert that an FMI call returns fmi2Error (fmpy raises FMICallException with status 3)."""
     try:
