@@ -45,7 +45,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
-from .linear import propagator_minus_identity, propagator_minus_identity_scalar, spectral_rate
+from .linear import (
+    propagator_k2,
+    propagator_minus_identity,
+    propagator_minus_identity_scalar,
+    spectral_rate,
+)
 
 __all__ = ["ExactOscillator", "forcing_amplitude_phase"]
 
@@ -389,3 +394,42 @@ class ExactOscillator:
         """Convenience: exact (u, v) at t1 and the number of wall entries/impacts."""
         s, c = self.strobe(u0, v0, [t1], t0)
         return float(s[0, 0]), float(s[0, 1]), int(c[0])
+
+    def pre_impact_map(self, u, v, n: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Exact counterpart of the near-grazing maps (31)/(32) (FORMULAS.md section 3).
+
+        The map's state is the pre-impact ("virtual") state at t = n: the orbit before
+        its impact near n, continued to t = n as if there were no wall (figure 3).  So:
+        free-propagate (u, v) back to n - 1/2, integrate exactly with the wall to
+        n + 1/2, then free-propagate to n + 1 (8).
+
+        Parameters
+        ----------
+        u, v : float or array_like
+            Virtual states at t = n (looped over; each is independent).
+        n : int
+
+        Returns
+        -------
+        u1, v1 : ndarray
+            Virtual state at t = n + 1.
+        contacts : ndarray of int
+            Wall entries/impacts in (n - 1/2, n + 1/2].
+        """
+        u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
+        shape = u.shape
+        u, v = u.reshape(-1), v.reshape(-1)
+        Pb = propagator_k2(-0.5, self.nu, self.Omega ** 2)
+        Pf = propagator_k2(0.5, self.nu, self.Omega ** 2)
+        pn = np.array(self.wall_free_orbit(float(n)))
+        pm = np.array(self.wall_free_orbit(n - 0.5))
+        pp = np.array(self.wall_free_orbit(n + 0.5))
+        p1 = np.array(self.wall_free_orbit(float(n + 1)))
+        out_u, out_v = np.empty(u.size), np.empty(u.size)
+        counts = np.empty(u.size, dtype=int)
+        for k in range(u.size):
+            z_half = Pb @ (np.array([u[k], v[k]]) - pn) + pm
+            st, c = self.strobe(float(z_half[0]), float(z_half[1]), [n + 0.5], t0=n - 0.5)
+            z1 = Pf @ (st[0] - pp) + p1
+            out_u[k], out_v[k], counts[k] = z1[0], z1[1], c[0]
+        return out_u.reshape(shape), out_v.reshape(shape), counts.reshape(shape)

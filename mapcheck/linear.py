@@ -45,15 +45,19 @@ def eigenvalues(nu: float, Omega: float) -> tuple[complex, complex]:
     return (-nu + disc) / 2.0, (-nu - disc) / 2.0
 
 
-def _c_and_s(t: np.ndarray, d: float) -> tuple[np.ndarray, np.ndarray]:
-    """C = cosh(sqrt(d) t), S = sinh(sqrt(d) t)/sqrt(d) for any sign of d.
+def _damped_c_and_s(t: np.ndarray, nu: float, k2: float) -> tuple[np.ndarray, np.ndarray]:
+    """e^{-nu t/2} C and e^{-nu t/2} S, C = cosh(sqrt(d) t), S = sinh(sqrt(d) t)/sqrt(d).
 
-    Uses cos/sin for d < 0 and a series for small |d| t^2 (FORMULAS.md section 2).
-    Only called where e^{-nu t/2} does not need to be folded in (see propagator_k2).
+    d = nu^2/4 - k2 of any sign: cos/sin for d < 0, a Taylor series in d t^2 where
+    |d| t^2 <= 1 (there S = sinh(..)/sqrt(d) would lose relative accuracy), and for
+    d > 0 the exponentials are combined, (e^{(q-b)t} +- e^{-(q+b)t})/2, so that
+    nothing overflows at large t (FORMULAS.md section 2).
     """
+    b = 0.5 * nu
+    d = b * b - k2
     z = d * t * t
-    C = np.empty_like(t)
-    S = np.empty_like(t)
+    eC = np.empty_like(t)
+    eS = np.empty_like(t)
     small = np.abs(z) <= _SERIES_D
     if np.any(small):
         zs, ts = z[small], t[small]
@@ -66,20 +70,23 @@ def _c_and_s(t: np.ndarray, d: float) -> tuple[np.ndarray, np.ndarray]:
             s_sum += term_s
             term_c = term_c * zs / ((2 * k + 1) * (2 * k + 2))
             term_s = term_s * zs / ((2 * k + 2) * (2 * k + 3))
-        C[small] = c_sum
-        S[small] = s_sum * ts
+        E = np.exp(-b * ts)
+        eC[small] = E * c_sum
+        eS[small] = E * s_sum * ts
     big = ~small
     if np.any(big):
         tb = t[big]
         if d > 0:
             q = np.sqrt(d)
-            C[big] = np.cosh(q * tb)
-            S[big] = np.sinh(q * tb) / q
+            ep, em = np.exp((q - b) * tb), np.exp(-(q + b) * tb)
+            eC[big] = 0.5 * (ep + em)
+            eS[big] = 0.5 * (ep - em) / q
         else:
             w = np.sqrt(-d)
-            C[big] = np.cos(w * tb)
-            S[big] = np.sin(w * tb) / w
-    return C, S
+            E = np.exp(-b * tb)
+            eC[big] = E * np.cos(w * tb)
+            eS[big] = E * np.sin(w * tb) / w
+    return eC, eS
 
 
 def propagator_k2(t, nu: float, k2: float) -> np.ndarray:
@@ -109,21 +116,8 @@ def propagator_k2(t, nu: float, k2: float) -> np.ndarray:
     shape = t.shape
     t = t.reshape(-1)
     b = 0.5 * nu
-    d = b * b - k2
-    z = d * t * t
+    eC, eS = _damped_c_and_s(t, nu, k2)
     out = np.empty(t.shape + (2, 2))
-    C, S = _c_and_s(t, d)
-    E = np.exp(-b * t)
-    eC, eS = E * C, E * S
-    if d > 0:
-        # e^{-bt} cosh(qt) = (e^{(q-b)t} + e^{-(q+b)t})/2 avoids overflow of cosh
-        big = np.abs(z) > _SERIES_D
-        if np.any(big):
-            q = np.sqrt(d)
-            tb = t[big]
-            ep, em = np.exp((q - b) * tb), np.exp(-(q + b) * tb)
-            eC[big] = 0.5 * (ep + em)
-            eS[big] = 0.5 * (ep - em) / q
     out[:, 0, 0] = eC + b * eS
     out[:, 0, 1] = eS
     out[:, 1, 0] = -k2 * eS
