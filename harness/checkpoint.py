@@ -1,0 +1,88 @@
+"""Checkpoints: finished sweep tasks on disk, so an interrupted sweep resumes.
+
+A checkpoint is a directory with a ``manifest.json`` (the fingerprint of the run: FMU
+sha256, parameters, grids, sampling) and one ``.npz`` file per finished task, written
+atomically (temporary file + rename), so an interruption at any moment leaves only whole
+results.  Resuming with different settings is refused rather than mixing two runs.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import HarnessInputError
+
+
+def fingerprint(obj: Any) -> str:
+    """sha256 of a JSON rendering of ``obj`` (numpy arrays and scalars included)."""
+
+    def default(o: Any) -> Any:
+        if isinstance(o, np.ndarray):
+            return o.tolist()
+        if isinstance(o, np.generic):
+            return o.item()
+        return repr(o)
+
+    text = json.dumps(obj, sort_keys=True, default=default)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+class Checkpoint:
+    """Finished tasks of one run, stored in ``directory``.
+
+    Parameters
+    ----------
+    directory : path
+        Created if missing.
+    run_fingerprint : str
+        Identifies the run; an existing checkpoint with another fingerprint is an error.
+    argument : str
+        Name used in error messages (``"--checkpoint"``).
+    """
+
+    def __init__(self, directory: str | os.PathLike, run_fingerprint: str, argument: str = "--checkpoint") -> None:
+        self.directory = Path(directory)
+        self.fingerprint = run_fingerprint
+        manifest = self.directory / "manifest.json"
+        if manifest.exists():
+            try:
+                stored = json.loads(manifest.read_text())["fingerprint"]
+            except (ValueError, KeyError):
+                raise HarnessInputError(argument, f"{self.directory} is not a harness checkpoint") from None
+            if stored != run_fingerprint:
+                raise HarnessInputError(
+                    argument,
+                    f"{self.directory} holds a checkpoint of a different run (other parameters or FMU); "
+                    "delete it or choose another directory",
+                )
+        else:
+            self.directory.mkdir(parents=True, exist_ok=True)
+            manifest.write_text(json.dumps({"fingerprint": run_fingerprint}))
+
+    def _file(self, key: str) -> Path:
+        safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in key)
+        return self.directory / f"{safe}.npz"
+
+    def has(self, key: str) -> bool:
+        return self._file(key).exists()
+
+    def save(self, key: str, arrays: dict[str, np.ndarray]) -> None:
+        """Store one finished task atomically."""
+        target = self._file(key)
+        tmp = target.with_suffix(".tmp.npz")
+        np.savez(tmp, **arrays)
+        os.replace(tmp, target)
+
+    def load(self, key: str) -> dict[str, np.ndarray]:
+        with np.load(self._file(key)) as data:
+            return {k: data[k] for k in data.files}
+
+    def remove(self) -> None:
+        """Delete the checkpoint (after the final results are written)."""
+        shutil.rmtree(self.directory, ignore_errors=True)

@@ -1,0 +1,147 @@
+"""Orbit classification from stroboscopic samples.
+
+A sampled orbit x_0 .. x_{N-1} (x = (u, v) at t = n + theta) has period M when
+x_{k+M} = x_k for every k (within a tolerance) and the impact counts per period repeat
+with period M too; M is the smallest such shift.  "Not periodic" (period 0) covers
+chaotic orbits, quasi-periodic ones and orbits that have not converged in the transient.
+
+The period-adding windows of the paper's Figure 9 are maximal orbits: period M with one
+impact per M periods, M = 1, 2, 3 as sigma decreases.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+NOT_PERIODIC = 0
+
+
+@dataclass(frozen=True)
+class OrbitClass:
+    """Result of :func:`classify_orbit`.
+
+    Attributes
+    ----------
+    period : int
+        Smallest period M >= 1 in forcing periods, or 0 (:data:`NOT_PERIODIC`).
+    impacts : int
+        Wall entries in one orbit period (over M forcing periods); -1 when not periodic.
+    residual : float
+        max_k ||x_{k+M} - x_k||_inf for the period found (for M = 0: for the best M tried).
+    """
+
+    period: int
+    impacts: int
+    residual: float
+
+    @property
+    def periodic(self) -> bool:
+        return self.period != NOT_PERIODIC
+
+    @property
+    def label(self) -> str:
+        """Short human-readable label, e.g. ``"P3, 1 impact"``."""
+        if not self.periodic:
+            return "not periodic"
+        s = "" if self.impacts == 1 else "s"
+        return f"P{self.period}, {self.impacts} impact{s}"
+
+
+def classify_orbit(
+    u: np.ndarray,
+    v: np.ndarray,
+    impacts: np.ndarray,
+    tol: float = 1e-5,
+    max_period: int | None = None,
+) -> OrbitClass:
+    """Classify a sampled orbit by its period and impacts per period.
+
+    Parameters
+    ----------
+    u, v : array_like, shape (N,)
+        Stroboscopic samples.
+    impacts : array_like of int, shape (N,)
+        Wall entries in the period ending at each sample.
+    tol : float
+        Periodicity tolerance, relative to ``1 + amplitude`` of the orbit (the amplitude is
+        the largest peak-to-peak range of u and v), so it works for orbits of any size.
+    max_period : int, optional
+        Largest period tried; default N // 2 (each shift is checked on at least N/2 pairs).
+
+    Returns
+    -------
+    OrbitClass
+    """
+    u = np.asarray(u, dtype=float)
+    v = np.asarray(v, dtype=float)
+    imp = np.asarray(impacts)
+    n = u.size
+    if not (v.size == n and imp.size == n):
+        raise ValueError("u, v and impacts must have the same length")
+    if not np.all(np.isfinite(u)) or not np.all(np.isfinite(v)) or n < 2:
+        return OrbitClass(NOT_PERIODIC, -1, float("inf"))
+    if max_period is None:
+        max_period = n // 2
+    max_period = max(1, min(max_period, n - 1))
+    amplitude = max(np.ptp(u), np.ptp(v))
+    threshold = tol * (1.0 + amplitude)
+    best = float("inf")
+    for m in range(1, max_period + 1):
+        residual = float(max(np.max(np.abs(u[m:] - u[:-m])), np.max(np.abs(v[m:] - v[:-m]))))
+        best = min(best, residual)
+        if residual <= threshold and np.array_equal(imp[m:], imp[:-m]):
+            # impacts over one orbit period: use the last full period (most converged)
+            return OrbitClass(m, int(imp[n - m :].sum()), residual)
+    return OrbitClass(NOT_PERIODIC, -1, best)
+
+
+def classify_samples(u: np.ndarray, v: np.ndarray, impacts: np.ndarray, tol: float = 1e-5,
+                     max_period: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Classify many orbits at once: arrays ``(..., N)`` -> (period, impacts) arrays ``(...)``."""
+    u = np.asarray(u)
+    shape = u.shape[:-1]
+    period = np.zeros(shape, dtype=np.int64)
+    orbit_impacts = np.full(shape, -1, dtype=np.int64)
+    for idx in np.ndindex(shape):
+        c = classify_orbit(u[idx], np.asarray(v)[idx], np.asarray(impacts)[idx], tol, max_period)
+        period[idx], orbit_impacts[idx] = c.period, c.impacts
+    return period, orbit_impacts
+
+
+def windows(values: np.ndarray, period: np.ndarray, impacts: np.ndarray | None = None) -> list[tuple[int, float, float]]:
+    """Contiguous runs of the same period along a sorted parameter axis.
+
+    Parameters
+    ----------
+    values : array_like, shape (K,)
+        Parameter values, sorted.
+    period : array_like of int, shape (K,)
+        Period at each value.
+    impacts : array_like of int, optional
+        When given, only runs of orbits with exactly one impact per orbit period (maximal
+        orbits, as in period adding) are returned.
+
+    Returns
+    -------
+    list of (period, lowest value, highest value)
+        One entry per run of periodic points, in the order of ``values``.
+    """
+    values = np.asarray(values)
+    period = np.asarray(period)
+    keep = period > 0
+    if impacts is not None:
+        keep &= np.asarray(impacts) == 1
+    out: list[tuple[int, float, float]] = []
+    k = 0
+    while k < len(values):
+        if not keep[k]:
+            k += 1
+            continue
+        j = k
+        while j + 1 < len(values) and keep[j + 1] and period[j + 1] == period[k]:
+            j += 1
+        lo, hi = sorted((float(values[k]), float(values[j])))
+        out.append((int(period[k]), lo, hi))
+        k = j + 1
+    return out

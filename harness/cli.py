@@ -1,0 +1,129 @@
+"""Command line: ``impact-harness`` / ``python -m harness``.
+
+Subcommands are registered by modules: :mod:`harness.commands` provides simulate, strobe,
+sweep and jacobian; further modules listed in :data:`OPTIONAL_COMMAND_MODULES` (e.g. a
+later ``harness/reproduce.py``) are picked up when they exist.  A command module exposes
+``register(subparsers, parents)``, which adds its parser(s) with ``set_defaults(func=...)``;
+``func(args)`` returns the exit status.
+
+Exit status: 0 success, 1 the FMU or a run failed, 2 bad input (a one-line message naming
+the argument, never a traceback), 130 interrupted.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from typing import Any, Sequence
+
+from .errors import FmuError, HarnessInputError
+
+PROG = "impact-harness"
+
+#: Command modules always present.
+COMMAND_MODULES = ("harness.commands",)
+#: Command modules added by later issues; skipped while they do not exist.
+OPTIONAL_COMMAND_MODULES = ("harness.reproduce",)
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """ArgumentParser whose errors are one line (no usage dump), exit status 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
+def common_parent() -> argparse.ArgumentParser:
+    """Options shared by every subcommand that runs the FMU."""
+    p = OneLineParser(add_help=False)
+    g = p.add_argument_group("experiment")
+    g.add_argument("--config", "-c", metavar="FILE.toml", help="experiment file (TOML); flags override it")
+    g.add_argument("--fmu", dest="fmu__path", metavar="PATH",
+                   help="FMU to drive (default: build/fmu/ImpactOscillator.fmu or $IMPACT_HARNESS_FMU)")
+    g.add_argument("--set", dest="model_set", metavar="NAME=VALUE", action="append", default=[],
+                   help="set an FMU parameter, e.g. --set sigma=0.3 --set wall=rigid (repeatable)")
+    g.add_argument("--u0", dest="initial__u0", type=float, metavar="U", help="initial displacement")
+    g.add_argument("--v0", dest="initial__v0", type=float, metavar="V", help="initial velocity")
+    o = p.add_argument_group("output")
+    o.add_argument("--out", "-o", dest="run__out", metavar="FILE.nc", help="NetCDF result file")
+    o.add_argument("--plot", dest="run__plot", metavar="FILE.png", help="PNG plot (default: next to --out)")
+    o.add_argument("--no-plot", action="store_true", help="do not draw a plot")
+    o.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return p
+
+
+def sampling_parent() -> argparse.ArgumentParser:
+    """Options of stroboscopic sampling (strobe, sweep)."""
+    p = OneLineParser(add_help=False)
+    g = p.add_argument_group("stroboscopic sampling")
+    g.add_argument("--theta", dest="sampling__theta", type=float, metavar="PHASE",
+                   help="section phase in [0, 1): samples at t = n + theta (default 0)")
+    g.add_argument("--transient", dest="sampling__transient", type=int, metavar="N",
+                   help="periods discarded before sampling (default 150)")
+    g.add_argument("--samples", dest="sampling__samples", type=int, metavar="N",
+                   help="periods sampled (default 40)")
+    g.add_argument("--tol", dest="sampling__tol", type=float, help="periodicity tolerance, relative (default 1e-5)")
+    g.add_argument("--max-period", dest="sampling__max_period", type=int, metavar="M",
+                   help="largest period tried (default samples/2)")
+    return p
+
+
+def overrides_from_args(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
+    """CLI flags as a ``{section: {key: value}}`` layer (flags not given are absent)."""
+    layer: dict[str, dict[str, Any]] = {}
+    for dest, value in vars(args).items():
+        if "__" in dest and value is not None:
+            section, key = dest.split("__", 1)
+            layer.setdefault(section, {})[key] = value
+    for item in getattr(args, "model_set", []) or []:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise HarnessInputError("--set", f"expected NAME=VALUE, got {item!r}")
+        layer.setdefault("model", {})[name.strip()] = value.strip()
+    if getattr(args, "no_progress", False):
+        layer.setdefault("run", {})["progress"] = False
+    return layer
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The full parser, with every registered command module."""
+    from . import __version__
+
+    parser = OneLineParser(
+        prog=PROG,
+        description="Stroboscopic Poincare maps, bifurcation sweeps and map Jacobians of the "
+        "grazing impact oscillator FMU (fmpy; local processes or Dask).",
+    )
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
+    sub.required = True
+    parents = {"common": common_parent(), "sampling": sampling_parent()}
+    for name in COMMAND_MODULES:
+        importlib.import_module(name).register(sub, parents)
+    for name in OPTIONAL_COMMAND_MODULES:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name == name:
+                continue  # not written yet
+            raise
+        module.register(sub, parents)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of ``impact-harness``; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    prog = f"{PROG} {args.command}"
+    try:
+        return int(args.func(args) or 0)
+    except HarnessInputError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except FmuError as exc:
+        print(f"{prog}: FMU failure: {exc}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130

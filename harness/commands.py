@@ -1,0 +1,269 @@
+"""The subcommands simulate, strobe, sweep and jacobian.
+
+Each command builds an :class:`~harness.config.Experiment` (defaults < TOML < flags), runs,
+writes a NetCDF file with full provenance and a PNG plot, and prints a short summary on
+stdout.  Long runs show a tqdm progress bar on stderr.
+"""
+from __future__ import annotations
+
+import argparse
+import shutil
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .classify import classify_orbit, windows
+from .cli import overrides_from_args
+from .config import Experiment, parameter_values
+from .errors import HarnessInputError
+from .progress import progress_bar
+
+
+def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
+    """Add simulate, strobe, sweep and jacobian to the CLI."""
+    common, sampling = parents["common"], parents["sampling"]
+
+    p = sub.add_parser("simulate", parents=[common], help="time series of one run",
+                       description="Integrate the FMU from (u0, v0) at --t0 and record u, v and impacts on a uniform grid.")
+    g = p.add_argument_group("simulate")
+    g.add_argument("--t0", type=float, default=0.0, help="start time (default 0; t = n is the grazing phase)")
+    g.add_argument("--t-end", dest="simulate__t_end", type=float, metavar="T", help="end time (default 10)")
+    g.add_argument("--dt", dest="simulate__dt", type=float, help="output step (default 0.01)")
+    p.set_defaults(func=cmd_simulate)
+
+    p = sub.add_parser("strobe", parents=[common, sampling], help="stroboscopic samples at t = n + theta",
+                       description="Sample (u, v) at t = n + theta after a transient, count impacts per period and "
+                       "classify the orbit (period, impacts per period). Draws the Poincare section.")
+    p.set_defaults(func=cmd_strobe)
+
+    p = sub.add_parser("sweep", parents=[common, sampling], help="bifurcation sweep (fresh / up / down / both), 1D or 2D",
+                       description="Sweep an FMU parameter (sigma by default): fresh starts from the same state, or "
+                       "quasi-static continuation up and/or down carrying the state. Draws the bifurcation diagram.")
+    g = p.add_argument_group("sweep")
+    g.add_argument("--param", dest="sweep__param", metavar="NAME", help="swept FMU parameter (default sigma)")
+    g.add_argument("--start", dest="sweep__start", type=float, help="first value (default 0.8)")
+    g.add_argument("--stop", dest="sweep__stop", type=float, help="last value (default 0.1)")
+    g.add_argument("--num", dest="sweep__num", type=int, help="number of values (default 71)")
+    g.add_argument("--values", dest="sweep__values", metavar="V1,V2,...", help="explicit values (instead of start/stop/num)")
+    g.add_argument("--mode", dest="sweep__mode", metavar="MODE",
+                   help="fresh, up, down or both (= up and down); comma-separated list allowed (default both)")
+    g.add_argument("--scan", metavar="NAME=V1,V2,...|NAME=START:STOP:NUM",
+                   help="second axis of a 2D scan, e.g. --scan Gamma=10,100,1000")
+    b = p.add_argument_group("execution")
+    b.add_argument("--backend", dest="run__backend", choices=["serial", "processes", "dask"],
+                   help="where to run (default processes, or dask with --scheduler)")
+    b.add_argument("--workers", "-j", dest="run__workers", type=int, metavar="N",
+                   help="local worker processes (default: all cores)")
+    b.add_argument("--scheduler", dest="run__scheduler", metavar="tcp://HOST:PORT", help="run on this Dask scheduler")
+    b.add_argument("--checkpoint", dest="run__checkpoint", metavar="DIR",
+                   help="directory of finished points, to resume an interrupted sweep (default: OUT.partial)")
+    b.add_argument("--no-resume", action="store_true", help="discard an existing checkpoint and start over")
+    p.set_defaults(func=cmd_sweep)
+
+    p = sub.add_parser("jacobian", parents=[common], help="Jacobian of the stroboscopic map (at a state, or J(x) near grazing)",
+                       description="Central-difference Jacobian of the one-period map, by restarts from perturbed states. "
+                       "Without --state: J against x along the grazing family (wall-free state (x, 0) at t = n), in the "
+                       "coordinates of phase --theta (0: the paper's t = n, where J11, not J12, is singular).")
+    g = p.add_argument_group("jacobian")
+    g.add_argument("--theta", dest="jacobian__theta", type=float, metavar="PHASE",
+                   help="section phase of the coordinates, in [0, 1) (default 0)")
+    g.add_argument("--measure-theta", dest="jacobian__measure_theta", type=float, metavar="PHASE",
+                   help="phase where J is measured, away from the impact (default 0.5)")
+    g.add_argument("--x-start", dest="jacobian__x_start", type=float, help="smallest x (default 1e-6)")
+    g.add_argument("--x-stop", dest="jacobian__x_stop", type=float, help="largest x (default 1e-2)")
+    g.add_argument("--x-num", dest="jacobian__x_num", type=int, help="number of x values, log-spaced (default 25)")
+    g.add_argument("--state", dest="jacobian__state", metavar="U,V", help="J at this state at t = theta instead of a scan")
+    p.set_defaults(func=cmd_jacobian)
+
+
+# ----------------------------------------------------------------------------------------
+def _experiment(args: argparse.Namespace, extra: dict[str, dict[str, Any]] | None = None) -> Experiment:
+    layer = overrides_from_args(args)
+    for section, entries in (extra or {}).items():
+        layer.setdefault(section, {}).update(entries)
+    return Experiment.from_sources(getattr(args, "config", None), layer)
+
+
+def _outputs(args: argparse.Namespace, exp: Experiment, default_stem: str) -> tuple[Path, Path | None]:
+    out = Path(exp.run.out or f"results/{default_stem}.nc")
+    if args.no_plot:
+        return out, None
+    return out, Path(exp.run.plot) if exp.run.plot else out.with_suffix(".png")
+
+
+def _command_line() -> str:
+    return " ".join(["impact-harness", *sys.argv[1:]])
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    from .plots import timeseries_plot
+    from .results import provenance, timeseries_dataset, write_netcdf
+    from .sampling import simulate
+    from .simulator import FmuSimulator
+
+    exp = _experiment(args)
+    t_end = float(exp.layers.get("simulate", "t_end"))
+    dt = float(exp.layers.get("simulate", "dt"))
+    out, plot = _outputs(args, exp, "simulate")
+    t_start = time.perf_counter()
+    sim = FmuSimulator(exp.model.source())
+    n = max(1, int((t_end - args.t0) / dt)) if dt > 0 else 1
+    with progress_bar(total=n, desc="simulate", unit="step", disable=not exp.run.progress) as bar:
+        series = simulate(sim, exp.params, exp.state0, args.t0, t_end, dt, progress=bar)
+    settings = {**exp.as_attrs(), "simulate.t0": args.t0, "simulate.t_end": t_end, "simulate.dt": dt}
+    ds = timeseries_dataset(series, provenance(settings, exp.model, "serial", time.perf_counter() - t_start, _command_line()))
+    write_netcdf(ds, out)
+    print(f"{len(series['t'])} points, {int(series['impacts'][-1])} impacts; wrote {out}")
+    if plot:
+        print(f"plot: {timeseries_plot(ds, plot)}")
+    return 0
+
+
+def cmd_strobe(args: argparse.Namespace) -> int:
+    from .plots import poincare_section
+    from .results import provenance, strobe_dataset, write_netcdf
+    from .sampling import strobe
+    from .simulator import FmuSimulator
+
+    exp = _experiment(args)
+    s = exp.sampling
+    out, plot = _outputs(args, exp, "strobe")
+    t_start = time.perf_counter()
+    sim = FmuSimulator(exp.model.source())
+    with progress_bar(total=s.n_transient + s.n_samples, desc="strobe", unit="period", disable=not exp.run.progress) as bar:
+        r = strobe(sim, exp.params, exp.state0, s.theta, s.n_transient, s.n_samples, progress=bar)
+    orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
+    attrs = provenance(exp.as_attrs(), exp.model, "serial", time.perf_counter() - t_start, _command_line())
+    ds = strobe_dataset(r, orbit, attrs)
+    write_netcdf(ds, out)
+    print(f"{orbit.label} (residual {orbit.residual:.2e}); wrote {out}")
+    if plot:
+        print(f"plot: {poincare_section(ds, plot)}")
+    return 0
+
+
+def _scan_option(text: str | None) -> dict[str, Any]:
+    """``NAME=V1,V2`` or ``NAME=START:STOP:NUM`` -> the sweep layer entries."""
+    if text is None:
+        return {}
+    name, sep, spec = text.partition("=")
+    if not sep or not name.strip() or not spec.strip():
+        raise HarnessInputError("--scan", f"expected NAME=V1,V2,... or NAME=START:STOP:NUM, got {text!r}")
+    if ":" in spec:
+        parts = spec.split(":")
+        if len(parts) != 3:
+            raise HarnessInputError("--scan", f"expected START:STOP:NUM, got {spec!r}")
+        values = parameter_values(parts[0], parts[1], parts[2], None, ("--scan",) * 4)
+    else:
+        values = parameter_values(None, None, None, spec, ("--scan",) * 4)
+    return {"scan_param": name.strip(), "scan_values": [float(v) for v in values]}
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from .plots import bifurcation_diagram
+    from .results import write_netcdf
+    from .sweeps import SweepStats, run_sweep
+
+    exp = _experiment(args, {"sweep": _scan_option(args.scan)})
+    spec = exp.sweep_spec()
+    out, plot = _outputs(args, exp, f"sweep-{spec.param}")
+    explicit = exp.run.checkpoint is not None
+    ckpt = Path(exp.run.checkpoint) if explicit else out.with_name(out.name + ".partial")
+    if args.no_resume and ckpt.exists():
+        shutil.rmtree(ckpt)
+    stats = SweepStats()
+    try:
+        ds = run_sweep(
+            exp.model, spec, exp.params, exp.state0, exp.sampling,
+            backend=exp.run.backend, workers=exp.run.workers, scheduler=exp.run.scheduler,
+            checkpoint=str(ckpt), progress=exp.run.progress,
+            settings={**exp.as_attrs(), "command": _command_line()}, stats=stats,
+        )
+    except HarnessInputError as exc:
+        if explicit or "different run" not in str(exc):
+            raise
+        # The default checkpoint of an earlier, different sweep to the same file: start over.
+        print(f"note: discarding {ckpt} (checkpoint of a different sweep)", file=sys.stderr)
+        shutil.rmtree(ckpt)
+        ds = run_sweep(
+            exp.model, spec, exp.params, exp.state0, exp.sampling,
+            backend=exp.run.backend, workers=exp.run.workers, scheduler=exp.run.scheduler,
+            checkpoint=str(ckpt), progress=exp.run.progress,
+            settings={**exp.as_attrs(), "command": _command_line()}, stats=stats,
+        )
+    except KeyboardInterrupt:
+        print(f"interrupted: finished points are kept in {ckpt}; rerun the same command to resume", file=sys.stderr)
+        raise
+    write_netcdf(ds, out)
+    shutil.rmtree(ckpt, ignore_errors=True)  # the NetCDF file now holds everything
+    print(f"{spec.param}: {len(spec.values)} values x {', '.join(spec.modes)}"
+          + (f" x {spec.scan_param} ({len(spec.scan_values)} values)" if spec.scan_param else "")
+          + f"; {stats.computed} tasks computed, {stats.resumed} resumed; "
+          f"wall time {stats.wall_time:.2f} s on {ds.attrs['backend']}")
+    grid = ds[spec.param].values
+    if spec.scan_param is None:
+        for direction in ds["direction"].values:
+            sel = ds.sel(direction=direction)
+            wins = windows(grid, sel["period"].values, sel["orbit_impacts"].values)
+            text = ", ".join(f"P{m} [{lo:g}, {hi:g}]" for m, lo, hi in sorted(wins, key=lambda w: -w[2])) or "none"
+            print(f"  {direction}: windows of maximal orbits (1 impact per period): {text}")
+    print(f"wrote {out}")
+    if plot:
+        print(f"plot: {bifurcation_diagram(ds, plot)}")
+    return 0
+
+
+def cmd_jacobian(args: argparse.Namespace) -> int:
+    from .jacobian import jacobian_vs_x, map_jacobian
+    from .plots import jacobian_plot
+    from .results import jacobian_dataset, provenance, write_netcdf
+    from .sampling import check_count, check_theta
+    from .simulator import FmuSimulator
+
+    exp = _experiment(args)
+    L = exp.layers
+    params = dict(exp.params)
+    # Tight integrator tolerances unless the user set them: differences need clean maps.
+    for key in ("rtol", "atol"):
+        if ("model", key) not in L.origin and key in params:
+            params[key] = float(L.get("jacobian", key))
+    theta = check_theta(L.get("jacobian", "theta"), L.arg("jacobian", "theta"))
+    sim = FmuSimulator(exp.model.source())
+    t_start = time.perf_counter()
+    state = L.get("jacobian", "state")
+    if state is not None:
+        try:
+            u, v = (float(s) for s in str(state).replace(" ", "").split(","))
+        except ValueError:
+            raise HarnessInputError(L.arg("jacobian", "state"), f"expected U,V, got {state!r}") from None
+        res = map_jacobian(sim, params, (u, v), theta=theta)
+        print(f"J at (u, v) = ({u}, {v}), t = {theta}:")
+        print(np.array2string(res.J, precision=8))
+        print(f"image {res.image}, step {res.step:.2e}, estimated error {res.error:.1e}")
+        return 0
+    n = check_count(L.get("jacobian", "x_num"), L.arg("jacobian", "x_num"), minimum=1)
+    lo, hi = float(L.get("jacobian", "x_start")), float(L.get("jacobian", "x_stop"))
+    if not (0 < lo and 0 < hi):
+        raise HarnessInputError(L.arg("jacobian", "x_start"), f"x values must be > 0 (log-spaced), got {lo}, {hi}")
+    if n > 1 and lo == hi:
+        raise HarnessInputError(L.arg("jacobian", "x_stop"), f"empty range: x_start = x_stop = {lo}")
+    x = np.geomspace(lo, hi, n)
+    out, plot = _outputs(args, exp, "jacobian")
+    with progress_bar(total=n, desc="jacobian", unit="x", disable=not exp.run.progress) as bar:
+        scan = jacobian_vs_x(sim, params, x, theta, float(L.get("jacobian", "measure_theta")), progress=bar)
+    settings = {**exp.as_attrs(), **{f"model.{k}": v for k, v in params.items()},
+                **{f"jacobian.{k}": v for k, v in L.values["jacobian"].items()}}
+    ds = jacobian_dataset(scan, provenance(settings, exp.model, "serial", time.perf_counter() - t_start, _command_line()))
+    write_netcdf(ds, out)
+    dJ = np.abs(scan.J - scan.P1)
+    ok = (dJ[:, 0, 0] > 0)
+    if ok.sum() >= 2:
+        slope = np.polyfit(np.log(x[ok]), np.log(dJ[ok, 0, 0]), 1)[0]
+        print(f"log-log slope of |J11 - P11| against x: {slope:+.3f}")
+    print(f"wrote {out}")
+    if plot:
+        print(f"plot: {jacobian_plot(ds, plot)}")
+    return 0

@@ -1,0 +1,29 @@
+"""Errors the harness raises for bad input.
+
+Every user-facing check raises :class:`HarnessInputError`, which names the offending
+argument and the reason.  The CLI turns it into a one-line message and exit status 2
+(the same convention as :mod:`argparse`), never a traceback.
+"""
+from __future__ import annotations
+
+
+class HarnessInputError(ValueError):
+    """Bad input to the harness: names the argument and says why it is rejected.
+
+    Parameters
+    ----------
+    argument : str
+        The name of the argument as the user wrote it (``"--theta"``, ``"sampling.theta"``,
+        ``"theta"`` for the API), or the FMU variable concerned.
+    reason : str
+        Why the value is rejected, phrased to complete "argument <name>: ...".
+    """
+
+    def __init__(self, argument: str, reason: str) -> None:
+        self.argument = argument
+        self.reason = reason
+        super().__init__(f"argument {argument}: {reason}")
+
+
+class FmuError(RuntimeError):
+    """The FMU itself failed (an fmi2Status of Error or Fatal during a run)."""

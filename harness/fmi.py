@@ -1,0 +1,372 @@
+"""FMI layer: read and check an FMU, and drive one reusable Co-Simulation instance.
+
+The rest of the harness talks to a *simulator* (:class:`harness.simulator.Simulator`),
+never to fmpy directly.  This module is the only place that knows about fmpy and FMI:
+
+* :class:`FmuModel` reads the modelDescription once (in the process that plans a run),
+  checks that the FMU is Co-Simulation and has the oscillator's variables, and maps
+  variable names to value references and types.  Nothing is hard-coded: the value
+  references come from the modelDescription.
+* :class:`FmuSource` is the small, picklable handle (path + sha256 + optionally the bytes)
+  that travels to worker processes and Dask workers.
+* :class:`FmuSimulator` owns *one* slave instance and reuses it between runs with
+  ``reset`` (instantiating is far more expensive than resetting).
+* :func:`make_slave` picks the slave class from the FMU's ``fmiVersion``.  Only FMI 2.0
+  exists now; an FMI 3.0 build adds a class with the same small interface as
+  :class:`Fmi2Slave` and one entry in :data:`SLAVE_CLASSES`.
+"""
+from __future__ import annotations
+
+import atexit
+import hashlib
+import os
+import shutil
+import tempfile
+import threading
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from .errors import FmuError, HarnessInputError
+
+#: Names of the oscillator's variables.  They are the interface between the harness and
+#: any FMU it drives (the C FMU, its Python twin, an FMI 3.0 build).
+STATE_OUTPUTS = ("u", "v")
+IMPACT_COUNTER = "impacts"
+INITIAL_STATE = ("u0", "v0")
+REQUIRED_VARIABLES = (*STATE_OUTPUTS, IMPACT_COUNTER, *INITIAL_STATE)
+
+#: Symbolic values accepted for the Integer parameter ``wall``.
+WALL_NAMES = {"none": 0, "compliant": 1, "rigid": 2}
+
+_SETTABLE_CAUSALITIES = {"parameter", "input"}
+
+
+def sha256_of(path: str | os.PathLike) -> str:
+    """Return the hex sha256 of a file (used to identify the exact FMU of a result)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+@dataclass(frozen=True)
+class VariableInfo:
+    """What the harness needs to know about one FMU variable."""
+
+    name: str
+    value_reference: int
+    type: str  # "Real", "Integer", "Boolean", ...
+    causality: str
+    variability: str
+    start: Any = None
+
+    @property
+    def settable(self) -> bool:
+        """True when the harness may set it before a run (parameters and inputs)."""
+        return self.causality in _SETTABLE_CAUSALITIES and self.variability != "constant"
+
+    @property
+    def tunable(self) -> bool:
+        """True when it may change between communication points, the state carried on."""
+        return self.causality == "input" or (
+            self.causality == "parameter" and self.variability == "tunable"
+        )
+
+
+class FmuModel:
+    """Static description of a Co-Simulation FMU, checked for use by the harness.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The ``.fmu`` file.
+    argument : str
+        How the caller names this argument in error messages (``"--fmu"`` in the CLI).
+
+    Raises
+    ------
+    HarnessInputError
+        If the file is missing, is not an FMU, is not Co-Simulation, has an FMI version
+        the harness cannot drive, or lacks one of :data:`REQUIRED_VARIABLES`.
+    """
+
+    def __init__(self, path: str | os.PathLike, argument: str = "fmu") -> None:
+        from fmpy import read_model_description
+
+        self.argument = argument
+        self.path = Path(path).expanduser().resolve()
+        if not self.path.is_file():
+            raise HarnessInputError(argument, f"no such file: {str(path)!r}")
+        if not zipfile.is_zipfile(self.path):
+            raise HarnessInputError(argument, f"{str(path)!r} is not an FMU (not a zip archive)")
+        try:
+            md = read_model_description(str(self.path), validate=False)
+        except Exception as exc:  # fmpy raises plain Exceptions with useful text
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise HarnessInputError(argument, f"{str(path)!r} is not a valid FMU: {reason}") from None
+        self.description = md
+        self.fmi_version: str = md.fmiVersion
+        if md.coSimulation is None:
+            raise HarnessInputError(
+                argument,
+                f"{self.path.name} is not a Co-Simulation FMU (it only provides Model Exchange); "
+                "the harness needs fmiModelDescription/CoSimulation",
+            )
+        major = self.fmi_version.split(".")[0]
+        if major not in SLAVE_CLASSES:
+            raise HarnessInputError(
+                argument,
+                f"{self.path.name} is an FMI {self.fmi_version} FMU; supported: "
+                + ", ".join(f"FMI {v}.x" for v in sorted(SLAVE_CLASSES)),
+            )
+        self.model_identifier: str = md.coSimulation.modelIdentifier
+        self.guid: str = md.guid
+        self.variables: dict[str, VariableInfo] = {
+            v.name: VariableInfo(
+                name=v.name,
+                value_reference=int(v.valueReference),
+                type=v.type,
+                causality=v.causality,
+                variability=v.variability,
+                start=v.start,
+            )
+            for v in md.modelVariables
+        }
+        missing = [n for n in REQUIRED_VARIABLES if n not in self.variables]
+        if missing:
+            raise HarnessInputError(
+                argument,
+                f"{self.path.name} lacks the oscillator variable(s) {', '.join(map(repr, missing))}",
+            )
+        self._sha256: str | None = None
+
+    # -- identity ------------------------------------------------------------------------
+    @property
+    def sha256(self) -> str:
+        """The FMU file's sha256 (computed once)."""
+        if self._sha256 is None:
+            self._sha256 = sha256_of(self.path)
+        return self._sha256
+
+    def source(self, embed: bool = False) -> "FmuSource":
+        """A picklable handle for workers; ``embed`` ships the bytes (remote Dask workers)."""
+        data = self.path.read_bytes() if embed else None
+        return FmuSource(str(self.path), self.sha256, data)
+
+    # -- variables -----------------------------------------------------------------------
+    def parameter_names(self) -> list[str]:
+        """Names of the variables the harness may set (parameters and inputs)."""
+        return [n for n, v in self.variables.items() if v.settable]
+
+    def variable(self, name: str, argument: str | None = None) -> VariableInfo:
+        """Look up a variable by name, with a clear error naming ``argument`` if unknown."""
+        try:
+            return self.variables[name]
+        except KeyError:
+            raise HarnessInputError(
+                argument or name,
+                f"unknown FMU variable {name!r}; settable variables of {self.path.name}: "
+                + ", ".join(self.parameter_names()),
+            ) from None
+
+    def check_settable(self, name: str, argument: str | None = None) -> VariableInfo:
+        """Return the variable if the harness may set it, else raise naming the reason."""
+        var = self.variable(name, argument)
+        if not var.settable:
+            raise HarnessInputError(
+                argument or name,
+                f"FMU variable {name!r} has causality {var.causality!r} and variability "
+                f"{var.variability!r}; only parameters and inputs can be set",
+            )
+        return var
+
+    def coerce(self, name: str, value: Any, argument: str | None = None) -> float | int | bool:
+        """Convert ``value`` to the Python type of FMU variable ``name`` (checked settable)."""
+        var = self.check_settable(name, argument)
+        return coerce_value(var, value, argument or name)
+
+    def defaults(self) -> dict[str, float | int | bool]:
+        """Start values of all settable parameters, as given by the modelDescription."""
+        out: dict[str, float | int | bool] = {}
+        for name in self.parameter_names():
+            var = self.variables[name]
+            if var.start is not None and var.type in ("Real", "Integer", "Boolean"):
+                out[name] = coerce_value(var, var.start, name)
+        return out
+
+
+def coerce_value(var: VariableInfo, value: Any, argument: str) -> float | int | bool:
+    """Convert a user value (number, string from TOML or CLI) to the variable's type."""
+    try:
+        if var.type == "Real":
+            if isinstance(value, bool):
+                raise ValueError
+            return float(value)
+        if var.type in ("Integer", "Enumeration"):
+            if var.name == "wall" and isinstance(value, str) and value.lower() in WALL_NAMES:
+                return WALL_NAMES[value.lower()]
+            if isinstance(value, bool):
+                raise ValueError
+            f = float(value)
+            if f != int(f):
+                raise ValueError
+            return int(f)
+        if var.type == "Boolean":
+            if isinstance(value, str):
+                if value.lower() in ("true", "1", "yes"):
+                    return True
+                if value.lower() in ("false", "0", "no"):
+                    return False
+                raise ValueError
+            return bool(value)
+    except (TypeError, ValueError):
+        hint = " (or one of none, compliant, rigid)" if var.name == "wall" else ""
+        raise HarnessInputError(
+            argument, f"{value!r} is not a valid {var.type} value for FMU variable {var.name!r}{hint}"
+        ) from None
+    raise HarnessInputError(argument, f"FMU variable {var.name!r} has type {var.type}, which the harness cannot set")
+
+
+# ----------------------------------------------------------------------------------------
+# Picklable handle and per-process extraction
+# ----------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class FmuSource:
+    """What a worker needs to open the same FMU: its path, its sha256, maybe its bytes.
+
+    On a worker that shares the file system the path is used after its sha256 is checked;
+    on a remote Dask worker ``data`` (the FMU's bytes) is written to a local cache instead.
+    The sha256 guarantees every backend runs the very same binary.
+    """
+
+    path: str
+    sha256: str
+    data: bytes | None = field(default=None, repr=False, compare=False)
+
+
+_EXTRACT_LOCK = threading.Lock()
+_EXTRACTED: dict[str, tuple[str, "FmuModel"]] = {}
+_TMP_ROOT: str | None = None
+
+
+def _tmp_root() -> str:
+    global _TMP_ROOT
+    if _TMP_ROOT is None:
+        _TMP_ROOT = tempfile.mkdtemp(prefix="impact-harness-")
+        atexit.register(shutil.rmtree, _TMP_ROOT, True)
+    return _TMP_ROOT
+
+
+def open_source(source: FmuSource) -> tuple[str, FmuModel]:
+    """Extract the FMU once per process and return (unzip directory, model).
+
+    Raises
+    ------
+    FmuError
+        If the file at ``source.path`` is not the FMU the run was planned with (its sha256
+        differs) and no bytes were shipped.
+    """
+    from fmpy import extract
+
+    with _EXTRACT_LOCK:
+        hit = _EXTRACTED.get(source.sha256)
+        if hit is not None:
+            return hit
+        path = source.path
+        if not (os.path.isfile(path) and sha256_of(path) == source.sha256):
+            if source.data is None:
+                raise FmuError(
+                    f"FMU {path} is missing on this worker or differs from the one the run "
+                    f"was planned with (sha256 {source.sha256[:12]}...)"
+                )
+            path = os.path.join(_tmp_root(), source.sha256 + ".fmu")
+            with open(path, "wb") as fh:
+                fh.write(source.data)
+        unzipdir = extract(path, unzipdir=os.path.join(_tmp_root(), source.sha256))
+        model = FmuModel(path)
+        _EXTRACTED[source.sha256] = (unzipdir, model)
+        return unzipdir, model
+
+
+# ----------------------------------------------------------------------------------------
+# Slaves: the version-specific part
+# ----------------------------------------------------------------------------------------
+class Fmi2Slave:
+    """One FMI 2.0 Co-Simulation instance (fmpy's low-level ``FMU2Slave``).
+
+    The interface (``initialize``, ``reset``, ``set``, ``do_step``, ``get_real``,
+    ``get_integer``, ``close``) is all the simulator uses, so an ``Fmi3Slave`` around
+    fmpy's ``FMU3Slave`` only has to provide the same methods.
+    """
+
+    def __init__(self, model: FmuModel, unzipdir: str, instance_name: str) -> None:
+        from fmpy.fmi2 import FMU2Slave
+
+        self._fmu = FMU2Slave(
+            guid=model.guid,
+            unzipDirectory=unzipdir,
+            modelIdentifier=model.model_identifier,
+            instanceName=instance_name,
+        )
+        self._fmu.instantiate(loggingOn=False)
+        self._initialized = False
+
+    def initialize(self, t0: float, values: Mapping[VariableInfo, Any]) -> None:
+        """setupExperiment(t0), enter initialization, set ``values``, exit initialization."""
+        self._fmu.setupExperiment(startTime=t0)
+        self._fmu.enterInitializationMode()
+        self.set(values)
+        self._fmu.exitInitializationMode()
+        self._initialized = True
+
+    def set(self, values: Mapping[VariableInfo, Any]) -> None:
+        """Set variables grouped by type (one FMI call per type)."""
+        by_type: dict[str, tuple[list[int], list[Any]]] = {}
+        for var, value in values.items():
+            vrs, vals = by_type.setdefault(var.type, ([], []))
+            vrs.append(var.value_reference)
+            vals.append(value)
+        for typ, (vrs, vals) in by_type.items():
+            if typ == "Real":
+                self._fmu.setReal(vrs, [float(x) for x in vals])
+            elif typ in ("Integer", "Enumeration"):
+                self._fmu.setInteger(vrs, [int(x) for x in vals])
+            elif typ == "Boolean":
+                self._fmu.setBoolean(vrs, [bool(x) for x in vals])
+            else:  # pragma: no cover - rejected earlier by coerce_value
+                raise FmuError(f"cannot set variables of type {typ}")
+
+    def reset(self) -> None:
+        """fmi2Reset: back to the instantiated state, instance and library kept."""
+        if self._initialized:
+            self._fmu.reset()
+            self._initialized = False
+
+    def do_step(self, t: float, h: float) -> None:
+        self._fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+
+    def get_real(self, vrs: list[int]) -> list[float]:
+        return self._fmu.getReal(vrs)
+
+    def get_integer(self, vrs: list[int]) -> list[int]:
+        return self._fmu.getInteger(vrs)
+
+    def close(self) -> None:
+        try:
+            if self._initialized:
+                self._fmu.terminate()
+        finally:
+            self._fmu.freeInstance()
+
+
+#: Slave class per FMI major version.  FMI 3.0: add ``"3": Fmi3Slave``.
+SLAVE_CLASSES: dict[str, type] = {"2": Fmi2Slave}
+
+
+def make_slave(model: FmuModel, unzipdir: str, instance_name: str) -> Fmi2Slave:
+    """Instantiate the slave class matching the FMU's ``fmiVersion``."""
+    cls = SLAVE_CLASSES[model.fmi_version.split(".")[0]]
+    return cls(model, unzipdir, instance_name)

@@ -1,0 +1,207 @@
+"""Jacobian of the stroboscopic map, measured on the FMU by central differences.
+
+The map F takes the state at t0 = n + theta to the state one period later.  Its Jacobian
+is measured by restarting the simulator from perturbed states (no directional derivatives
+are needed from the FMU).  Near grazing F has a square-root singularity, so the step must
+be small against the distance to the grazing set but large against the integrator's noise;
+:func:`map_jacobian` tries a ladder of steps and keeps the one where successive estimates
+agree best (the classical step selection for noisy differences), and reports that
+disagreement as the error estimate.
+
+For the map near grazing (FORMULAS.md section 8) :func:`jacobian_vs_x` follows the
+family of orbits whose wall-free continuation at t = n is (u, v) = (x, 0): J is measured at
+the section phase ``measure_theta`` (default 1/2, far from the impact near t = n, where
+every element is generic) and expressed in the coordinates of the section phase ``theta``
+by the exact free-flight change of coordinates, J_theta = P(d) J P(d)^-1 with
+d = theta - measure_theta mod 1.  At ``theta = 0`` these are the paper's virtual
+coordinates at t = n, in which J12 is *not* singular (d sqrt(chi)/dv = 0 at v = 0) and J11
+is.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+import scipy.linalg
+
+from .errors import HarnessInputError
+from .sampling import check_theta
+from .simulator import Simulator
+
+TWO_PI = 2.0 * math.pi
+
+#: Steps tried, as multiples of the state scale: 1e-2 down to ~1e-9 in factors of 4.
+DEFAULT_STEPS = tuple(1e-2 * 4.0 ** -k for k in range(15))
+
+
+@dataclass(frozen=True)
+class JacobianResult:
+    """A measured Jacobian.
+
+    Attributes
+    ----------
+    J : ndarray, shape (2, 2)
+        d(u, v)_{n+1} / d(u, v)_n.
+    image : ndarray, shape (2,)
+        F(state), the unperturbed image.
+    step : float
+        The difference step chosen.
+    error : float
+        max |J(step) - J(previous step)|: the estimated absolute error.
+    """
+
+    J: np.ndarray
+    image: np.ndarray
+    step: float
+    error: float
+
+
+def one_period(sim: Simulator, params: Mapping[str, Any], state: Sequence[float], t0: float) -> np.ndarray:
+    """F(state): (u, v) one period after ``t0``, from a fresh (re)start."""
+    sim.start(params, t0, (float(state[0]), float(state[1])))
+    sim.advance(t0 + 1.0)
+    u, v, _ = sim.read()
+    return np.array([u, v])
+
+
+def map_jacobian(
+    sim: Simulator,
+    params: Mapping[str, Any],
+    state: Sequence[float],
+    theta: float = 0.0,
+    steps: Sequence[float] = DEFAULT_STEPS,
+    scale: Sequence[float] = (1.0, TWO_PI),
+) -> JacobianResult:
+    """Jacobian of the one-period map at ``state`` (taken at t = theta).
+
+    Parameters
+    ----------
+    sim : Simulator
+    params : mapping
+        FMU parameters; tight ``rtol``/``atol`` make small steps usable.
+    state : (u, v)
+        Point of the section at phase ``theta``.
+    theta : float
+        Section phase in [0, 1).
+    steps : sequence of float
+        Candidate relative steps, decreasing.
+    scale : (float, float)
+        Step in u is ``h * scale[0]``, in v ``h * scale[1]`` (v ~ 2 pi u along orbits).
+
+    Returns
+    -------
+    JacobianResult
+    """
+    theta = check_theta(theta)
+    if len(steps) < 2:
+        raise HarnessInputError("steps", "need at least two candidate steps")
+    x = np.asarray(state, dtype=float)
+    image = one_period(sim, params, x, theta)
+    estimates = []
+    for h in steps:
+        J = np.empty((2, 2))
+        for j in range(2):
+            dx = np.zeros(2)
+            dx[j] = h * scale[j]
+            J[:, j] = (one_period(sim, params, x + dx, theta) - one_period(sim, params, x - dx, theta)) / (2 * dx[j])
+        estimates.append(J)
+    diffs = [float(np.max(np.abs(estimates[k + 1] - estimates[k]))) for k in range(len(steps) - 1)]
+    best = int(np.argmin(diffs))
+    return JacobianResult(J=estimates[best + 1], image=image, step=float(steps[best + 1]), error=diffs[best])
+
+
+def free_propagator(nu: float, Omega: float, dt: float) -> np.ndarray:
+    """P(dt) of the wall-free oscillator (7): exp(dt [[0, 1], [-Omega^2, -nu]])."""
+    return scipy.linalg.expm(dt * np.array([[0.0, 1.0], [-Omega * Omega, -nu]]))
+
+
+def wall_free_orbit(sigma: float, t: float) -> np.ndarray:
+    """(p, p') of (4): the wall-free periodic orbit p(t) = (1 + sigma) cos(2 pi t) - 1."""
+    return np.array([(1 + sigma) * math.cos(TWO_PI * t) - 1.0, -TWO_PI * (1 + sigma) * math.sin(TWO_PI * t)])
+
+
+def grazing_family_state(x: float, t: float, nu: float, Omega: float, sigma: float) -> np.ndarray:
+    """State at time ``t`` (within the period before t = 0) of the wall-free orbit through
+    (u, v) = (x, 0) at t = 0, by (8): u(t) = P(t) [u(0) - p(0)] + p(t)."""
+    return free_propagator(nu, Omega, t) @ (np.array([x, 0.0]) - wall_free_orbit(sigma, 0.0)) + wall_free_orbit(sigma, t)
+
+
+@dataclass(frozen=True)
+class JacobianScan:
+    """J against x along the grazing family, in the coordinates of phase ``theta``.
+
+    Attributes
+    ----------
+    x : ndarray (K,)
+    J : ndarray (K, 2, 2)
+        In the coordinates of phase ``theta``.
+    J_measured : ndarray (K, 2, 2)
+        As measured at phase ``measure_theta``.
+    P1 : ndarray (2, 2)
+        Free-flight Jacobian P(1) (same in every phase's coordinates).
+    step, error : ndarray (K,)
+    theta, measure_theta : float
+    """
+
+    x: np.ndarray
+    J: np.ndarray
+    J_measured: np.ndarray
+    P1: np.ndarray
+    step: np.ndarray
+    error: np.ndarray
+    theta: float
+    measure_theta: float
+
+
+def jacobian_vs_x(
+    sim: Simulator,
+    params: Mapping[str, Any],
+    x: Sequence[float],
+    theta: float = 0.0,
+    measure_theta: float = 0.5,
+    progress: Any = None,
+) -> JacobianScan:
+    """J(x) near grazing for the family with wall-free state (x, 0) at t = n.
+
+    Parameters
+    ----------
+    sim : Simulator
+    params : mapping
+        Must contain ``nu``, ``Omega``, ``sigma`` (for the free-flight coordinates).
+    x : sequence of float
+        Penetration of the wall-free orbit at t = n (x > 0: impact).
+    theta : float
+        Section phase of the coordinates J is expressed in (0: the paper's t = n).
+    measure_theta : float
+        Section phase where J is measured; it must not be within the impact, so 1/2.
+    progress : tqdm-like, optional
+    """
+    theta = check_theta(theta, "--theta")
+    measure_theta = check_theta(measure_theta, "--measure-theta")
+    for name in ("nu", "Omega", "sigma"):
+        if name not in params:
+            raise HarnessInputError(name, "needed for the free-flight coordinates of the Jacobian")
+    nu, Om, sigma = float(params["nu"]), float(params["Omega"]), float(params["sigma"])
+    x = np.asarray(x, dtype=float)
+    if x.size == 0:
+        raise HarnessInputError("--x-num", "empty range of x")
+    t_meas = measure_theta - 1.0  # measured over [n - 1 + m, n + m], so the impact near n is inside
+    d = (theta - measure_theta) % 1.0
+    T = free_propagator(nu, Om, d)
+    Tinv = np.linalg.inv(T)
+    Js, Jm, hs, errs = [], [], [], []
+    for xi in x:
+        state = grazing_family_state(float(xi), t_meas, nu, Om, sigma)
+        res = map_jacobian(sim, params, state, theta=measure_theta)
+        Jm.append(res.J)
+        Js.append(T @ res.J @ Tinv)
+        hs.append(res.step)
+        errs.append(res.error)
+        if progress is not None:
+            progress.update(1)
+    return JacobianScan(
+        x=x, J=np.array(Js), J_measured=np.array(Jm), P1=free_propagator(nu, Om, 1.0),
+        step=np.array(hs), error=np.array(errs), theta=theta, measure_theta=measure_theta,
+    )

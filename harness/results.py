@@ -1,0 +1,182 @@
+"""Results as xarray Datasets with full provenance, written as NetCDF.
+
+Every Dataset the harness writes carries, as attributes, every parameter of the run, the
+FMU's sha256 and FMI version, the versions of this project and of the libraries, the
+backend and the wall time, so a file on its own says how it was made.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import os
+import platform
+import sys
+from importlib import metadata
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+import xarray as xr
+
+PROJECT_DISTRIBUTION = "impact-grazing"
+_LIBRARIES = ("fmpy", "numpy", "scipy", "xarray", "netCDF4", "dask", "distributed", "matplotlib")
+
+
+def library_versions() -> dict[str, str]:
+    """Versions of Python, this project and the libraries a result depends on."""
+    out = {"python": platform.python_version()}
+    for dist in (PROJECT_DISTRIBUTION, *_LIBRARIES):
+        try:
+            out[dist] = metadata.version(dist)
+        except metadata.PackageNotFoundError:
+            out[dist] = "not installed"
+    return out
+
+
+def _attr_value(value: Any) -> Any:
+    """NetCDF attributes hold strings, numbers and 1-D numeric arrays only."""
+    if value is None:
+        return "none"
+    if isinstance(value, (bool, np.bool_)):
+        return int(value)
+    if isinstance(value, (int, float, str, np.integer, np.floating)):
+        return value
+    if isinstance(value, (list, tuple, np.ndarray)):
+        arr = np.asarray(value)
+        if arr.dtype.kind in "if" and arr.ndim == 1 and arr.size:
+            return arr
+        return json.dumps(np.asarray(value).tolist())
+    return str(value)
+
+
+def provenance(
+    settings: Mapping[str, Any],
+    model: Any = None,
+    backend: str | None = None,
+    wall_time: float | None = None,
+    command: str | None = None,
+) -> dict[str, Any]:
+    """Attributes for a result.
+
+    Parameters
+    ----------
+    settings : mapping
+        Every parameter of the run (flat ``{"model.sigma": 0.2, "sampling.theta": 0, ...}``).
+    model : FmuModel, optional
+        The FMU (its path, sha256, FMI version and model identifier are recorded).
+    backend : str, optional
+        Backend description.
+    wall_time : float, optional
+        Seconds.
+    command : str, optional
+        The command line, when run from the CLI.
+    """
+    attrs: dict[str, Any] = {}
+    for key, value in settings.items():
+        attrs[key] = _attr_value(value)
+    if model is not None:
+        attrs["fmu_path"] = str(model.path)
+        attrs["fmu_sha256"] = model.sha256
+        attrs["fmi_version"] = model.fmi_version
+        attrs["fmu_model_identifier"] = model.model_identifier
+    for name, version in library_versions().items():
+        attrs[f"version.{name}"] = version
+    attrs["platform"] = f"{platform.system()} {platform.machine()}"
+    if backend is not None:
+        attrs["backend"] = backend
+    if wall_time is not None:
+        attrs["wall_time_s"] = float(wall_time)
+    attrs["created_utc"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
+    attrs["command"] = command if command is not None else " ".join(sys.argv)
+    # The whole record once more as JSON, for programs that want a dict back.
+    attrs["settings_json"] = json.dumps({k: _jsonable(v) for k, v in settings.items()}, sort_keys=True)
+    return attrs
+
+
+def _jsonable(value: Any) -> Any:
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, (str, int, float, bool)) or value is None:
+        return value
+    if isinstance(value, (list, tuple)):
+        return [_jsonable(v) for v in value]
+    return str(value)
+
+
+def settings_of(ds: xr.Dataset) -> dict[str, Any]:
+    """The settings a Dataset was made with (inverse of :func:`provenance`'s JSON record)."""
+    return json.loads(ds.attrs["settings_json"])
+
+
+def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """Write ``ds`` to ``path`` (directories created), atomically.
+
+    Written to a temporary name first, so that an interruption never leaves a truncated
+    file under the final name.
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(path.name + ".tmp")
+    ds.to_netcdf(tmp, engine="netcdf4")
+    os.replace(tmp, path)
+    return path
+
+
+def read_netcdf(path: str | os.PathLike) -> xr.Dataset:
+    """Load a result written by :func:`write_netcdf` fully into memory."""
+    with xr.open_dataset(path, engine="netcdf4") as ds:
+        return ds.load()
+
+
+def strobe_dataset(result: Any, orbit: Any, attrs: Mapping[str, Any]) -> xr.Dataset:
+    """Dataset of one stroboscopic run (samples + its classification)."""
+    n = len(result.u)
+    ds = xr.Dataset(
+        {
+            "u": ("sample", result.u, {"long_name": "displacement at t = n + theta"}),
+            "v": ("sample", result.v, {"long_name": "velocity at t = n + theta"}),
+            "impacts": ("sample", result.impacts, {"long_name": "wall entries in the period ending at the sample"}),
+            "t": ("sample", result.t, {"long_name": "sample time"}),
+            "period": ((), orbit.period, {"long_name": "orbit period in forcing periods (0: not periodic)"}),
+            "orbit_impacts": ((), orbit.impacts, {"long_name": "wall entries per orbit period (-1: not periodic)"}),
+        },
+        coords={"sample": np.arange(n)},
+        attrs=dict(attrs),
+    )
+    ds.attrs["classification"] = orbit.label
+    return ds
+
+
+def timeseries_dataset(series: Mapping[str, np.ndarray], attrs: Mapping[str, Any]) -> xr.Dataset:
+    """Dataset of a plain simulation (u, v, cumulative impacts against time)."""
+    return xr.Dataset(
+        {
+            "u": ("t", series["u"], {"long_name": "displacement"}),
+            "v": ("t", series["v"], {"long_name": "velocity"}),
+            "impacts": ("t", series["impacts"], {"long_name": "wall entries since the start"}),
+        },
+        coords={"t": series["t"]},
+        attrs=dict(attrs),
+    )
+
+
+def jacobian_dataset(scan: Any, attrs: Mapping[str, Any]) -> xr.Dataset:
+    """Dataset of :func:`harness.jacobian.jacobian_vs_x`: J(x) and the free-flight P(1)."""
+    rows = ["d_u_next", "d_v_next"]
+    cols = ["d_u", "d_v"]
+    ds = xr.Dataset(
+        {
+            "J": (("x", "row", "col"), scan.J, {"long_name": f"map Jacobian in the coordinates at theta = {scan.theta}"}),
+            "J_measured": (("x", "row", "col"), scan.J_measured,
+                           {"long_name": f"map Jacobian measured at theta = {scan.measure_theta}"}),
+            "P1": (("row", "col"), scan.P1, {"long_name": "free-flight Jacobian P(1)"}),
+            "step": ("x", scan.step, {"long_name": "central-difference step chosen"}),
+            "error": ("x", scan.error, {"long_name": "estimated absolute error of J"}),
+        },
+        coords={"x": scan.x, "row": rows, "col": cols},
+        attrs=dict(attrs),
+    )
+    ds["x"].attrs["long_name"] = "wall-free penetration u at t = n of the family (x, 0)"
+    return ds

@@ -1,0 +1,200 @@
+"""Simulators: what the sampling code drives.
+
+A simulator integrates the oscillator from a state at a start time, lets the caller
+change a parameter between communication points, and reports (u, v) and the cumulative
+number of wall entries.  Two implementations:
+
+* :class:`FmuSimulator` drives a Co-Simulation FMU (one instance, reused with ``reset``).
+* :class:`MappingSimulator` wraps a user-given one-period map, so that the same sweeps,
+  classification and plots apply to an analytic map (e.g. from :mod:`mapcheck`).
+"""
+from __future__ import annotations
+
+import math
+import threading
+from typing import Any, Callable, Mapping, Protocol, runtime_checkable
+
+from .errors import FmuError, HarnessInputError
+from .fmi import (
+    IMPACT_COUNTER,
+    INITIAL_STATE,
+    STATE_OUTPUTS,
+    FmuModel,
+    FmuSource,
+    VariableInfo,
+    make_slave,
+    open_source,
+)
+
+Params = Mapping[str, Any]
+
+
+@runtime_checkable
+class Simulator(Protocol):
+    """The interface the sampling, sweep and Jacobian code relies on."""
+
+    time: float
+
+    def start(self, params: Params, t0: float, state: tuple[float, float]) -> None:
+        """(Re)start at absolute time ``t0`` from ``state`` = (u, v) with ``params``."""
+
+    def advance(self, t: float) -> None:
+        """Integrate to absolute time ``t`` (> current time)."""
+
+    def set_parameter(self, name: str, value: Any) -> None:
+        """Change one parameter now; the state is carried on."""
+
+    def read(self) -> tuple[float, float, int]:
+        """Return (u, v, wall entries since the first ``start`` of this run)."""
+
+
+class FmuSimulator:
+    """Drive one FMU instance; :meth:`start` resets and re-initializes it.
+
+    Parameters
+    ----------
+    source : FmuSource
+        Which FMU (checked by sha256 on this process).
+    instance_name : str
+        FMI instance name (appears in the FMU's log messages).
+    max_step : float
+        Longest communication step; a period is done in one ``doStep`` by default because
+        the FMU handles its events inside a step (``canHandleVariableCommunicationStepSize``).
+    """
+
+    def __init__(self, source: FmuSource, instance_name: str = "harness", max_step: float = 1.0) -> None:
+        unzipdir, model = open_source(source)
+        self.model: FmuModel = model
+        self.source = source
+        self._slave = make_slave(model, unzipdir, instance_name)
+        self._max_step = float(max_step)
+        v = model.variables
+        self._state_vrs = [v[n].value_reference for n in STATE_OUTPUTS]
+        self._impacts_vr = [v[IMPACT_COUNTER].value_reference]
+        self._init_vars: tuple[VariableInfo, VariableInfo] = (v[INITIAL_STATE[0]], v[INITIAL_STATE[1]])
+        self._params: dict[str, Any] = {}
+        self._impact_offset = 0
+        self.time = math.nan
+        self.restarts = 0  # re-initializations to carry the state across a non-tunable change
+
+    # -- life cycle ----------------------------------------------------------------------
+    def start(self, params: Params, t0: float, state: tuple[float, float]) -> None:
+        self._params = dict(params)
+        self._impact_offset = 0
+        self._initialize(t0, state)
+
+    def _initialize(self, t0: float, state: tuple[float, float]) -> None:
+        values: dict[VariableInfo, Any] = {}
+        for name, value in self._params.items():
+            if name in INITIAL_STATE:
+                continue  # the state argument wins
+            values[self.model.check_settable(name)] = value
+        values[self._init_vars[0]] = float(state[0])
+        values[self._init_vars[1]] = float(state[1])
+        self._slave.reset()
+        try:
+            self._slave.initialize(float(t0), values)
+        except Exception as exc:
+            raise FmuError(f"FMU initialization at t={t0} with {self._params} failed: {exc}") from exc
+        self.time = float(t0)
+
+    def advance(self, t: float) -> None:
+        # Steps are computed from absolute times (not accumulated) so that sample times are
+        # exactly n + theta however many periods a run has.
+        while self.time < t:
+            t_next = min(t, self.time + self._max_step)
+            try:
+                self._slave.do_step(self.time, t_next - self.time)
+            except Exception as exc:
+                raise FmuError(f"FMU doStep from t={self.time} to t={t_next} failed: {exc}") from exc
+            self.time = t_next
+
+    def set_parameter(self, name: str, value: Any) -> None:
+        var = self.model.check_settable(name)
+        self._params[name] = value
+        if var.tunable:
+            self._slave.set({var: value})
+        else:
+            # Not tunable: restart at the current time from the current state, which is
+            # equivalent for a state-space model (the impact counter is carried over).
+            u, v, n = self.read()
+            self._impact_offset = n
+            self._initialize(self.time, (u, v))
+            self.restarts += 1
+
+    def read(self) -> tuple[float, float, int]:
+        u, v = self._slave.get_real(self._state_vrs)
+        (n,) = self._slave.get_integer(self._impacts_vr)
+        return float(u), float(v), int(n) + self._impact_offset
+
+    def close(self) -> None:
+        self._slave.close()
+
+
+OneStepMap = Callable[[float, float, float, Mapping[str, Any]], tuple[float, float, int]]
+
+
+class MappingSimulator:
+    """A user-given one-period map seen as a simulator.
+
+    Parameters
+    ----------
+    step : callable
+        ``step(u, v, t, params) -> (u_next, v_next, impacts)``: the state one period after
+        time ``t`` and the number of wall entries during that period.
+    defaults : mapping
+        Default parameters, merged under those passed to :meth:`start`.
+    """
+
+    def __init__(self, step: OneStepMap, defaults: Params | None = None) -> None:
+        self._step = step
+        self._defaults = dict(defaults or {})
+        self._params: dict[str, Any] = {}
+        self._u = self._v = math.nan
+        self._n = 0
+        self.time = math.nan
+
+    def start(self, params: Params, t0: float, state: tuple[float, float]) -> None:
+        self._params = {**self._defaults, **params}
+        self._u, self._v = float(state[0]), float(state[1])
+        self._n = 0
+        self.time = float(t0)
+
+    def advance(self, t: float) -> None:
+        periods = t - self.time
+        k = round(periods)
+        if k < 0 or abs(periods - k) > 1e-9:
+            raise HarnessInputError("t", f"a mapping advances in whole periods; cannot go from {self.time} to {t}")
+        for _ in range(k):
+            self._u, self._v, m = self._step(self._u, self._v, self.time, self._params)
+            self._n += int(m)
+            self.time += 1.0
+
+    def set_parameter(self, name: str, value: Any) -> None:
+        self._params[name] = value
+
+    def read(self) -> tuple[float, float, int]:
+        return self._u, self._v, self._n
+
+
+# ----------------------------------------------------------------------------------------
+# One simulator per (FMU, thread): workers reuse their instance across tasks.
+# ----------------------------------------------------------------------------------------
+_LOCAL = threading.local()
+
+
+def simulator_for(source: FmuSource) -> FmuSimulator:
+    """Return this thread's simulator for ``source``, creating it on first use.
+
+    A process-pool worker or a Dask worker thread instantiates the FMU once and then only
+    resets it between sweep points.  Thread-local because an FMI instance must not be used
+    from two threads at once (a Dask worker may run several threads).
+    """
+    cache: dict[str, FmuSimulator] | None = getattr(_LOCAL, "sims", None)
+    if cache is None:
+        cache = _LOCAL.sims = {}
+    sim = cache.get(source.sha256)
+    if sim is None:
+        name = f"harness-{threading.get_ident()}"
+        sim = cache[source.sha256] = FmuSimulator(source, instance_name=name)
+    return sim

@@ -1,0 +1,349 @@
+"""Parameter sweeps and 2D scans: fresh starts and quasi-static continuation.
+
+Two kinds of task:
+
+* **fresh**: one point, started from the same initial state (embarrassingly parallel);
+* **continuation** (``up`` / ``down``): one run through the whole grid of the swept
+  parameter, changed between periods with the state carried on (through the FMU's tunable
+  ``sigma``; a non-tunable parameter is changed by restarting from the current state).
+  This is how the experiment and the paper's figures show hysteresis.  Each direction
+  starts from the initial state at its first grid value, so up and down are independent
+  tasks and can run in parallel.
+
+In a 2D scan the second parameter (e.g. Gamma) is fixed per task: fresh points cover the
+grid, continuation runs one chain per value of the second parameter.
+
+Tasks are plain data; :func:`run_task` executes one on whatever process it lands on, with
+that process's reused FMU instance.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+import xarray as xr
+
+from .backends import Backend, make_backend
+from .checkpoint import Checkpoint, fingerprint
+from .classify import classify_orbit
+from .config import SamplingSpec, SweepSpec
+from .errors import HarnessInputError
+from .fmi import INITIAL_STATE, FmuModel, FmuSource
+from .progress import progress_bar
+from .results import provenance
+from .sampling import check_theta, sample_periods
+from .simulator import simulator_for
+
+RESULT_FIELDS = ("u", "v", "impacts", "t", "period", "orbit_impacts")
+
+
+@dataclass(frozen=True)
+class SweepTask:
+    """One unit of work: a fresh point or a continuation chain.
+
+    Attributes
+    ----------
+    key : str
+        Stable identifier (checkpoint file name, ordering).
+    mode : str
+        ``"fresh"``, ``"up"`` or ``"down"``.
+    param : str
+        Swept parameter.
+    values : tuple of float
+        One value (fresh) or the chain in the order it is run (continuation).
+    params : dict
+        All other FMU parameters (including the fixed second-axis value of a 2D scan).
+    state0 : (float, float)
+        Initial state at the first section time.
+    sampling : SamplingSpec
+    """
+
+    key: str
+    mode: str
+    param: str
+    values: tuple[float, ...]
+    params: dict[str, Any] = field(hash=False)
+    state0: tuple[float, float]
+    sampling: SamplingSpec
+
+
+def execute(task: SweepTask, sim: Any) -> dict[str, np.ndarray]:
+    """Run ``task`` on simulator ``sim``; arrays indexed (point in ``task.values``, sample)."""
+    s = task.sampling
+    k, n = len(task.values), s.n_samples
+    out = {
+        "u": np.empty((k, n)),
+        "v": np.empty((k, n)),
+        "impacts": np.empty((k, n), dtype=np.int64),
+        "t": np.empty((k, n)),
+        "period": np.empty(k, dtype=np.int64),
+        "orbit_impacts": np.empty(k, dtype=np.int64),
+    }
+    params = dict(task.params)
+    state0 = task.state0
+    for i, value in enumerate(task.values):
+        if i == 0:
+            if task.param in INITIAL_STATE:  # sweeping the initial state (basin scans)
+                state0 = (value, state0[1]) if task.param == INITIAL_STATE[0] else (state0[0], value)
+            else:
+                params[task.param] = value
+            sim.start(params, s.theta, state0)
+        else:
+            sim.set_parameter(task.param, value)
+        r = sample_periods(sim, s.n_transient, s.n_samples)
+        orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
+        out["u"][i], out["v"][i], out["impacts"][i], out["t"][i] = r.u, r.v, r.impacts, r.t
+        out["period"][i], out["orbit_impacts"][i] = orbit.period, orbit.impacts
+    return out
+
+
+def run_task(task: SweepTask, source: Any) -> dict[str, np.ndarray]:
+    """Worker entry point: this thread's FMU instance (or a user simulator) runs ``task``."""
+    sim = simulator_for(source) if isinstance(source, FmuSource) else source
+    return execute(task, sim)
+
+
+# ----------------------------------------------------------------------------------------
+# Planning
+# ----------------------------------------------------------------------------------------
+def plan_tasks(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, float],
+               sampling: SamplingSpec) -> dict[str, SweepTask]:
+    """All tasks of a sweep, keyed by a stable key."""
+    if spec.param in INITIAL_STATE and any(m != "fresh" for m in spec.modes):
+        raise HarnessInputError("--mode", f"the initial state {spec.param!r} can only be swept with fresh starts")
+    grid = np.sort(np.asarray(spec.values, dtype=float))
+    scan = [None] if spec.scan_param is None else list(np.asarray(spec.scan_values, dtype=float))
+    tasks: dict[str, SweepTask] = {}
+    for j, second in enumerate(scan):
+        base = dict(params)
+        if second is not None:
+            base[spec.scan_param] = float(second)
+        suffix = "" if second is None else f"-s{j:04d}"
+        for mode in spec.modes:
+            if mode == "fresh":
+                for i, value in enumerate(grid):
+                    key = f"fresh{suffix}-p{i:05d}"
+                    tasks[key] = SweepTask(key, mode, spec.param, (float(value),), base, state0, sampling)
+            else:
+                chain = grid if mode == "up" else grid[::-1]
+                key = f"{mode}{suffix}"
+                tasks[key] = SweepTask(key, mode, spec.param, tuple(float(x) for x in chain), base, state0, sampling)
+    return tasks
+
+
+def sweep_fingerprint(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, float],
+                      sampling: SamplingSpec, fmu_sha256: str) -> str:
+    """Identity of a sweep for checkpoints: same fingerprint, same results."""
+    return fingerprint({
+        "fmu": fmu_sha256,
+        "params": dict(params),
+        "state0": list(state0),
+        "sampling": sampling.__dict__,
+        "param": spec.param,
+        "values": np.sort(np.asarray(spec.values, dtype=float)),
+        "modes": list(spec.modes),
+        "scan_param": spec.scan_param,
+        "scan_values": None if spec.scan_values is None else np.asarray(spec.scan_values, dtype=float),
+    })
+
+
+# ----------------------------------------------------------------------------------------
+# Assembly
+# ----------------------------------------------------------------------------------------
+def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[str, Mapping[str, np.ndarray]],
+             sampling: SamplingSpec, attrs: Mapping[str, Any]) -> xr.Dataset:
+    """Put task results on the grid: dims (direction, param[, scan_param], sample)."""
+    grid = np.sort(np.asarray(spec.values, dtype=float))
+    directions = list(spec.modes)
+    dims = ["direction", spec.param]
+    coords: dict[str, Any] = {"direction": directions, spec.param: grid}
+    shape = [len(directions), len(grid)]
+    scan = None
+    if spec.scan_param is not None:
+        scan = np.asarray(spec.scan_values, dtype=float)
+        dims.append(spec.scan_param)
+        coords[spec.scan_param] = scan
+        shape.append(len(scan))
+    n = sampling.n_samples
+    coords["sample"] = np.arange(n)
+    arrays = {
+        "u": np.full(shape + [n], np.nan),
+        "v": np.full(shape + [n], np.nan),
+        "t": np.full(shape + [n], np.nan),
+        "impacts": np.full(shape + [n], -1, dtype=np.int64),
+        "period": np.full(shape, -1, dtype=np.int64),
+        "orbit_impacts": np.full(shape, -1, dtype=np.int64),
+    }
+    index_of_value = {float(x): i for i, x in enumerate(grid)}
+    for key, task in tasks.items():
+        res = results[key]
+        d = directions.index(task.mode)
+        j = None
+        if scan is not None:
+            j = int(np.flatnonzero(scan == float(task.params[spec.scan_param]))[0])
+        for row, value in enumerate(task.values):
+            idx = (d, index_of_value[value]) if j is None else (d, index_of_value[value], j)
+            for name in RESULT_FIELDS:
+                arrays[name][idx] = res[name][row]
+    sample_dims = dims + ["sample"]
+    ds = xr.Dataset(
+        {
+            "u": (sample_dims, arrays["u"], {"long_name": "displacement at t = n + theta"}),
+            "v": (sample_dims, arrays["v"], {"long_name": "velocity at t = n + theta"}),
+            "impacts": (sample_dims, arrays["impacts"], {"long_name": "wall entries in the period ending at the sample"}),
+            "t": (sample_dims, arrays["t"], {"long_name": "absolute sample time"}),
+            "period": (dims, arrays["period"], {"long_name": "orbit period in forcing periods (0: not periodic)"}),
+            "orbit_impacts": (dims, arrays["orbit_impacts"], {"long_name": "wall entries per orbit period (-1: not periodic)"}),
+        },
+        coords=coords,
+        attrs=dict(attrs),
+    )
+    ds[spec.param].attrs["long_name"] = f"swept FMU parameter {spec.param}"
+    ds["direction"].attrs["long_name"] = "fresh: every point from the same state; up/down: continuation"
+    return ds
+
+
+# ----------------------------------------------------------------------------------------
+# Driver
+# ----------------------------------------------------------------------------------------
+@dataclass
+class SweepStats:
+    """What a sweep did: tasks computed now, tasks taken from the checkpoint, wall time."""
+
+    computed: int = 0
+    resumed: int = 0
+    wall_time: float = 0.0
+
+
+def run_sweep(
+    fmu: FmuModel | str | Any,
+    spec: SweepSpec,
+    params: Mapping[str, Any] | None = None,
+    state0: tuple[float, float] = (-1.0, 0.0),
+    sampling: SamplingSpec | None = None,
+    backend: Any = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    checkpoint: str | None = None,
+    progress: bool = True,
+    settings: Mapping[str, Any] | None = None,
+    stats: SweepStats | None = None,
+) -> xr.Dataset:
+    """Run a sweep (or 2D scan) and return its Dataset.
+
+    Parameters
+    ----------
+    fmu : FmuModel, path, or simulator
+        The FMU to drive, or a picklable simulator object (e.g.
+        :class:`~harness.simulator.MappingSimulator`) used as it is on each worker.
+    spec : SweepSpec
+        Swept parameter, grid, modes (and second axis).
+    params : mapping, optional
+        FMU parameters (default: the FMU's start values).
+    state0 : (float, float)
+        Initial (u, v) at the first section time.
+    sampling : SamplingSpec, optional
+        Section phase, transient, sampled periods, tolerance.
+    backend : str, Backend or distributed.Client, optional
+        See :func:`harness.backends.make_backend`; default: local process pool.
+    workers : int, optional
+        Local processes (default: all usable cores).
+    scheduler : str, optional
+        Dask scheduler address (selects the Dask backend).
+    checkpoint : path, optional
+        Directory of finished tasks; a rerun with the same settings resumes from it.
+    progress : bool
+        Show a tqdm progress bar (per finished point).
+    settings : mapping, optional
+        Extra settings to record in the attributes.
+    stats : SweepStats, optional
+        Filled with counts of computed / resumed tasks and the wall time.
+
+    Returns
+    -------
+    xarray.Dataset
+        Variables u, v, impacts, t (direction, param[, scan], sample), period and
+        orbit_impacts (direction, param[, scan]); attributes with the full provenance.
+    """
+    t_start = time.perf_counter()
+    sampling = sampling or SamplingSpec()
+    check_theta(sampling.theta, "sampling.theta")
+    model: FmuModel | None = None
+    if isinstance(fmu, (str,)) or hasattr(fmu, "__fspath__"):
+        model = FmuModel(fmu)
+    elif isinstance(fmu, FmuModel):
+        model = fmu
+    if model is not None:
+        model.check_settable(spec.param, "--param")
+        if spec.scan_param is not None:
+            model.check_settable(spec.scan_param, "--scan")
+        base = model.defaults()
+        for name, value in (params or {}).items():
+            base[name] = model.coerce(name, value, name)
+        for name in INITIAL_STATE:
+            base.pop(name, None)
+        source: Any = model.source()
+        sha = model.sha256
+    else:
+        base = dict(params or {})
+        source = fmu
+        sha = f"simulator:{type(fmu).__name__}"
+    tasks = plan_tasks(spec, base, state0, sampling)
+
+    store = None
+    if checkpoint is not None:
+        store = Checkpoint(checkpoint, sweep_fingerprint(spec, base, state0, sampling, sha))
+    results: dict[str, dict[str, np.ndarray]] = {}
+    todo: dict[str, SweepTask] = {}
+    for key, task in tasks.items():
+        if store is not None and store.has(key):
+            results[key] = store.load(key)
+        else:
+            todo[key] = task
+    stats = stats if stats is not None else SweepStats()
+    stats.resumed = len(results)
+
+    be: Backend = make_backend(backend, workers, scheduler)
+    if be.name == "dask" and model is not None:
+        source = model.source(embed=True)  # remote workers may not share the file system
+    total_points = sum(len(t.values) for t in tasks.values())
+    done_points = sum(len(tasks[k].values) for k in results)
+    bar = progress_bar(total=total_points, initial=done_points, desc=f"sweep {spec.param}", unit="pt", disable=not progress)
+
+    def on_result(key: str, arrays: dict[str, np.ndarray]) -> None:
+        results[key] = arrays
+        if store is not None:
+            store.save(key, arrays)
+        stats.computed += 1
+        bar.update(len(tasks[key].values))
+
+    try:
+        be.run(run_task, todo, source, on_result)
+        description = be.describe()
+    finally:
+        bar.close()
+        if backend is None or isinstance(backend, str):
+            be.close()  # a backend or client passed in stays open for the caller
+    stats.wall_time = time.perf_counter() - t_start
+    record = {
+        "sweep.param": spec.param,
+        "sweep.values": np.sort(np.asarray(spec.values, dtype=float)),
+        "sweep.modes": ",".join(spec.modes),
+        "sweep.scan_param": spec.scan_param,
+        "sweep.scan_values": spec.scan_values,
+        "sampling.theta": sampling.theta,
+        "sampling.transient": sampling.n_transient,
+        "sampling.samples": sampling.n_samples,
+        "sampling.tol": sampling.tol,
+        "sampling.max_period": sampling.max_period,
+        "initial.u0": state0[0],
+        "initial.v0": state0[1],
+        **{f"model.{k}": v for k, v in base.items()},
+        **dict(settings or {}),
+        "tasks_computed": stats.computed,
+        "tasks_resumed": stats.resumed,
+    }
+    attrs = provenance(record, model=model, backend=description, wall_time=stats.wall_time)
+    return assemble(spec, tasks, results, sampling, attrs)
