@@ -1,4 +1,46 @@
-"""mapcheck: the analytic near-grazing maps of Molenaar, de Weger & van de Water (2001)."""
-from .exact import ExactOscillator
+"""mapcheck: the analytic near-grazing maps of Molenaar, de Weger & van de Water,
+"Mappings of grazing-impact oscillators", Nonlinearity 14 (2001) 301.
 
-__all__ = ["ExactOscillator"]
+Modules, by concern:
+
+* :mod:`mapcheck.linear`   -- eigenvalues, propagator (7), (alpha, gamma) (9) and its inverse
+* :mod:`mapcheck.coeffs`   -- ``coefficients(nu, Omega, r, wall)``: (36), (39), (48); A and A~(sigma)
+* :mod:`mapcheck.maps`     -- the maps: L (26)-(30), (31)/(32), (33)-(35), (37)/(38), (1)/(2), (54)-(56)
+* :mod:`mapcheck.exact`    -- closed-form solution of the ODE and the exact pre-impact map
+"""
+from .coeffs import A_GRAZING, Coefficients, coefficients, grazing_acceleration
+from .exact import ExactOscillator
+from .linear import alpha_gamma, invert_alpha_gamma, propagator
+from .maps import (
+    damped_1d_map,
+    from_natural,
+    local_impact_map,
+    local_impact_map_delay,
+    natural_map,
+    nordmark_map,
+    physical_map,
+    piecewise_map,
+    rho_1d,
+    to_natural,
+)
+
+__all__ = [
+    "A_GRAZING",
+    "Coefficients",
+    "ExactOscillator",
+    "alpha_gamma",
+    "coefficients",
+    "damped_1d_map",
+    "from_natural",
+    "grazing_acceleration",
+    "invert_alpha_gamma",
+    "local_impact_map",
+    "local_impact_map_delay",
+    "natural_map",
+    "nordmark_map",
+    "physical_map",
+    "piecewise_map",
+    "propagator",
+    "rho_1d",
+    "to_natural",
+]
