@@ -122,7 +122,9 @@ class Coefficients:
             return rho / self.rho_per_sigma
         # rho = k sigma |A| / (|A| + sigma (|A| - Omega^2)) for sigma > -1
         k, a, b = self.rho_per_sigma, abs(A_GRAZING), abs(A_GRAZING) - self.Omega ** 2
-        return rho * a / (k * a - rho * b)
+        # rho~ increases to k a / b as sigma -> inf: larger rho has no sigma (inf returned)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(rho * b >= k * a, np.inf, rho * a / (k * a - rho * b))
 
     def l_of(self, A) -> np.ndarray:
         """l of (36) for a given grazing acceleration A (e.g. A~(sigma))."""
