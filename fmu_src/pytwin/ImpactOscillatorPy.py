@@ -2,7 +2,7 @@
 
 Same variables (names, value references, causalities, variabilities, start values) as
 ``fmu_src/modelDescription.xml``, so that the harness drives either FMU unchanged.  The physics
-and the CVODE driver live in ``impact_model.py`` (bundled into the FMU's resources); this file
+and the CVODE driver live in ``impact_twin_model.py`` (bundled into the FMU's resources); this file
 is only the FMI face.
 
 Error reporting: pythonfmu turns *any* Python exception raised in a callback into
@@ -27,7 +27,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial
 from pythonfmu.variables import Boolean, Integer, Real
 
-from impact_model import (
+from impact_twin_model import (
     MODE_FREE,
     CvodeDriver,
     ModelError,

@@ -5,7 +5,7 @@ Usage (from the repository root, with the project's virtual environment)::
     .venv/bin/python fmu_src/pytwin/build.py --out build/fmu/ImpactOscillatorPy.fmu
 
 ``scripts/setup.sh`` runs exactly this when the twin's sources changed.  The FMU bundles the
-slave (``ImpactOscillatorPy.py``), the physics (``impact_model.py``) and pythonfmu's own Python
+slave (``ImpactOscillatorPy.py``), the physics (``impact_twin_model.py``) and pythonfmu's own Python
 files; numpy and scikit-sundae must be importable by the Python that runs the FMU (see
 README.md next to this file).  The model description, InitialUnknowns included, is written by
 the slave class itself (``ImpactOscillatorPy.to_xml``); this script checks it afterwards with
@@ -19,7 +19,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 SCRIPT = HERE / "ImpactOscillatorPy.py"
-PROJECT_FILES = [HERE / "impact_model.py"]
+PROJECT_FILES = [HERE / "impact_twin_model.py"]
 
 
 def build(out: Path) -> Path:

@@ -1,0 +1,497 @@
+"""The pythonfmu twin (build/fmu/ImpactOscillatorPy.fmu) against the C FMU and the closed form.
+
+* Build and interface: the one build command writes an FMU that ``fmpy validate`` accepts and
+  whose variables (names, value references, types, causality, variability, initial, start,
+  bounds) are exactly the C FMU's, so the harness drives either unchanged.
+* Cross-check: both FMUs are driven by the *harness* (``harness.simulator.FmuSimulator``, the
+  same code path for both) over 50 periods for the compliant, rigid and no wall; stroboscopic
+  states agree to 1e-7 and impact counts exactly.  Also with sigma tuned mid-run.
+* Oracle: the twin alone against ``mapcheck.exact.ExactOscillator`` (closed form, sharing no
+  code with either FMU): one-period maps, 1e-9-deep grazing contacts at several phases, rigid
+  chatter ending in sticking, the local time origin at t = 1e6.
+* Bad parameters: rejected with a message naming the variable, and the instance stays usable
+  (pythonfmu reports any Python exception as fmi2Fatal; the twin keeps the instance alive).
+"""
+from __future__ import annotations
+
+import ctypes
+import importlib.util
+import math
+import subprocess
+import sys
+import time
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import (
+    FMU2Slave,
+    fmi2CallbackAllocateMemoryTYPE,
+    fmi2CallbackFreeMemoryTYPE,
+    fmi2CallbackFunctions,
+    fmi2CallbackLoggerTYPE,
+)
+from fmpy.validation import validate_fmu
+
+from harness.fmi import FmuModel
+from harness.simulator import FmuSimulator
+from mapcheck.exact import ExactOscillator
+
+ROOT = Path(__file__).resolve().parents[1]
+TWIN_SRC = ROOT / "fmu_src" / "pytwin"
+TWIN_FMU = ROOT / "build" / "fmu" / "ImpactOscillatorPy.fmu"
+C_FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
+
+FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)  # overdamped, the paper's Fig. 9
+UNDERDAMPED = dict(nu=0.196, Omega=7.368)
+WALLS = {"none": 0, "compliant": 1, "rigid": 2}
+THETA = 0.5  # strobe half a period away from the grazing phase t = n
+
+_libc = ctypes.CDLL(None)
+_libc.calloc.restype = ctypes.c_void_p
+_libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
+_libc.free.argtypes = [ctypes.c_void_p]
+
+
+# ---------------------------------------------------------------------------------------------
+# fixtures and helpers
+# ---------------------------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def twin_fmu() -> Path:
+    """The twin as the set-up script builds it; rebuilt here if missing or older than its
+    sources, so that the tests never run a stale twin."""
+    sources = list(TWIN_SRC.glob("*.py"))
+    if not TWIN_FMU.exists() or max(p.stat().st_mtime for p in sources) > TWIN_FMU.stat().st_mtime:
+        subprocess.run(
+            [sys.executable, str(TWIN_SRC / "build.py"), "--out", str(TWIN_FMU)],
+            check=True, cwd=ROOT, capture_output=True,
+        )
+    return TWIN_FMU
+
+
+@pytest.fixture(scope="module")
+def c_fmu() -> Path:
+    assert C_FMU.exists(), f"{C_FMU} missing: build it with scripts/setup.sh"
+    return C_FMU
+
+
+class Slave:
+    """fmpy's FMU2Slave on one FMU, collecting log messages as (status, category, text).
+
+    The tests of the twin alone use this (not the harness) so that they also see the FMI
+    status codes and the log; the cross-check uses the harness.
+    """
+
+    def __init__(self, path: Path, logging: bool = False) -> None:
+        self.md = read_model_description(str(path))
+        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
+        self.types = {v.name: v.type for v in self.md.modelVariables}
+        self.messages: list[tuple[int, str, str]] = []
+        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=extract(str(path)),
+                             modelIdentifier=self.md.coSimulation.modelIdentifier,
+                             instanceName="twin-test")
+
+        def log(env, instance, status, category, message):  # noqa: ANN001 (ctypes callback)
+            # pythonfmu passes a NULL category with its own fatal message
+            self.messages.append((status, (category or b"").decode(), (message or b"").decode()))
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(log)
+        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
+        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
+        self._keep = (cb, log)  # the callbacks must outlive the instance
+        self.fmu.instantiate(callbacks=cb, loggingOn=logging)
+        self.t = 0.0
+
+    def set(self, **values: float) -> None:
+        for k, x in values.items():
+            if self.types[k] == "Integer":
+                self.fmu.setInteger([self.vr[k]], [int(WALLS.get(x, x) if isinstance(x, str) else x)])
+            else:
+                self.fmu.setReal([self.vr[k]], [float(x)])
+
+    def start(self, t0: float = 0.0, **params: float) -> None:
+        """Reset, set the parameters, initialise at t0."""
+        self.fmu.reset()
+        self.fmu.setupExperiment(startTime=t0)
+        self.fmu.enterInitializationMode()
+        self.set(**params)
+        self.fmu.exitInitializationMode()
+        self.t = t0
+
+    def step_to(self, t: float) -> None:
+        self.fmu.doStep(self.t, t - self.t)
+        self.t = t
+
+    def state(self) -> np.ndarray:
+        return np.array(self.fmu.getReal([self.vr["u"], self.vr["v"]]))
+
+    def impacts(self) -> int:
+        return int(self.fmu.getInteger([self.vr["impacts"]])[0])
+
+    def in_contact(self) -> bool:
+        return bool(self.fmu.getBoolean([self.vr["in_contact"]])[0])
+
+    def close(self) -> None:
+        self.fmu.freeInstance()
+
+
+@pytest.fixture(scope="module")
+def twin(twin_fmu: Path) -> Iterator[Slave]:
+    s = Slave(twin_fmu)
+    yield s
+    s.close()
+
+
+def on_orbit(t0: float, sigma: float) -> tuple[float, float]:
+    """The wall-free periodic orbit p(t) = (1+sigma) cos(2 pi t) - 1 of eq (4) at t0."""
+    w = 2.0 * math.pi
+    return (1 + sigma) * math.cos(w * t0) - 1, -(1 + sigma) * w * math.sin(w * t0)
+
+
+def harness_strobe(path: Path, params: dict, t0: float, state: tuple[float, float],
+                   periods: int, tune: dict[int, float] | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, float]:
+    """Drive one FMU through the harness's simulator and strobe it once per period.
+
+    Parameters
+    ----------
+    path : Path
+        The FMU.
+    params : dict
+        Parameters (by name) for ``FmuSimulator.start``.
+    t0, state : float, (float, float)
+        Start time and (u, v) there.
+    periods : int
+        Number of periods; the strobe times are t0 + 1, ..., t0 + periods.
+    tune : dict, optional
+        {period index k: sigma}: set sigma (tunable) after the k-th strobe.
+
+    Returns
+    -------
+    states : ndarray (periods, 2)
+    impacts : ndarray (periods,)
+    seconds_per_period : float
+        Wall-clock cost of the stepping (initialisation excluded).
+    """
+    sim = FmuSimulator(FmuModel(path).source(), instance_name="twin-xcheck")
+    try:
+        sim.start(params, t0, state)
+        states, counts = np.empty((periods, 2)), np.empty(periods, dtype=int)
+        tic = time.perf_counter()
+        for k in range(periods):
+            sim.advance(t0 + k + 1)
+            u, v, n = sim.read()
+            states[k] = u, v
+            counts[k] = n
+            if tune and k in tune:
+                sim.set_parameter("sigma", tune[k])
+        return states, counts, (time.perf_counter() - tic) / periods
+    finally:
+        sim.close()
+
+
+# ---------------------------------------------------------------------------------------------
+# build and interface
+# ---------------------------------------------------------------------------------------------
+def test_build_command_writes_a_valid_fmu(tmp_path: Path) -> None:
+    """The README's build command, run as the set-up script runs it, gives an FMU that fmpy's
+    validator accepts (pythonfmu alone would leave InitialUnknowns empty and fail it)."""
+    out = tmp_path / "ImpactOscillatorPy.fmu"
+    proc = subprocess.run([sys.executable, str(TWIN_SRC / "build.py"), "--out", str(out)],
+                          cwd=ROOT, capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    assert validate_fmu(str(out)) == []
+    with zipfile.ZipFile(out) as z:
+        names = set(z.namelist())
+        md = ET.fromstring(z.read("modelDescription.xml"))
+    assert {"binaries/linux64/ImpactOscillatorPy.so", "resources/ImpactOscillatorPy.py",
+            "resources/impact_twin_model.py", "resources/slavemodule.txt"} <= names
+    assert len(md.findall("ModelStructure/InitialUnknowns/Unknown")) == 7
+
+
+#: The variables of the oscillator FMU (issue 6), in value-reference order.
+ISSUE_VARIABLES = ["nu", "Omega", "sigma", "r", "Gamma", "wall", "u0", "v0", "rtol", "atol",
+                   "F_g", "phi", "kappa", "u", "v", "impacts", "in_contact"]
+
+
+def _variables(path: Path) -> dict[str, dict]:
+    md = read_model_description(str(path))
+    return {
+        v.name: dict(vr=v.valueReference, type=v.type, causality=v.causality,
+                     variability=v.variability, initial=v.initial,
+                     start=None if v.start is None else float(v.start),
+                     min=v.min, max=v.max, unit=v.unit)
+        for v in md.modelVariables
+    }
+
+
+def test_interface_is_the_c_fmus(twin_fmu: Path, c_fmu: Path) -> None:
+    """The twin's variables are the oscillator's, each with the C FMU's value reference, type,
+    causality, variability, initial, start value, bounds and unit: the harness sees no
+    difference.  (Descriptions are documentation and may differ where the C FMU documents
+    features the twin does not have.)  Variables the C FMU has beyond these (it grows: Model
+    Exchange, other contact laws) are not required of the twin."""
+    twin_vars, c_vars = _variables(twin_fmu), _variables(c_fmu)
+    assert list(twin_vars) == ISSUE_VARIABLES
+    for name in ISSUE_VARIABLES:
+        assert twin_vars[name] == c_vars[name], name
+    # the InitialUnknowns of these variables, with their dependencies, too
+    deps = []
+    for path in (twin_fmu, c_fmu):
+        md = read_model_description(str(path))
+        deps.append({u.variable.name: sorted(d.name for d in (u.dependencies or []))
+                     for u in md.initialUnknowns if u.variable.name in ISSUE_VARIABLES})
+    assert deps[0] == deps[1]
+
+
+# ---------------------------------------------------------------------------------------------
+# cross-check against the C FMU, both driven by the harness
+# ---------------------------------------------------------------------------------------------
+XCASES = [
+    # wall, sigma, linear part, Gamma, r, start state at THETA (None: on the wall-free orbit)
+    ("compliant", 0.2, FIG9, 10.0, 0.9, None),            # period-3 window of Fig. 9
+    ("rigid", 0.2, FIG9, 10.0, 0.9, None),                # strongly damped: rare impacts
+    ("none", 0.3, FIG9, 10.0, 0.9, None),
+    ("compliant", 0.05, UNDERDAMPED, 1000.0, 0.9, None),
+    ("rigid", 0.05, UNDERDAMPED, 1000.0, 0.9, None),      # an impact about every other period
+]
+
+
+@pytest.mark.parametrize("wall,sigma,lin,Gamma,r,state", XCASES)
+def test_twin_agrees_with_c_fmu_over_50_periods(twin_fmu, c_fmu, wall, sigma, lin, Gamma, r,
+                                                 state, record_property) -> None:
+    params = dict(wall=WALLS[wall], sigma=sigma, Gamma=Gamma, r=r, **lin)
+    state = state or on_orbit(THETA, sigma)
+    c_states, c_counts, c_cost = harness_strobe(c_fmu, params, THETA, state, 50)
+    t_states, t_counts, t_cost = harness_strobe(twin_fmu, params, THETA, state, 50)
+    record_property("us_per_period_c", round(c_cost * 1e6, 1))
+    record_property("us_per_period_twin", round(t_cost * 1e6, 1))
+    diff = np.max(np.abs(t_states - c_states))
+    record_property("max_state_difference", float(diff))
+    assert diff <= 1e-7, f"max state difference {diff:.2e}"
+    np.testing.assert_array_equal(t_counts, c_counts)
+    if wall != "none":
+        assert c_counts[-1] > 0, "the case was meant to hit the wall"
+
+
+@pytest.mark.xfail(reason="C FMU: chatter on the rigid wall is left to CVODE down to rebound "
+                   "speeds of 1e-9, whose flights (height s^2/2a ~ 1e-20) lie far below its "
+                   "tolerance; it stops with 'could not locate a wall crossing stepped over'. "
+                   "The twin sums that tail in closed form (impact_twin_model._rigid_impact).",
+                   strict=False)
+def test_twin_agrees_with_c_fmu_through_chatter_and_sticking(twin_fmu, c_fmu) -> None:
+    params = dict(wall=WALLS["rigid"], sigma=0.3, r=0.5, **FIG9)
+    t_states, t_counts, _ = harness_strobe(twin_fmu, params, THETA, (0.0, -0.1), 10)
+    c_states, c_counts, _ = harness_strobe(c_fmu, params, THETA, (0.0, -0.1), 10)
+    assert np.max(np.abs(t_states - c_states)) <= 1e-7
+    np.testing.assert_array_equal(t_counts, c_counts)
+
+
+def test_twin_agrees_with_c_fmu_when_sigma_is_tuned_mid_run(twin_fmu, c_fmu) -> None:
+    """sigma is tunable: changed between doSteps it acts from that time on, in both FMUs
+    (across a period-3 window, a period-1 orbit and back below grazing)."""
+    params = dict(wall=WALLS["compliant"], sigma=0.2, **FIG9)
+    tune = {9: 0.95, 19: 0.5, 29: -0.05}
+    state = on_orbit(THETA, 0.2)
+    c_states, c_counts, _ = harness_strobe(c_fmu, params, THETA, state, 40, tune)
+    t_states, t_counts, _ = harness_strobe(twin_fmu, params, THETA, state, 40, tune)
+    assert np.max(np.abs(t_states - c_states)) <= 1e-7
+    np.testing.assert_array_equal(t_counts, c_counts)
+    # the change did something: impacts per period differ between the windows
+    per_period = np.diff(c_counts)
+    assert per_period[10:19].sum() != per_period[30:39].sum()
+
+
+# ---------------------------------------------------------------------------------------------
+# the twin alone against the closed form
+# ---------------------------------------------------------------------------------------------
+OCASES = [
+    ("compliant", 0.2, FIG9, 10.0),
+    ("compliant", 0.95, FIG9, 10.0),
+    ("rigid", 0.02, FIG9, 10.0),
+    ("none", 0.3, FIG9, 10.0),
+    ("compliant", 0.05, UNDERDAMPED, 1000.0),
+    ("rigid", 0.05, UNDERDAMPED, 1000.0),
+]
+
+
+@pytest.mark.parametrize("wall,sigma,lin,Gamma", OCASES)
+def test_one_period_map_matches_closed_form(twin, wall, sigma, lin, Gamma) -> None:
+    """Each one-period step of the twin, from its own state, against the exact map (so that
+    any instability of the orbit cannot amplify the error)."""
+    u0, v0 = on_orbit(THETA, sigma)
+    twin.start(t0=THETA, wall=wall, sigma=sigma, Gamma=Gamma, u0=u0, v0=v0, **lin)
+    osc = ExactOscillator(lin["nu"], lin["Omega"], sigma, r=0.9, Gamma=Gamma, wall=wall)
+    worst, n_twin, n_exact = 0.0, 0, 0
+    x, k = twin.state(), twin.impacts()
+    for n in range(20):
+        t = THETA + n
+        exact, count = osc.strobe(x[0], x[1], [t + 1.0], t0=t)
+        twin.step_to(t + 1.0)
+        x, k_new = twin.state(), twin.impacts()
+        worst = max(worst, float(np.max(np.abs(x - exact[0]))))
+        n_twin += k_new - k
+        n_exact += int(count[0])
+        k = k_new
+    assert worst <= 1e-8, f"worst one-period error {worst:.2e}"
+    assert n_twin == n_exact
+    if wall != "none":
+        assert n_twin > 0, "the case was meant to hit the wall"
+
+
+def test_whole_orbit_matches_closed_form(twin) -> None:
+    """20 periods in one run, strobed, against the closed form from the same start."""
+    sigma = 0.5
+    u0, v0 = on_orbit(THETA, sigma)
+    twin.start(t0=THETA, sigma=sigma, u0=u0, v0=v0, **FIG9)
+    times = np.arange(1, 21) + THETA
+    exact, counts = ExactOscillator(FIG9["nu"], FIG9["Omega"], sigma).strobe(u0, v0, times, THETA)
+    got = []
+    for t in times:
+        twin.step_to(float(t))
+        got.append(twin.state())
+    assert np.max(np.abs(np.array(got) - exact)) < 1e-8
+    assert twin.impacts() == counts[-1] > 0
+
+
+@pytest.mark.parametrize("lin", [FIG9, UNDERDAMPED], ids=["overdamped", "underdamped"])
+@pytest.mark.parametrize("wall", ["compliant", "rigid"])
+@pytest.mark.parametrize("t0", [0.05, 0.3, 0.5, 0.77, 0.999])
+def test_grazing_contact_1e9_deep_is_found(twin, wall, lin, t0) -> None:
+    """On the wall-free orbit with sigma = 1e-9 the maximum pokes 1e-9 into the wall at t = 1,
+    reached from several phases (the contact falls at different places in the solver's steps);
+    with sigma = -1e-9 it misses by 1e-9 and no contact may be invented."""
+    for depth, expected in [(1e-9, 1), (-1e-9, 0)]:
+        u0, v0 = on_orbit(t0, depth)
+        twin.start(t0=t0, wall=wall, sigma=depth, u0=u0, v0=v0, Gamma=1000.0, **lin)
+        twin.step_to(1.5)
+        assert twin.impacts() == expected, f"depth {depth}: {twin.impacts()} contacts"
+
+
+def test_rigid_chatter_ends_in_sticking(twin) -> None:
+    """Rigid wall, r = 0.5, leaving the wall slowly while the net force pushes in: impacts
+    accumulate in finite time; the twin must stick (in_contact, u = v = 0), release when the
+    force stops pushing, and count the oracle's impacts (to one: the oracle sticks below the
+    same velocity, but a chatter impact that close to the threshold is a coin toss)."""
+    sigma, r, t0, (u0, v0) = 0.3, 0.5, THETA, (0.0, -0.1)
+    twin.start(t0=t0, wall="rigid", sigma=sigma, r=r, u0=u0, v0=v0, **FIG9)
+    osc = ExactOscillator(FIG9["nu"], FIG9["Omega"], sigma, r=r, wall="rigid")
+    kinds = [k for _, k in osc.crossings(u0, v0, t0, t0 + 3)]
+    assert "stick" in kinds and "release" in kinds, "the case was meant to chatter"
+    stuck_seen = False
+    for t in np.arange(t0 + 0.02, t0 + 3, 0.02):
+        twin.step_to(float(t))
+        if twin.in_contact():
+            stuck_seen = True
+            assert np.all(twin.state() == 0.0)
+    assert stuck_seen
+    assert not twin.in_contact(), "released by the end"
+    _, counts = osc.strobe(u0, v0, [twin.t], t0)
+    assert abs(twin.impacts() - counts[0]) <= 1, (twin.impacts(), counts[0])
+
+
+def test_local_time_origin_keeps_accuracy_at_t_1e6(twin) -> None:
+    """Started at t = 10^6 + 1/2 the one-period map is as accurate as near t = 0 (the forcing
+    phase is kept in an integer time origin plus a local time)."""
+    sigma = 0.5
+    osc = ExactOscillator(FIG9["nu"], FIG9["Omega"], sigma)
+    errors = []
+    for t0 in (THETA, 1e6 + THETA):
+        u0, v0 = on_orbit(t0, sigma)
+        twin.start(t0=t0, sigma=sigma, u0=u0, v0=v0, **FIG9)
+        exact, counts = osc.strobe(u0, v0, [t0 + 1, t0 + 2, t0 + 3], t0=t0)
+        got = []
+        for k in (1, 2, 3):
+            twin.step_to(t0 + k)
+            got.append(twin.state())
+        errors.append(float(np.max(np.abs(np.array(got) - exact))))
+        assert twin.impacts() == counts[-1] > 0
+    assert max(errors) < 1e-8, errors
+
+
+# ---------------------------------------------------------------------------------------------
+# the grazing guard's locating step (white box: at the default tolerances CVODE's own root
+# finding on v already samples inside a shallow contact, so the guard is a backstop that the
+# FMU-level tests above rarely reach)
+# ---------------------------------------------------------------------------------------------
+def test_guard_locates_a_stepped_over_crossing() -> None:
+    """Hand the driver's locating step a free flight whose last good point lies before a 1e-6
+    deep contact and a turning point past it: it must return the exact entry time."""
+    # Loaded under another name: the twin FMU, running in this process, imports its own copy
+    # as ``impact_twin_model`` and must not find this one in sys.modules.
+    spec = importlib.util.spec_from_file_location("twin_model_under_test",
+                                                  TWIN_SRC / "impact_twin_model.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    CvodeDriver, OscillatorModel = mod.CvodeDriver, mod.OscillatorModel
+    depth, t_good = 1e-6, 0.97
+    m = OscillatorModel()
+    m.wall, m.Gamma = 1, 1000.0
+    m.set_real("sigma", depth)
+    m.u0, m.v0 = on_orbit(t_good, depth)
+    drv = CvodeDriver(m)
+    drv.start(t_good)
+    m.initialize_state(drv.tau)
+    drv._reinit()
+    found = drv._locate_missed_crossing(1.0)  # the maximum of u is at t = 1 (local time)
+    assert found is not None
+    tc, yc = found
+    # exact entry: (1 + depth) cos(2 pi t) - 1 = 0 just before t = 1
+    t_exact = 1.0 - math.acos(1.0 / (1.0 + depth)) / (2.0 * math.pi)
+    assert abs(drv.origin + tc - t_exact) < 1e-9
+    assert yc[0] >= 0.0 and yc[1] > 0.0
+
+
+# ---------------------------------------------------------------------------------------------
+# bad input
+# ---------------------------------------------------------------------------------------------
+BAD = [
+    (dict(r=1.5), "r"),
+    (dict(r=-0.1), "r"),
+    (dict(wall="compliant", Gamma=0.0), "Gamma"),
+    (dict(Omega=0.0), "Omega"),
+    (dict(nu=-1.0), "nu"),
+    (dict(sigma=float("nan")), "sigma"),
+    (dict(u0=float("inf")), "u0"),
+    (dict(wall=3), "wall"),
+    (dict(wall="rigid", u0=0.1), "u0"),
+]
+
+
+@pytest.mark.parametrize("params,name", BAD, ids=[b[1] + str(i) for i, b in enumerate(BAD)])
+def test_bad_parameters_are_rejected_and_the_instance_survives(twin_fmu, params, name) -> None:
+    """A bad value stops initialisation with a message naming the variable; pythonfmu maps any
+    Python exception to fmi2Fatal (it cannot return fmi2Error), and the same instance must
+    still run a good case after fmi2Reset, as the harness reuses instances."""
+    s = Slave(twin_fmu, logging=True)
+    try:
+        with pytest.raises(FMICallException) as info:
+            s.start(**params)
+        assert info.value.status >= 3  # fmi2Error or fmi2Fatal
+        errors = [m for st, cat, m in s.messages if st >= 3 and cat == "logStatusError"]
+        assert any(name in m for m in errors), s.messages
+        s.start(t0=0.0, sigma=0.5, **FIG9)
+        s.step_to(1.0)
+        assert np.all(np.isfinite(s.state()))
+    finally:
+        s.close()
+
+
+def test_only_sigma_is_tunable_after_initialisation(twin_fmu) -> None:
+    s = Slave(twin_fmu, logging=True)
+    try:
+        s.start(t0=0.0, **FIG9)
+        s.step_to(1.0)
+        s.set(sigma=0.3)  # tunable: accepted
+        s.step_to(2.0)
+        with pytest.raises(FMICallException):
+            s.set(r=0.5)
+        assert any("only sigma is tunable" in m for _, _, m in s.messages)
+    finally:
+        s.close()
