@@ -87,14 +87,14 @@ def overrides_from_args(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The full parser, with every registered command module."""
-    from . import __version__
+    from .results import project_version
 
     parser = OneLineParser(
         prog=PROG,
         description="Stroboscopic Poincare maps, bifurcation sweeps and map Jacobians of the "
         "grazing impact oscillator FMU (fmpy; local processes or Dask).",
     )
-    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {project_version()}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=OneLineParser)
     sub.required = True
     parents = {"common": common_parent(), "sampling": sampling_parent()}

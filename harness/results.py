@@ -22,6 +22,14 @@ PROJECT_DISTRIBUTION = "impact-grazing"
 _LIBRARIES = ("fmpy", "numpy", "scipy", "xarray", "netCDF4", "dask", "distributed", "matplotlib")
 
 
+def project_version() -> str:
+    """This project's version (from the installed distribution's metadata)."""
+    try:
+        return metadata.version(PROJECT_DISTRIBUTION)
+    except metadata.PackageNotFoundError:  # pragma: no cover - bare checkout
+        return "0+unknown"
+
+
 def library_versions() -> dict[str, str]:
     """Versions of Python, this project and the libraries a result depends on."""
     out = {"python": platform.python_version()}

@@ -92,7 +92,7 @@ def sample_periods(sim: Simulator, n_transient: int, n_samples: int, progress: A
     v = np.empty(n_samples)
     imp = np.empty(n_samples, dtype=np.int64)
     for i in range(n_samples):
-        t[i] = t_start + n_transient + i + 1
+        t[i] = t_start + (n_transient + i + 1)  # integer first: t is the float nearest n + theta
         sim.advance(t[i])
         u[i], v[i], n = sim.read()
         imp[i] = n - n_prev

@@ -1,0 +1,132 @@
+"""The harness's FMI layer on the real FMU: checks of the FMU, instance reuse, parameter changes."""
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from harness import FmuModel, FmuSimulator, HarnessInputError, MappingSimulator, strobe
+from harness.sampling import sample_periods
+from mapcheck.exact import ExactOscillator
+
+FMU = Path(__file__).resolve().parents[1] / "build" / "fmu" / "ImpactOscillator.fmu"
+
+
+@pytest.fixture(scope="module")
+def model() -> FmuModel:
+    assert FMU.is_file(), f"build the FMU first ({FMU} missing)"
+    return FmuModel(FMU)
+
+
+def _params(model: FmuModel, **kw) -> dict:
+    p = model.defaults()
+    for k in ("u0", "v0"):
+        p.pop(k)
+    p.update(kw)
+    return p
+
+
+def _rewritten_fmu(tmp_path: Path, edit) -> Path:
+    """A copy of the real FMU whose modelDescription.xml is changed by ``edit``."""
+    out = tmp_path / "edited.fmu"
+    with zipfile.ZipFile(FMU) as src, zipfile.ZipFile(out, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = edit(data.decode()).encode()
+            dst.writestr(item, data)
+    return out
+
+
+def test_model_description_is_read_not_hard_coded(model: FmuModel) -> None:
+    from fmpy import read_model_description
+
+    md = read_model_description(str(FMU))
+    for v in md.modelVariables:
+        assert model.variables[v.name].value_reference == v.valueReference
+    assert model.fmi_version == "2.0" and model.model_identifier == "ImpactOscillator"
+    assert model.variables["sigma"].tunable and not model.variables["Gamma"].tunable
+    assert len(model.sha256) == 64
+
+
+def test_model_exchange_only_fmu_is_rejected(tmp_path: Path) -> None:
+    import re
+
+    def to_me(xml: str) -> str:
+        return re.sub(r"<CoSimulation[^>]*/>", '<ModelExchange modelIdentifier="ImpactOscillator"/>', xml, flags=re.S)
+
+    with pytest.raises(HarnessInputError, match="not a Co-Simulation FMU") as err:
+        FmuModel(_rewritten_fmu(tmp_path, to_me), argument="--fmu")
+    assert err.value.argument == "--fmu"
+
+
+def test_fmu_without_the_oscillator_variables_is_rejected(tmp_path: Path) -> None:
+    path = _rewritten_fmu(tmp_path, lambda xml: xml.replace('name="impacts"', 'name="hits"'))
+    with pytest.raises(HarnessInputError, match="lacks the oscillator variable.*'impacts'"):
+        FmuModel(path)
+
+
+@pytest.mark.parametrize("content, reason", [(None, "no such file"), (b"not a zip", "not an FMU")])
+def test_missing_or_non_fmu_file(tmp_path: Path, content, reason) -> None:
+    path = tmp_path / "x.fmu"
+    if content is not None:
+        path.write_bytes(content)
+    with pytest.raises(HarnessInputError, match=reason):
+        FmuModel(path)
+
+
+def test_unknown_and_unsettable_variables(model: FmuModel) -> None:
+    with pytest.raises(HarnessInputError, match="unknown FMU variable 'sigmaa'"):
+        model.check_settable("sigmaa", "--param")
+    with pytest.raises(HarnessInputError, match="calculatedParameter"):
+        model.check_settable("F_g")
+    with pytest.raises(HarnessInputError, match="not a valid Integer"):
+        model.coerce("wall", "soft")
+    assert model.coerce("wall", "rigid") == 2 and model.coerce("wall", 1.0) == 1
+
+
+def test_one_instance_reused_with_reset_gives_identical_runs(model: FmuModel) -> None:
+    """reset + re-initialization must leave no trace of the previous run (bit for bit)."""
+    sim = FmuSimulator(model.source())
+    a1 = strobe(sim, _params(model, sigma=0.5), (-1.0, 0.0), theta=0.3, n_transient=20, n_samples=10)
+    strobe(sim, _params(model, sigma=0.18, Gamma=100.0), (0.0, 1.0), theta=0.7, n_transient=30, n_samples=5)
+    a2 = strobe(sim, _params(model, sigma=0.5), (-1.0, 0.0), theta=0.3, n_transient=20, n_samples=10)
+    fresh = FmuSimulator(model.source(), instance_name="fresh")
+    a3 = strobe(fresh, _params(model, sigma=0.5), (-1.0, 0.0), theta=0.3, n_transient=20, n_samples=10)
+    for other in (a2, a3):
+        np.testing.assert_array_equal(a1.u, other.u)
+        np.testing.assert_array_equal(a1.v, other.v)
+        np.testing.assert_array_equal(a1.impacts, other.impacts)
+    assert a1.impacts.sum() > 0
+
+
+def test_non_tunable_change_restarts_from_the_current_state(model: FmuModel) -> None:
+    """Gamma is fixed in the FMU: the harness restarts from the carried state; the result is
+    the oracle's continuation with the new Gamma, and the impact counter keeps counting."""
+    sim = FmuSimulator(model.source())
+    p = _params(model, sigma=0.5)
+    sim.start(p, 0.4, (-0.2, 0.5))
+    first = sample_periods(sim, 0, 6)
+    sim.set_parameter("Gamma", 100.0)
+    second = sample_periods(sim, 0, 6)
+    assert sim.restarts == 1
+    _, _, total = sim.read()
+    assert total == first.impacts.sum() + second.impacts.sum() and second.impacts.sum() > 0
+    oracle = ExactOscillator(p["nu"], p["Omega"], 0.5, r=p["r"], Gamma=100.0, wall="compliant")
+    states, _ = oracle.strobe(first.u[-1], first.v[-1], second.t, t0=first.t[-1])
+    np.testing.assert_allclose(second.u, states[:, 0], atol=1e-8)
+    np.testing.assert_allclose(second.v, states[:, 1], atol=1e-8)
+
+
+def test_mapping_simulator_runs_a_user_map() -> None:
+    def halve(u, v, t, params):
+        return params["a"] * u, v, int(u > 0)
+
+    sim = MappingSimulator(halve, {"a": 0.5})
+    r = strobe(sim, {}, (8.0, 1.0), theta=0.0, n_transient=1, n_samples=3)
+    np.testing.assert_array_equal(r.u, [2.0, 1.0, 0.5])
+    np.testing.assert_array_equal(r.impacts, [1, 1, 1])
+    with pytest.raises(HarnessInputError, match="whole periods"):
+        sim.advance(sim.time + 0.5)
