@@ -1,7 +1,9 @@
 /*
- * FMI 2.0 Co-Simulation glue for the impact oscillator: instance life cycle, the state machine
- * of the standard, typed get/set by value reference, FMU state save/restore/serialisation, and
- * fmi2DoStep on top of the CVODE driver. No physics here (see model.c).
+ * FMI 2.0 Co-Simulation and Model Exchange glue for the impact oscillator: instance life cycle,
+ * the state machine of the standard, typed get/set by value reference, FMU state
+ * save/restore/serialisation, fmi2DoStep on top of the CVODE driver, and the Model Exchange
+ * functions (the importer integrates u, v and watches the wall indicator). No physics here
+ * (see model.c).
  */
 #include <math.h>
 #include <stdarg.h>
@@ -19,9 +21,12 @@ typedef enum {
     ST_STEP = 1 << 2,
     ST_TERMINATED = 1 << 3,
     ST_ERROR = 1 << 4,
+    ST_EVENT = 1 << 5, /* Model Exchange: event mode */
+    ST_CONT = 1 << 6,  /* Model Exchange: continuous-time mode */
 } InstanceState;
 
-#define ANY_STATE (ST_INSTANTIATED | ST_INIT | ST_STEP | ST_TERMINATED | ST_ERROR)
+#define ANY_STATE (ST_INSTANTIATED | ST_INIT | ST_STEP | ST_TERMINATED | ST_ERROR | ST_EVENT | ST_CONT)
+#define RUN_STATES (ST_STEP | ST_EVENT | ST_CONT) /* initialised, not terminated */
 
 typedef struct {
     char *name;
@@ -31,6 +36,8 @@ typedef struct {
     double start_time;
     ModelData m;
     Solver s;
+    int is_me;       /* instantiated for Model Exchange */
+    double me_time;  /* Model Exchange: the time set by the importer */
 } Instance;
 
 /* What an FMU state snapshot holds: enough to restart CVODE at exactly the saved point. */
@@ -43,6 +50,7 @@ typedef struct {
     ModelData m;
     double origin, tau;
     long events, guard_hits;
+    double me_time;
 } Snapshot;
 
 static void log_msg(Instance *c, fmi2Status status, const char *category, const char *fmt, ...) {
@@ -107,9 +115,9 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
     (void)resources; (void)visible;
     if (!cb || !cb->logger) return NULL;
     if (!name || !name[0]) name = "ImpactOscillator";
-    if (type != fmi2CoSimulation) {
+    if (type != fmi2CoSimulation && type != fmi2ModelExchange) {
         cb->logger(cb->componentEnvironment, name, fmi2Error, "logStatusError",
-                   "fmi2Instantiate: this FMU implements Co-Simulation only");
+                   "fmi2Instantiate: unknown FMU type");
         return NULL;
     }
     if (!guid || strcmp(guid, MODEL_GUID) != 0) {
@@ -132,6 +140,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
         free_mem(c, c);
         return NULL;
     }
+    c->is_me = type == fmi2ModelExchange;
     c->state = ST_INSTANTIATED;
     return c;
 }
@@ -176,13 +185,14 @@ fmi2Status fmi2ExitInitializationMode(fmi2Component comp) {
     solver_start(&c->s, c->start_time);
     model_initialize_state(&c->m, c->s.tau);
     c->s.events = c->s.guard_hits = 0;
-    c->state = ST_STEP;
+    c->me_time = c->start_time;
+    c->state = c->is_me ? ST_EVENT : ST_STEP;
     return fmi2OK;
 }
 
 fmi2Status fmi2Terminate(fmi2Component comp) {
     Instance *c = (Instance *)comp;
-    if (!allowed(c, "fmi2Terminate", ST_STEP | ST_ERROR)) return fmi2Error;
+    if (!allowed(c, "fmi2Terminate", RUN_STATES | ST_ERROR)) return fmi2Error;
     c->state = ST_TERMINATED;
     return fmi2OK;
 }
@@ -201,7 +211,13 @@ fmi2Status fmi2Reset(fmi2Component comp) {
 /* ---------------------------------------------------------------------------------------- */
 /* get / set */
 
-#define GET_STATES (ST_INIT | ST_STEP | ST_TERMINATED | ST_ERROR)
+#define GET_STATES (ST_INIT | RUN_STATES | ST_TERMINATED | ST_ERROR)
+
+/* Local time (model.h) of the current state: the solver's, or in Model Exchange the importer's
+ * time reduced by whole periods (exact in floating point). */
+static double local_tau(const Instance *c) {
+    return c->is_me ? c->me_time - floor(c->me_time) : c->s.tau;
+}
 
 fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
                        fmi2Real value[]) {
@@ -209,7 +225,7 @@ fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
     if (!allowed(c, "fmi2GetReal", GET_STATES | ST_INSTANTIATED)) return fmi2Error;
     if (n > 0 && (!vr || !value)) return fail(c, "fmi2GetReal", "NULL argument");
     for (size_t i = 0; i < n; ++i) {
-        const char *why = model_get_real(&c->m, (int)vr[i], &value[i]);
+        const char *why = model_get_real_at(&c->m, local_tau(c), (int)vr[i], &value[i]);
         if (why) return fail(c, "fmi2GetReal", "value reference %u %s", vr[i], why);
     }
     return fmi2OK;
@@ -256,7 +272,7 @@ fmi2Status fmi2GetString(fmi2Component comp, const fmi2ValueReference vr[], size
 /* Parameters may be set before initialisation ends; afterwards only tunable ones. */
 static fmi2Status check_settable(Instance *c, const char *fn, fmi2ValueReference vr) {
     if (c->state & (ST_INSTANTIATED | ST_INIT)) return fmi2OK;
-    if (c->state == ST_STEP && model_is_tunable((int)vr)) return fmi2OK;
+    if ((c->state & RUN_STATES) && model_is_tunable((int)vr)) return fmi2OK;
     return fail(c, fn, "%s (value reference %u) cannot be set now: only sigma is tunable "
                 "after initialisation", model_variable_name((int)vr), vr);
 }
@@ -264,7 +280,7 @@ static fmi2Status check_settable(Instance *c, const char *fn, fmi2ValueReference
 fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
                        const fmi2Real value[]) {
     Instance *c = (Instance *)comp;
-    if (!allowed(c, "fmi2SetReal", ST_INSTANTIATED | ST_INIT | ST_STEP)) return fmi2Error;
+    if (!allowed(c, "fmi2SetReal", ST_INSTANTIATED | ST_INIT | RUN_STATES)) return fmi2Error;
     if (n > 0 && (!vr || !value)) return fail(c, "fmi2SetReal", "NULL argument");
     for (size_t i = 0; i < n; ++i) {
         if (check_settable(c, "fmi2SetReal", vr[i]) != fmi2OK) return fmi2Error;
@@ -281,7 +297,7 @@ fmi2Status fmi2SetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
 fmi2Status fmi2SetInteger(fmi2Component comp, const fmi2ValueReference vr[], size_t n,
                           const fmi2Integer value[]) {
     Instance *c = (Instance *)comp;
-    if (!allowed(c, "fmi2SetInteger", ST_INSTANTIATED | ST_INIT | ST_STEP)) return fmi2Error;
+    if (!allowed(c, "fmi2SetInteger", ST_INSTANTIATED | ST_INIT | RUN_STATES)) return fmi2Error;
     if (n > 0 && (!vr || !value)) return fail(c, "fmi2SetInteger", "NULL argument");
     for (size_t i = 0; i < n; ++i) {
         if (check_settable(c, "fmi2SetInteger", vr[i]) != fmi2OK) return fmi2Error;
@@ -297,7 +313,7 @@ fmi2Status fmi2SetBoolean(fmi2Component comp, const fmi2ValueReference vr[], siz
                           const fmi2Boolean value[]) {
     (void)value;
     Instance *c = (Instance *)comp;
-    if (!allowed(c, "fmi2SetBoolean", ST_INSTANTIATED | ST_INIT | ST_STEP)) return fmi2Error;
+    if (!allowed(c, "fmi2SetBoolean", ST_INSTANTIATED | ST_INIT | RUN_STATES)) return fmi2Error;
     if (n == 0) return fmi2OK;
     return fail(c, "fmi2SetBoolean", "value reference %u is not a settable Boolean",
                 vr ? vr[0] : 0u);
@@ -307,7 +323,7 @@ fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size
                          const fmi2String value[]) {
     (void)value;
     Instance *c = (Instance *)comp;
-    if (!allowed(c, "fmi2SetString", ST_INSTANTIATED | ST_INIT | ST_STEP)) return fmi2Error;
+    if (!allowed(c, "fmi2SetString", ST_INSTANTIATED | ST_INIT | RUN_STATES)) return fmi2Error;
     if (n == 0) return fmi2OK;
     return fail(c, "fmi2SetString", "value reference %u: the model has no String variables",
                 vr ? vr[0] : 0u);
@@ -327,6 +343,7 @@ static void snapshot_take(Instance *c, Snapshot *s) {
     s->tau = c->s.tau;
     s->events = c->s.events;
     s->guard_hits = c->s.guard_hits;
+    s->me_time = c->me_time;
     /* CVODE's step history is not part of the snapshot; restarting the live instance here too
      * makes "continue" and "restore, then continue" follow the very same computation. */
     c->s.needs_reinit = 1;
@@ -340,12 +357,13 @@ static void snapshot_restore(Instance *c, const Snapshot *s) {
     c->s.tau = s->tau;
     c->s.events = s->events;
     c->s.guard_hits = s->guard_hits;
+    c->me_time = s->me_time;
     c->s.needs_reinit = 1;
 }
 
 fmi2Status fmi2GetFMUstate(fmi2Component comp, fmi2FMUstate *state) {
     Instance *c = (Instance *)comp;
-    if (!allowed(c, "fmi2GetFMUstate", ST_INSTANTIATED | ST_INIT | ST_STEP | ST_TERMINATED))
+    if (!allowed(c, "fmi2GetFMUstate", ST_INSTANTIATED | ST_INIT | RUN_STATES | ST_TERMINATED))
         return fmi2Error;
     if (!state) return fail(c, "fmi2GetFMUstate", "NULL argument");
     Snapshot *s = *state ? (Snapshot *)*state : alloc_mem(c, sizeof(Snapshot));
@@ -361,7 +379,7 @@ static int snapshot_valid(const Snapshot *s) {
 
 fmi2Status fmi2SetFMUstate(fmi2Component comp, fmi2FMUstate state) {
     Instance *c = (Instance *)comp;
-    if (!allowed(c, "fmi2SetFMUstate", ST_INSTANTIATED | ST_INIT | ST_STEP | ST_TERMINATED))
+    if (!allowed(c, "fmi2SetFMUstate", ST_INSTANTIATED | ST_INIT | RUN_STATES | ST_TERMINATED))
         return fmi2Error;
     if (!snapshot_valid((const Snapshot *)state))
         return fail(c, "fmi2SetFMUstate", "not a state of this FMU");
@@ -492,4 +510,121 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s, fmi2
 fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2String *value) {
     (void)s; (void)value;
     return fail((Instance *)comp, "fmi2GetStringStatus", "no string status");
+}
+
+/* ---------------------------------------------------------------------------------------- */
+/* Model Exchange: the importer integrates (u, v); the FMU gives derivatives, the wall
+ * indicator g0 and the jumps. The grazing guard of the CS solver is not part of ME: a contact
+ * that enters and leaves the wall within one of the importer's steps is the importer's to find
+ * (or miss). */
+
+#define ME_ONLY(c, fn, states) \
+    do { \
+        if (!allowed(c, fn, states)) return fmi2Error; \
+        if (!c->is_me) return fail(c, fn, "instance was not instantiated for Model Exchange"); \
+    } while (0)
+
+fmi2Status fmi2EnterEventMode(fmi2Component comp) {
+    Instance *c = (Instance *)comp;
+    ME_ONLY(c, "fmi2EnterEventMode", ST_EVENT | ST_CONT);
+    c->state = ST_EVENT;
+    return fmi2OK;
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component comp, fmi2EventInfo *info) {
+    Instance *c = (Instance *)comp;
+    ME_ONLY(c, "fmi2NewDiscreteStates", ST_EVENT);
+    if (!info) return fail(c, "fmi2NewDiscreteStates", "NULL argument");
+    double y[2] = {c->m.u, c->m.v};
+    const int impacts = c->m.impacts;
+    const int changed = model_me_event_update(&c->m, local_tau(c), y);
+    c->m.u = y[0];
+    c->m.v = y[1];
+    if (changed) {
+        c->s.events++;
+        log_msg(c, fmi2OK, "logEvents", "fmi2NewDiscreteStates: wall event at t = %.17g%s",
+                c->me_time, c->m.impacts != impacts ? " (impact)" : "");
+    }
+    info->newDiscreteStatesNeeded = fmi2False;
+    info->terminateSimulation = fmi2False;
+    info->nominalsOfContinuousStatesChanged = fmi2False;
+    info->valuesOfContinuousStatesChanged = changed ? fmi2True : fmi2False;
+    info->nextEventTimeDefined = fmi2False;
+    info->nextEventTime = 0.0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component comp) {
+    Instance *c = (Instance *)comp;
+    ME_ONLY(c, "fmi2EnterContinuousTimeMode", ST_EVENT);
+    c->state = ST_CONT;
+    return fmi2OK;
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component comp, fmi2Boolean no_prior,
+                                       fmi2Boolean *enter_event, fmi2Boolean *terminate) {
+    (void)no_prior;
+    Instance *c = (Instance *)comp;
+    ME_ONLY(c, "fmi2CompletedIntegratorStep", ST_CONT);
+    if (enter_event) *enter_event = fmi2False;
+    if (terminate) *terminate = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetTime(fmi2Component comp, fmi2Real t) {
+    Instance *c = (Instance *)comp;
+    ME_ONLY(c, "fmi2SetTime", ST_EVENT | ST_CONT);
+    if (!isfinite(t)) return fail(c, "fmi2SetTime", "time must be finite");
+    c->me_time = t;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component comp, const fmi2Real x[], size_t n) {
+    Instance *c = (Instance *)comp;
+    ME_ONLY(c, "fmi2SetContinuousStates", ST_EVENT | ST_CONT);
+    if (n != 2 || !x) return fail(c, "fmi2SetContinuousStates", "expected 2 states, got %zu", n);
+    if (!isfinite(x[0]) || !isfinite(x[1]))
+        return fail(c, "fmi2SetContinuousStates", "states must be finite");
+    c->m.u = x[0];
+    c->m.v = x[1];
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component comp, fmi2Real dx[], size_t n) {
+    Instance *c = (Instance *)comp;
+    ME_ONLY(c, "fmi2GetDerivatives", GET_STATES);
+    if (n != 2 || !dx) return fail(c, "fmi2GetDerivatives", "expected 2 states, got %zu", n);
+    const double y[2] = {c->m.u, c->m.v};
+    model_derivatives(&c->m, local_tau(c), y, dx);
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component comp, fmi2Real g[], size_t n) {
+    Instance *c = (Instance *)comp;
+    ME_ONLY(c, "fmi2GetEventIndicators", GET_STATES);
+    if (n != MODEL_N_ME_EVENTS || !g)
+        return fail(c, "fmi2GetEventIndicators", "expected %d indicators, got %zu",
+                    MODEL_N_ME_EVENTS, n);
+    const double y[2] = {c->m.u, c->m.v};
+    double all[MODEL_N_EVENTS];
+    model_event_indicators(&c->m, local_tau(c), y, all);
+    g[0] = all[0];
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component comp, fmi2Real x[], size_t n) {
+    Instance *c = (Instance *)comp;
+    ME_ONLY(c, "fmi2GetContinuousStates", GET_STATES);
+    if (n != 2 || !x) return fail(c, "fmi2GetContinuousStates", "expected 2 states, got %zu", n);
+    x[0] = c->m.u;
+    x[1] = c->m.v;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component comp, fmi2Real x[], size_t n) {
+    Instance *c = (Instance *)comp;
+    ME_ONLY(c, "fmi2GetNominalsOfContinuousStates", ANY_STATE);
+    if (n != 2 || !x) return fail(c, "fmi2GetNominalsOfContinuousStates", "expected 2 states");
+    x[0] = x[1] = 1.0;
+    return fmi2OK;
 }

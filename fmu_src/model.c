@@ -20,6 +20,7 @@ static const double STICK_VELOCITY = 1e-9;
 static const char *const NAMES[VR_COUNT] = {
     "nu", "Omega", "sigma", "r", "Gamma", "wall", "u0", "v0", "rtol", "atol",
     "F_g", "phi", "kappa", "u", "v", "impacts", "in_contact",
+    "contact", "alpha_hc", "der(u)", "der(v)", "wall_indicator",
 };
 
 const char *model_variable_name(int vr) {
@@ -39,6 +40,10 @@ void model_set_defaults(ModelData *m) {
     m->v0 = 0.0;
     m->rtol = 1e-12;
     m->atol = 1e-14;
+    m->contact = CONTACT_LINEAR;
+    /* Hunt-Crossley: an impact at speed v_in leaves roughly r ~ 1 - (2/3) alpha v_in, so 0.15
+     * gives r ~ 0.9 at v_in ~ 1 */
+    m->alpha_hc = 0.15;
     m->mode = MODE_FREE;
     m->impacts = 0;
     model_update_derived(m);
@@ -67,11 +72,15 @@ const char *model_check_real(int vr, double x) {
     case VR_U0: case VR_V0: return NULL;
     case VR_RTOL: return (x <= 0.0 || x >= 1.0) ? "must lie in (0, 1)" : NULL;
     case VR_ATOL: return x <= 0.0 ? "must be > 0" : NULL;
+    case VR_HC_ALPHA: return x < 0.0 ? "must be >= 0 (dissipation)" : NULL;
     default: return "is not a settable Real variable";
     }
 }
 
 const char *model_check_integer(int vr, int x) {
+    if (vr == VR_CONTACT)
+        return (x < CONTACT_LINEAR || x > CONTACT_HUNT_CROSSLEY)
+                   ? "must be 0 (linear), 1 (Hertz) or 2 (Hunt-Crossley)" : NULL;
     if (vr != VR_WALL) return "is not a settable Integer variable";
     return (x < WALL_NONE || x > WALL_RIGID) ? "must be 0 (none), 1 (compliant) or 2 (rigid)"
                                              : NULL;
@@ -112,6 +121,13 @@ void model_initialize_state(ModelData *m, double tau0) {
         m->mode = MODE_STICK;
 }
 
+double model_contact_force(const ModelData *m, double u, double v) {
+    if (m->contact == CONTACT_LINEAR) return m->kappa2 * u; /* (40); smooth across u = 0 */
+    if (!(u > 0.0)) return 0.0; /* Hertz laws: C^1 continuation by 0 outside the wall */
+    const double h = m->kappa2 * u * sqrt(u); /* kappa^2 u^{3/2} */
+    return m->contact == CONTACT_HERTZ ? h : h * (1.0 + m->alpha_hc * v);
+}
+
 void model_derivatives(const ModelData *m, double tau, const double y[2], double dy[2]) {
     if (m->mode == MODE_STICK) {
         dy[0] = 0.0;
@@ -119,20 +135,29 @@ void model_derivatives(const ModelData *m, double tau, const double y[2], double
         return;
     }
     double k = m->Omega2 * (y[0] + 1.0);
-    if (m->mode == MODE_CONTACT) k += m->kappa2 * y[0]; /* (40): the wall's spring */
+    if (m->mode == MODE_CONTACT) k += model_contact_force(m, y[0], y[1]); /* the wall */
     dy[0] = y[1];
     dy[1] = forcing(m, tau) - m->nu * y[1] - k;
 }
 
-void model_jacobian(const ModelData *m, double J[2][2]) {
+void model_jacobian(const ModelData *m, const double y[2], double J[2][2]) {
     if (m->mode == MODE_STICK) {
         J[0][0] = J[0][1] = J[1][0] = J[1][1] = 0.0;
         return;
     }
     J[0][0] = 0.0;
     J[0][1] = 1.0;
-    J[1][0] = -(m->Omega2 + (m->mode == MODE_CONTACT ? m->kappa2 : 0.0));
+    J[1][0] = -m->Omega2;
     J[1][1] = -m->nu;
+    if (m->mode != MODE_CONTACT) return;
+    if (m->contact == CONTACT_LINEAR) {
+        J[1][0] -= m->kappa2;
+    } else if (y[0] > 0.0) {
+        const double s = sqrt(y[0]);
+        const double damp = m->contact == CONTACT_HUNT_CROSSLEY ? m->alpha_hc : 0.0;
+        J[1][0] -= 1.5 * m->kappa2 * s * (1.0 + damp * y[1]);
+        J[1][1] -= m->kappa2 * y[0] * s * damp;
+    }
 }
 
 void model_event_indicators(const ModelData *m, double tau, const double y[2],
@@ -184,7 +209,9 @@ EventResult model_event_update(ModelData *m, double tau, double y[2], int which)
         y[0] = 0.0;
         m->impacts += 1;
         if (m->wall == WALL_COMPLIANT) {
-            y[1] *= m->r; /* footnote 2: the wall passes the mass on with v -> r v */
+            /* footnote 2: the linear wall passes the mass on with v -> r v. The Hertz laws
+             * enter continuously (Hunt-Crossley dissipates inside the wall instead). */
+            if (m->contact == CONTACT_LINEAR) y[1] *= m->r;
             m->mode = MODE_CONTACT;
         } else {
             const double vc = y[1];
@@ -225,6 +252,7 @@ const char *model_get_real(const ModelData *m, int vr, double *x) {
     case VR_F_G: *x = m->F_g; break;
     case VR_PHI: *x = m->phi; break;
     case VR_KAPPA: *x = m->kappa; break;
+    case VR_HC_ALPHA: *x = m->alpha_hc; break;
     case VR_U: *x = m->u; break;
     case VR_V: *x = m->v; break;
     default: return "is not a Real variable";
@@ -235,6 +263,7 @@ const char *model_get_real(const ModelData *m, int vr, double *x) {
 const char *model_get_integer(const ModelData *m, int vr, int *x) {
     switch (vr) {
     case VR_WALL: *x = m->wall; break;
+    case VR_CONTACT: *x = m->contact; break;
     case VR_IMPACTS: *x = m->impacts; break;
     default: return "is not an Integer variable";
     }
@@ -260,6 +289,7 @@ const char *model_set_real(ModelData *m, int vr, double x) {
     case VR_V0: m->v0 = x; break;
     case VR_RTOL: m->rtol = x; break;
     case VR_ATOL: m->atol = x; break;
+    case VR_HC_ALPHA: m->alpha_hc = x; break;
     }
     model_update_derived(m);
     return NULL;
@@ -268,6 +298,40 @@ const char *model_set_real(ModelData *m, int vr, double x) {
 const char *model_set_integer(ModelData *m, int vr, int x) {
     const char *why = model_check_integer(vr, x);
     if (why) return why;
-    m->wall = x;
+    if (vr == VR_CONTACT) m->contact = x;
+    else m->wall = x;
     return NULL;
+}
+
+int model_me_event_update(ModelData *m, double tau, double y[2]) {
+    if (model_release_now(m, tau)) { /* sticking: the holding force has gone */
+        y[0] = 0.0;
+        y[1] = 0.0;
+        return 1;
+    }
+    if (m->wall == WALL_NONE || m->mode == MODE_STICK) return 0;
+    /* the importer stops on the far side of g0 = u = 0 (or on it) */
+    const int crossed = m->mode == MODE_FREE ? (y[0] > 0.0 || (y[0] == 0.0 && y[1] > 0.0))
+                                             : (y[0] < 0.0 || (y[0] == 0.0 && y[1] < 0.0));
+    if (!crossed) return 0;
+    model_event_update(m, tau, y, 0);
+    return 1;
+}
+
+const char *model_get_real_at(const ModelData *m, double tau, int vr, double *x) {
+    if (vr == VR_DER_U || vr == VR_DER_V) {
+        const double y[2] = {m->u, m->v};
+        double dy[2];
+        model_derivatives(m, tau, y, dy);
+        *x = dy[vr == VR_DER_V];
+        return NULL;
+    }
+    if (vr == VR_WALL_INDICATOR) {
+        const double y[2] = {m->u, m->v};
+        double g[MODEL_N_EVENTS];
+        model_event_indicators(m, tau, y, g);
+        *x = g[0];
+        return NULL;
+    }
+    return model_get_real(m, vr, x);
 }

@@ -41,10 +41,21 @@ typedef enum {
     VR_V = 14,
     VR_IMPACTS = 15,
     VR_IN_CONTACT = 16,
+    /* added after the FMI 2.0 CS interface was fixed: contact laws, Model Exchange */
+    VR_CONTACT = 17,       /* Integer: 0 linear, 1 Hertz, 2 Hunt-Crossley */
+    VR_HC_ALPHA = 18,      /* Hunt-Crossley damping factor */
+    VR_DER_U = 19,         /* der(u) (Model Exchange) */
+    VR_DER_V = 20,         /* der(v) (Model Exchange) */
+    VR_WALL_INDICATOR = 21, /* the event indicator g0 (FMI 3.0 Model Exchange) */
     VR_COUNT
 } ValueReference;
 
 typedef enum { WALL_NONE = 0, WALL_COMPLIANT = 1, WALL_RIGID = 2 } WallKind;
+
+/* Contact law of the compliant wall (force on the mass at depth u > 0, velocity v):
+ * LINEAR kappa^2 u (the paper's (40)), HERTZ kappa^2 u^{3/2}, HUNT_CROSSLEY
+ * kappa^2 u^{3/2} (1 + alpha_hc v). The entry jump v -> r v belongs to the linear law only. */
+typedef enum { CONTACT_LINEAR = 0, CONTACT_HERTZ = 1, CONTACT_HUNT_CROSSLEY = 2 } ContactLaw;
 
 /* The discrete state. CONTACT: inside the compliant wall. STICK: resting on the rigid wall after
  * chatter, held there while the net force pushes into it. */
@@ -59,6 +70,8 @@ typedef struct {
     double nu, Omega, sigma, r, Gamma;
     int wall;
     double u0, v0, rtol, atol;
+    int contact;      /* ContactLaw */
+    double alpha_hc;  /* Hunt-Crossley damping factor */
     /* calculated parameters, kept consistent by model_update_derived() */
     double F_g, phi, kappa, Omega2, kappa2;
     /* continuous state at the current local time */
@@ -88,7 +101,7 @@ void model_initialize_state(ModelData *m, double tau0);
 double model_wall_force(const ModelData *m, double tau);
 
 void model_derivatives(const ModelData *m, double tau, const double y[2], double dy[2]);
-void model_jacobian(const ModelData *m, double J[2][2]);
+void model_jacobian(const ModelData *m, const double y[2], double J[2][2]);
 void model_event_indicators(const ModelData *m, double tau, const double y[2],
                             double g[MODEL_N_EVENTS]);
 void model_root_directions(const ModelData *m, int dir[MODEL_N_EVENTS]);
@@ -106,12 +119,23 @@ int model_release_now(ModelData *m, double tau);
 
 /* Typed access by value reference (fmi2GetReal & co.). Return NULL or an error message. */
 const char *model_get_real(const ModelData *m, int vr, double *value);
+/* As model_get_real, and also der(u), der(v) and the wall indicator at local time tau. */
+const char *model_get_real_at(const ModelData *m, double tau, int vr, double *value);
 const char *model_get_integer(const ModelData *m, int vr, int *value);
 const char *model_get_boolean(const ModelData *m, int vr, int *value);
 const char *model_set_real(ModelData *m, int vr, double value);
 const char *model_set_integer(ModelData *m, int vr, int value);
 /* Whether a variable may be set after initialisation (variability tunable). */
 int model_is_tunable(int vr);
+
+/* Model Exchange: the importer integrates (u, v) and watches MODEL_N_ME_EVENTS indicators (the
+ * wall indicator g0 only: the grazing guard g1 is the importer's business in ME). At an event
+ * (importer found a sign change of g0, state y at local time tau), applies what the mode's
+ * sign of g0 calls for; returns 1 if the mode or the state changed. */
+#define MODEL_N_ME_EVENTS 1
+int model_me_event_update(ModelData *m, double tau, double y[2]);
+/* Contact force of the compliant wall at depth u (> 0), velocity v (0 for u <= 0). */
+double model_contact_force(const ModelData *m, double u, double v);
 const char *model_variable_name(int vr);
 
 #endif

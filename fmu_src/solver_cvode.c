@@ -42,9 +42,9 @@ static int rhs(realtype t, N_Vector y, N_Vector ydot, void *user_data) {
 
 static int jac(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *user_data, N_Vector t1,
                N_Vector t2, N_Vector t3) {
-    (void)t; (void)y; (void)fy; (void)t1; (void)t2; (void)t3;
+    (void)t; (void)fy; (void)t1; (void)t2; (void)t3;
     double a[2][2];
-    model_jacobian((const ModelData *)user_data, a);
+    model_jacobian((const ModelData *)user_data, N_VGetArrayPointer(y), a);
     SM_ELEMENT_D(J, 0, 0) = a[0][0];
     SM_ELEMENT_D(J, 0, 1) = a[0][1];
     SM_ELEMENT_D(J, 1, 0) = a[1][0];

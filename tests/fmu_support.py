@@ -122,3 +122,31 @@ def expect_error(call, *args) -> None:  # noqa: ANN001
         assert e.status == 3, f"expected fmi2Error, got status {e.status}"
         return
     raise AssertionError(f"{call.__name__}{args} did not fail")
+
+
+# -- added for FMI 3.0 / Model Exchange / contact-law tests (issue 8) ---------------------------
+FMU3_PATH = ROOT / "build" / "fmu" / "ImpactOscillator_fmi3.fmu"
+
+
+def at_times(result, times) -> tuple[np.ndarray, np.ndarray]:
+    """(u, v) and impacts at each of `times` from an fmpy result that also holds event rows
+    (the last row at each time: after any event there)."""
+    t = result["time"]
+    rows = [int(np.flatnonzero(np.isclose(t, x, rtol=0, atol=1e-12))[-1]) for x in times]
+    return (np.c_[result["u"][rows], result["v"][rows]],
+            np.asarray(result["impacts"][rows], dtype=int))
+
+
+def simulate(path, fmi_type: str, t0: float, t1: float, dt: float, rtol: float = 1e-10,
+             **start_values):
+    """fmpy.simulate_fmu with this FMU's outputs; extra keyword arguments go to simulate_fmu
+    when they are among its own options, else they are start values."""
+    from fmpy import simulate_fmu
+    options = {k: start_values.pop(k) for k in ("use_event_mode", "early_return_allowed",
+                                                "step_finished", "solver") if k in start_values}
+    for k, x in list(start_values.items()):
+        if k == "wall" and isinstance(x, str):
+            start_values[k] = WALLS[x]
+    return simulate_fmu(str(path), fmi_type=fmi_type, start_time=t0, stop_time=t1,
+                        output_interval=dt, relative_tolerance=rtol, start_values=start_values,
+                        output=["u", "v", "impacts", "in_contact"], **options)
