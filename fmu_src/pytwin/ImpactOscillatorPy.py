@@ -16,6 +16,7 @@ Build with ``python fmu_src/pytwin/build.py --out build/fmu/ImpactOscillatorPy.f
 """
 from __future__ import annotations
 
+import ctypes
 import math
 import sys
 from typing import Any, Optional
@@ -72,9 +73,6 @@ _OUTPUTS_REAL = {
 _IMPACTS_DESC = "wall entries (impacts) since the start time"
 _IN_CONTACT_DESC = "true while inside the compliant wall or sticking on the rigid one"
 
-#: See ImpactOscillatorPy._reject: references handed to pythonfmu's exception clean-up.
-_REFS_FOR_PYTHONFMU_CLEANUP: list[tuple[object, type, list]] = []
-
 #: InitialUnknowns with the C FMU's dependencies (1-based indices of ModelVariables).
 #: pythonfmu writes none by default, which ``fmpy validate`` rejects.
 _INITIAL_UNKNOWNS = (
@@ -111,6 +109,7 @@ class ImpactOscillatorPy(Fmi2Slave):
         self.driver: Optional[CvodeDriver] = None
         self.start_time = 0.0
         self.initialized = False
+        self.failed = False  # a doStep failed: only fmi2Reset helps (the C FMU's error state)
         # The order of registration is the value reference: keep it equal to model.h's enum.
         for name, (desc, _) in _PARAMETERS_REAL.items():
             self._register_real_parameter(name, desc, tunable=(name == "sigma"))
@@ -196,18 +195,20 @@ class ImpactOscillatorPy(Fmi2Slave):
     def _reject(self, message: str) -> None:
         """Log ``message`` as fmi2Error, then raise (pythonfmu returns fmi2Fatal).
 
-        pythonfmu's exception handler (``handle_py_exception``) releases one reference to this
-        instance, to its class and to its log queue (``cleanPyObject``) but keeps using the
-        pointers: a later ``fmi2Reset`` (the harness reuses instances) or ``fmi2FreeInstance``
-        would release them again and crash the importer.  One extra reference to each, taken
-        here for every exception that leaves a callback, keeps the counts balanced, so the
-        instance survives a rejected parameter exactly like the C FMU's does.
+        Every exception leaving a callback must come through here.  pythonfmu's exception
+        handler (``handle_py_exception`` -> ``cleanPyObject``) releases one reference to this
+        instance, to its class and to its log queue but keeps using the pointers: a later call,
+        ``fmi2Reset`` (the harness reuses instances) or ``fmi2FreeInstance`` would then work on
+        freed objects and crash the importer.  One reference to each, donated here to that
+        clean-up (taken with ``Py_IncRef`` and owned by nobody on the Python side), keeps the
+        counts balanced, so the instance survives a rejected parameter as the C FMU's does.
         """
         self.log(message, Fmi2Status.error, "logStatusError")
         # pythonfmu 0.7 forwards log messages only while the importer has logging on; stderr
         # makes sure the reason is seen even when it has not.
         print(f"{self.instance_name}: {message}", file=sys.stderr, flush=True)
-        _REFS_FOR_PYTHONFMU_CLEANUP.append((self, type(self), self.log_queue))
+        for obj in (self, type(self), self.log_queue):
+            ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
         raise ModelError(message)
 
     def _set_real(self, name: str, x: float) -> None:
@@ -286,7 +287,16 @@ class ImpactOscillatorPy(Fmi2Slave):
         except ModelError as exc:
             self._reject(f"fmi2ExitInitializationMode: {exc}")
         self.model.update_derived()
-        self.driver = CvodeDriver(self.model)
+        try:
+            self.driver = CvodeDriver(self.model)
+        except ImportError as exc:
+            self._reject(
+                "fmi2ExitInitializationMode: the Python running this FMU "
+                f"({sys.version.split()[0]}, prefix {sys.prefix}) cannot import scikit-sundae "
+                f"({exc}); see fmu_src/pytwin/README.md (PYTHONPATH)"
+            )
+        except Exception as exc:  # anything else must go through _reject too (see there)
+            self._reject(f"fmi2ExitInitializationMode: CVODE set-up failed: {exc!r}")
         self.driver.start(self.start_time)
         self.model.initialize_state(self.driver.tau)
         self.initialized = True
@@ -295,6 +305,8 @@ class ImpactOscillatorPy(Fmi2Slave):
         """Integrate from ``current_time`` to ``current_time + step_size``."""
         if self.driver is None:
             self._reject("fmi2DoStep: called before initialisation ended")
+        if self.failed:
+            self._reject("fmi2DoStep: an earlier step failed; reset the instance")
         if not (math.isfinite(current_time) and math.isfinite(step_size)) or step_size < 0.0:
             self._reject(f"fmi2DoStep: bad communication step (t = {current_time}, h = {step_size})")
         now = self.driver.time
@@ -305,6 +317,7 @@ class ImpactOscillatorPy(Fmi2Slave):
             )
         try:
             self.driver.advance(current_time + step_size)
-        except SolverError as exc:
+        except Exception as exc:  # SolverError, or a bug: either way through _reject
+            self.failed = True
             self._reject(f"fmi2DoStep: integration failed: {exc}")
         return True
