@@ -7,9 +7,13 @@ Modules, by concern:
 * :mod:`mapcheck.coeffs`   -- ``coefficients(nu, Omega, r, wall)``: (36), (39), (48); A and A~(sigma)
 * :mod:`mapcheck.maps`     -- the maps: L (26)-(30), (31)/(32), (33)-(35), (37)/(38), (1)/(2), (54)-(56)
 * :mod:`mapcheck.exact`    -- closed-form solution of the ODE and the exact pre-impact map
+* :mod:`mapcheck.windows`  -- ``window_1d(M)`` (64); maximal period-M orbits and their windows
+* :mod:`mapcheck.bifurcation` -- vectorized iteration over sigma/rho grids (fresh, up, down)
+* :mod:`mapcheck.duration` -- impact duration: exact (41) and (42), (45), (50)
 """
 from .coeffs import A_GRAZING, Coefficients, coefficients, grazing_acceleration
 from .exact import ExactOscillator
+from .bifurcation import PiecewiseMap, classify, orbit_diagram
 from .linear import alpha_gamma, invert_alpha_gamma, propagator
 from .maps import (
     damped_1d_map,
@@ -23,9 +27,18 @@ from .maps import (
     rho_1d,
     to_natural,
 )
+from .windows import MapParams, Window, maximal_orbits, window_1d, windows
 
 __all__ = [
     "A_GRAZING",
+    "MapParams",
+    "PiecewiseMap",
+    "Window",
+    "classify",
+    "maximal_orbits",
+    "orbit_diagram",
+    "window_1d",
+    "windows",
     "Coefficients",
     "ExactOscillator",
     "alpha_gamma",
