@@ -17,10 +17,16 @@
  * in finite time; the mass is taken to stick instead (Zeno truncation). */
 static const double STICK_VELOCITY = 1e-9;
 
+/* Where an event leaves the mass on the wall, u is put a hair on the side of its new mode rather
+ * than at 0: CVODE deactivates a root function that is exactly zero at the restart and takes its
+ * reference sign only after the first step, so a contact or flight shorter than that first step
+ * (chatter, grazing) would be stepped over. */
+static const double ON_WALL = 1e-300;
+
 static const char *const NAMES[VR_COUNT] = {
     "nu", "Omega", "sigma", "r", "Gamma", "wall", "u0", "v0", "rtol", "atol",
     "F_g", "phi", "kappa", "u", "v", "impacts", "in_contact",
-    "contact", "alpha_hc", "der(u)", "der(v)", "wall_indicator",
+    "contact", "alpha_hc", "der(u)", "der(v)", "wall_indicator", "time",
 };
 
 const char *model_variable_name(int vr) {
@@ -205,30 +211,32 @@ EventResult model_event_update(ModelData *m, double tau, double y[2], int which)
 
     switch (m->mode) {
     case MODE_FREE:
-        /* entering the wall: u = 0 exactly (the root), v > 0 */
-        y[0] = 0.0;
+        /* entering the wall: u = 0 (the root), v > 0 */
         m->impacts += 1;
         if (m->wall == WALL_COMPLIANT) {
             /* footnote 2: the linear wall passes the mass on with v -> r v. The Hertz laws
              * enter continuously (Hunt-Crossley dissipates inside the wall instead). */
             if (m->contact == CONTACT_LINEAR) y[1] *= m->r;
+            y[0] = ON_WALL;
             m->mode = MODE_CONTACT;
         } else {
             const double vc = y[1];
+            y[0] = -ON_WALL;
             y[1] = -m->r * vc; /* (11) */
             if (fabs(y[1]) <= STICK_VELOCITY * fmax(1.0, fabs(vc)) &&
                 model_wall_force(m, tau) > 0.0) {
+                y[0] = 0.0;
                 y[1] = 0.0;
                 m->mode = MODE_STICK;
             }
         }
         return EVENT_JUMP;
     case MODE_CONTACT:
-        y[0] = 0.0; /* leaving the compliant wall: no jump in v */
+        y[0] = -ON_WALL; /* leaving the compliant wall: no jump in v */
         m->mode = MODE_FREE;
         return EVENT_JUMP;
     case MODE_STICK:
-        y[0] = 0.0;
+        y[0] = -ON_WALL;
         y[1] = 0.0;
         m->mode = MODE_FREE;
         return EVENT_JUMP;

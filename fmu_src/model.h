@@ -47,6 +47,7 @@ typedef enum {
     VR_DER_U = 19,         /* der(u) (Model Exchange) */
     VR_DER_V = 20,         /* der(v) (Model Exchange) */
     VR_WALL_INDICATOR = 21, /* the event indicator g0 (FMI 3.0 Model Exchange) */
+    VR_TIME = 22,          /* FMI 3.0 independent variable (handled by the FMI glue) */
     VR_COUNT
 } ValueReference;
 

@@ -126,20 +126,35 @@ def test_accuracy_does_not_decay_over_1e4_periods(fmu):
 
 
 def test_rigid_chatter_ends_in_sticking_not_a_hang(fmu):
-    """Strongly damped and barely forced past grazing, a rigid wall with r = 0.5 makes impacts
-    accumulate in finite time; the FMU must stick (in_contact, u = v = 0), release when the force
-    stops pushing, and agree with the oracle's impact count."""
-    lin, sigma, r = FIG9, 0.3, 0.5
-    fmu.start(t0=0.0, wall="rigid", sigma=sigma, r=r, u0=-1.0, v0=0.0, **lin)
-    osc = ExactOscillator(lin["nu"], lin["Omega"], sigma, r=r, wall="rigid")
-    kinds = [k for _, k in osc.crossings(-1.0, 0.0, 0.0, 6.0)]
-    assert "stick" in kinds and "release" in kinds, "the case was meant to chatter"
-    stuck_seen = False
-    for t in np.arange(1, 6, 0.01):
-        fmu.step_to(float(t))
-        if fmu.in_contact():
-            stuck_seen = True
-            assert np.all(fmu.state() == 0.0)
-    assert stuck_seen
-    _, counts = osc.strobe(-1.0, 0.0, [fmu.t])
-    assert abs(fmu.impacts() - counts[0]) <= 1, (fmu.impacts(), counts[0])
+    """Released just off a rigid wall while the drive pushes into it, the mass chatters: impacts
+    accumulate in finite time. The FMU must stick (in_contact, u = v = 0), release when the force
+    stops pushing, and agree with the oracle on the impact count and the release time."""
+    import math
+    from mapcheck.exact import forcing_amplitude_phase
+    lin, sigma = FIG9, 0.3
+    _, phi = forcing_amplitude_phase(lin["nu"], lin["Omega"])
+    t0 = (-phi / (2 * math.pi)) % 1 - 0.15  # just before the phase of maximal push
+    for r in (0.5, 0.8):
+        fmu.start(t0=t0, wall="rigid", sigma=sigma, r=r, u0=-0.01, v0=0.0, **lin)
+        osc = ExactOscillator(lin["nu"], lin["Omega"], sigma, r=r, wall="rigid")
+        events = osc.crossings(-0.01, 0.0, t0, t0 + 1.0)
+        kinds = [k for _, k in events]
+        assert kinds.count("stick") == 1 and kinds.count("release") == 1, "meant to chatter"
+        t_stick = next(t for t, k in events if k == "stick")
+        t_release = next(t for t, k in events if k == "release")
+        # chatter accumulates at t_stick (a Zeno point): the FMU must get there too
+        fmu.step_to(t_stick - 1e-6)
+        assert not fmu.in_contact()
+        fmu.step_to(t_stick + 1e-6)
+        assert fmu.in_contact() and np.all(fmu.state() == 0.0)
+        fmu.step_to(t_release - 1e-6)
+        assert fmu.in_contact()
+        fmu.step_to(t_release + 1e-6)
+        assert not fmu.in_contact() and fmu.state()[0] < 0.0
+        fmu.step_to(t0 + 1.0)
+        _, counts = osc.strobe(-0.01, 0.0, [t0 + 1.0], t0=t0)
+        # The count of a Zeno sequence depends on where it is truncated: its last impacts are
+        # 1e-9-sized and their number is set by the stick threshold and round-off, not by the
+        # physics. The two must agree to within one decade of impact velocity.
+        decade = math.log(10) / math.log(1 / r)
+        assert abs(fmu.impacts() - counts[0]) <= decade, (fmu.impacts(), counts[0])
