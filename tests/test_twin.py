@@ -495,3 +495,90 @@ def test_only_sigma_is_tunable_after_initialisation(twin_fmu) -> None:
         assert any("only sigma is tunable" in m for _, _, m in s.messages)
     finally:
         s.close()
+
+
+# ---------------------------------------------------------------------------------------------
+# a non-Python importer: the runtime needs stated in fmu_src/pytwin/README.md
+# ---------------------------------------------------------------------------------------------
+_C_IMPORTER = r"""
+#include <dlfcn.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include "fmi2Functions.h"
+static void logger(fmi2ComponentEnvironment e, fmi2String name, fmi2Status s, fmi2String cat,
+                   fmi2String msg, ...) {
+    (void)e; (void)name; (void)cat;
+    printf("log %d: %s\n", (int)s, msg);
+}
+#define LOAD(f) f##TYPE *f = (f##TYPE *)dlsym(h, #f); if (!f) return 2;
+int main(int argc, char **argv) {
+    (void)argc;
+    void *h = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+    if (!h) { printf("dlopen: %s\n", dlerror()); return 1; }
+    LOAD(fmi2Instantiate) LOAD(fmi2SetupExperiment) LOAD(fmi2EnterInitializationMode)
+    LOAD(fmi2ExitInitializationMode) LOAD(fmi2DoStep) LOAD(fmi2GetReal) LOAD(fmi2SetReal)
+    LOAD(fmi2Terminate) LOAD(fmi2FreeInstance)
+    fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
+    fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, argv[2], argv[3], &cb, fmi2False,
+                                      fmi2True);
+    if (!c) { printf("instantiate failed\n"); return 1; }
+    fmi2SetupExperiment(c, fmi2False, 0.0, 0.5, fmi2False, 0.0);
+    fmi2EnterInitializationMode(c);
+    fmi2ValueReference vr[2] = {6, 7};  /* u0, v0 */
+    fmi2Real x[2] = {-2.2, 0.0};
+    fmi2SetReal(c, vr, 2, x);
+    if (fmi2ExitInitializationMode(c) != fmi2OK) { printf("init failed\n"); return 1; }
+    for (int k = 0; k < 10; ++k)
+        if (fmi2DoStep(c, 0.5 + k, 1.0, fmi2True) != fmi2OK) { printf("step failed\n"); return 1; }
+    fmi2ValueReference out[2] = {13, 14};  /* u, v */
+    fmi2Real y[2];
+    fmi2GetReal(c, out, 2, y);
+    printf("state %.17g %.17g\n", y[0], y[1]);
+    fmi2Terminate(c);
+    fmi2FreeInstance(c);
+    return 0;
+}
+"""
+
+
+def test_non_python_importer_with_ld_preload(twin_fmu: Path, tmp_path: Path) -> None:
+    """A C program that dlopens the twin needs libpython preloaded, PYTHONHOME at its
+    installation and PYTHONPATH at the packages, exactly as the README says; then it computes
+    what fmpy gets in-process."""
+    import shutil
+    import sysconfig
+
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    src, exe = tmp_path / "importer.c", tmp_path / "importer"
+    src.write_text(_C_IMPORTER)
+    subprocess.run([cc, "-O1", "-I", str(ROOT / "fmu_src" / "include" / "fmi2"), str(src),
+                    "-o", str(exe), "-ldl"], check=True, capture_output=True)
+    unzipdir = Path(extract(str(twin_fmu), unzipdir=str(tmp_path / "fmu")))
+    guid = read_model_description(str(twin_fmu)).guid
+    args = [str(exe), str(unzipdir / "binaries" / "linux64" / "ImpactOscillatorPy.so"), guid,
+            (unzipdir / "resources").as_uri()]
+    libpython = Path(sysconfig.get_config_var("LIBDIR")) / sysconfig.get_config_var("INSTSONAME")
+    site = sysconfig.get_paths()["purelib"]
+    env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
+
+    bare = subprocess.run(args, env=env, capture_output=True, text=True, timeout=60)
+    assert bare.returncode != 0 and "undefined symbol" in bare.stdout
+
+    # PYTHONHOME: the embedded interpreter would otherwise look for its standard library next
+    # to whichever "python3" comes first on PATH (here maybe a different installation).
+    run = subprocess.run(args, env={**env, "LD_PRELOAD": str(libpython), "PYTHONPATH": site,
+                                    "PYTHONHOME": sys.base_prefix},
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stdout + run.stderr
+    got = [float(x) for x in run.stdout.split("state")[1].split()]
+
+    s = Slave(twin_fmu)
+    try:
+        s.start(t0=0.5, u0=-2.2, v0=0.0)
+        for k in range(10):  # the same communication points (CVODE stops at each)
+            s.step_to(1.5 + k)
+        np.testing.assert_allclose(got, s.state(), rtol=0, atol=1e-12)
+    finally:
+        s.close()
