@@ -22,6 +22,9 @@ typedef struct {
     /* Counters since the start, for statistics and tests. */
     long events;
     long guard_hits;  /* crossings the grazing guard recovered */
+    /* A wall event located by solver_advance_ex(stop_at_event) whose jump is not applied yet:
+     * tau is the event time and the model holds the state at the crossing, before the jump. */
+    int pending;
     char msg[512];    /* why the last call failed */
 } Solver;
 
@@ -32,6 +35,13 @@ void solver_free(Solver *s);
 void solver_start(Solver *s, double t);
 /* Integrates to absolute time t_end; returns 0, or -1 with s->msg set. */
 int solver_advance(Solver *s, ModelData *m, double t_end);
+/* As solver_advance, but with stop_at_event it stops at the first wall event in (now, t_end]
+ * and returns 1: solver_time() is the event time, the model holds the state at the crossing
+ * before the jump, and s->pending is set. The jump is applied by solver_apply_pending (FMI 3.0
+ * event mode), or at the start of the next advance. stop_at_event = 0 is solver_advance. */
+int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event);
+/* Applies a pending event's jump (no-op without one); returns 1 if there was one. */
+int solver_apply_pending(Solver *s, ModelData *m);
 double solver_time(const Solver *s);
 
 #endif

@@ -184,8 +184,25 @@ static int locate_missed_crossing(Solver *s, const ModelData *m, double t_turn, 
     return 0;
 }
 
+int solver_apply_pending(Solver *s, ModelData *m) {
+    if (!s->pending) return 0;
+    double y[2] = {m->u, m->v};
+    model_event_update(m, s->tau, y, 0);
+    m->u = y[0];
+    m->v = y[1];
+    s->events++;
+    s->pending = 0;
+    s->needs_reinit = 1;
+    return 1;
+}
+
 int solver_advance(Solver *s, ModelData *m, double t_end) {
+    return solver_advance_ex(s, m, t_end, 0);
+}
+
+int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) {
     s->msg[0] = '\0';
+    solver_apply_pending(s, m);
     if (s->needs_reinit || s->tau > REORIGIN_AFTER) {
         if (reinit(s, m) != 0) return -1;
     }
@@ -228,6 +245,14 @@ int solver_advance(Solver *s, ModelData *m, double t_end) {
                 return -1;
             }
             s->guard_hits++;
+        }
+        if (stop_at_event) { /* FMI 3.0 early return: the jump is the importer's event mode */
+            s->tau = tc;
+            m->u = yc[0];
+            m->v = yc[1];
+            s->pending = 1;
+            s->needs_reinit = 1;
+            return 1;
         }
         model_event_update(m, tc, yc, 0);
         s->tau = tc;

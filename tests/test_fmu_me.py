@@ -81,5 +81,5 @@ def test_me_records_each_impact_as_an_event_row():
     assert len(enters) == len(jumps)
     for j, tc in zip(jumps, enters):
         assert t[j] == t[j + 1] and abs(t[j] - tc) < 1e-8
-        assert abs(res["u"][j + 1]) == 0.0
+        assert abs(res["u"][j + 1]) < 1e-200  # on the wall (a hair inside, see model.c)
         assert res["v"][j + 1] == pytest.approx(r * res["v"][j], rel=1e-12)
