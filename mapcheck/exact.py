@@ -223,7 +223,6 @@ class _State:
     u: float
     v: float
     mode: str  # "out", "in" (compliant wall), "stuck" (rigid wall)
-    on_wall: bool = False
     t_release: float = math.inf
 
 
@@ -289,7 +288,7 @@ class ExactOscillator:
         events: list = []
         pushes_in = u0 == 0.0 and v0 == 0.0 and self.net_wall_force(t0) > 0.0
         if self.wall == "compliant" and (u0 > 0.0 or (u0 == 0.0 and v0 > 0.0) or pushes_in):
-            return _State(t0, u0, v0, "in", on_wall=(u0 == 0.0)), events
+            return _State(t0, u0, v0, "in"), events
         if self.wall == "rigid":
             if u0 > 0.0:
                 raise ValueError("rigid wall: u0 > 0 is inside the wall")
@@ -297,25 +296,25 @@ class ExactOscillator:
                 st = _State(t0, 0.0, v0, "out")
                 return self._impact(st, events), events
             if u0 == 0.0 and abs(v0) < self.v_stick and self.net_wall_force(t0) > 0.0:
-                return _State(t0, 0.0, 0.0, "stuck", True, self._release_time(t0)), events
-        return _State(t0, u0, v0, "out", on_wall=(u0 == 0.0)), events
+                return _State(t0, 0.0, 0.0, "stuck", self._release_time(t0)), events
+        return _State(t0, u0, v0, "out"), events
 
     def _impact(self, st: _State, events: list) -> _State:
         vr = -self.r * st.v
         events.append((st.t, "impact"))
         if abs(vr) < self.v_stick and self.net_wall_force(st.t) > 0.0:
             events.append((st.t, "stick"))
-            return _State(st.t, 0.0, 0.0, "stuck", True, self._release_time(st.t))
-        return _State(st.t, 0.0, vr, "out", True)
+            return _State(st.t, 0.0, 0.0, "stuck", self._release_time(st.t))
+        return _State(st.t, 0.0, vr, "out")
 
     def _advance(self, st: _State, T: float, events: list) -> _State:
         """Integrate from st to time T exactly, appending wall events."""
         while True:
             if st.mode == "stuck":
                 if T < st.t_release:
-                    return _State(T, 0.0, 0.0, "stuck", True, st.t_release)
+                    return _State(T, 0.0, 0.0, "stuck", st.t_release)
                 events.append((st.t_release, "release"))
-                st = _State(st.t_release, 0.0, 0.0, "out", True)
+                st = _State(st.t_release, 0.0, 0.0, "out")
                 continue
             mode = self._wall if st.mode == "in" else self._free
             seg = _Segment(mode, st.t, st.u, st.v)
@@ -335,10 +334,10 @@ class ExactOscillator:
             if self.wall == "compliant":
                 if st.mode == "out":
                     events.append((t_c, "enter"))
-                    st = _State(t_c, 0.0, self.r * vc, "in", True)
+                    st = _State(t_c, 0.0, self.r * vc, "in")
                 else:
                     events.append((t_c, "exit"))
-                    st = _State(t_c, 0.0, vc, "out", True)
+                    st = _State(t_c, 0.0, vc, "out")
             else:
                 st = self._impact(_State(t_c, 0.0, vc, "out"), events)
 
