@@ -115,10 +115,10 @@ class Slave:
             else:
                 self.fmu.setReal([self.vr[k]], [float(x)])
 
-    def start(self, t0: float = 0.0, **params: float) -> None:
-        """Reset, set the parameters, initialise at t0."""
+    def start(self, t0: float = 0.0, tolerance: float | None = None, **params: float) -> None:
+        """Reset, set the parameters, initialise at t0 (with the importer's tolerance)."""
         self.fmu.reset()
-        self.fmu.setupExperiment(startTime=t0)
+        self.fmu.setupExperiment(startTime=t0, tolerance=tolerance)
         self.fmu.enterInitializationMode()
         self.set(**params)
         self.fmu.exitInitializationMode()
@@ -260,6 +260,8 @@ XCASES = [
     ("none", 0.3, FIG9, 10.0, 0.9, None),
     ("compliant", 0.05, UNDERDAMPED, 1000.0, 0.9, None),
     ("rigid", 0.05, UNDERDAMPED, 1000.0, 0.9, None),      # an impact about every other period
+    ("compliant", 1e-6, UNDERDAMPED, 1000.0, 0.9, None),  # near grazing: contacts ~1e-6 deep
+    ("rigid", 1e-4, UNDERDAMPED, 1000.0, 0.9, None),
 ]
 
 
@@ -306,6 +308,27 @@ def test_twin_agrees_with_c_fmu_when_sigma_is_tuned_mid_run(twin_fmu, c_fmu) -> 
     # the change did something: impacts per period differ between the windows
     per_period = np.diff(c_counts)
     assert per_period[10:19].sum() != per_period[30:39].sum()
+
+
+@pytest.mark.parametrize("tolerance", [1e-13, 1e-6])
+def test_importer_tolerance_tightens_rtol_as_in_the_c_fmu(twin_fmu, c_fmu, tolerance) -> None:
+    """setupExperiment's tolerance can only tighten rtol (1e-13 acts, 1e-6 is ignored): the two
+    FMUs give the same states, and a tighter rtol changes them (it was applied)."""
+    results = {}
+    for name, path in (("twin", twin_fmu), ("c", c_fmu)):
+        for tol in (None, tolerance):
+            s = Slave(path)
+            try:
+                s.start(t0=THETA, tolerance=tol, sigma=0.5, u0=-2.5, v0=0.0, **FIG9)
+                for k in range(5):
+                    s.step_to(THETA + k + 1)
+                results[name, tol] = s.state()
+            finally:
+                s.close()
+    np.testing.assert_allclose(results["twin", tolerance], results["c", tolerance], rtol=0,
+                               atol=1e-12)
+    changed = np.any(results["twin", tolerance] != results["twin", None])
+    assert changed == (tolerance < 1e-12)
 
 
 # ---------------------------------------------------------------------------------------------
