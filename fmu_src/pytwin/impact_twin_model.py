@@ -1,10 +1,14 @@
 """Physics and CVODE driver of the impact oscillator, in Python (the pythonfmu twin).
 
-This module is a line-by-line counterpart of the C FMU's ``fmu_src/model.c`` (the physics) and
-``fmu_src/solver_cvode.c`` (the CVODE driver), so that the two implementations can check each
-other.  It is also the place to change the contact law without touching C: everything that
-defines what happens at the wall is in :class:`OscillatorModel` (``derivatives``,
-``jacobian``, ``indicators``, ``event_update``, ``missed_crossing``, ``release_now``).
+This module is the counterpart of the C FMU's ``fmu_src/model.c`` (the physics) and
+``fmu_src/solver_cvode.c`` (the CVODE driver): the same specification and the same rules
+(thresholds, directions, re-origin), a separate implementation on a separate SUNDIALS build, so
+that the two check each other (differences, on purpose: how a
+stepped-over crossing is located, and the tail of rigid-wall chatter; see :class:`CvodeDriver`
+and :meth:`OscillatorModel._rigid_impact`).  It is also the place to change the contact law
+without touching C: everything that defines what happens at the wall is in
+:class:`OscillatorModel` (``make_rhs``, ``make_jacobian``, ``make_indicators``,
+``event_update``, ``missed_crossing``, ``release_now``).
 
 The model is the non-dimensional driven oscillator of Molenaar, de Weger & van de Water (2001),
 eqs (3), (5), (40), (53) (see ``shared/paper/FORMULAS.md``, section 1)::
@@ -36,6 +40,7 @@ __all__ = [
     "CHATTER_RESOLVED_ATOL",
     "ModelError",
     "OscillatorModel",
+    "SolverError",
     "CvodeDriver",
 ]
 
@@ -538,6 +543,13 @@ class CvodeDriver:
         self._clear_event_log()
         if hit:
             return float(res.t), [float(res.y[0]), float(res.y[1])]
+        if self.model.missed_crossing(float(res.y[0])):
+            # the re-integration ends on the wrong side too, without a located crossing: as the
+            # C FMU, fail rather than carry a state inside the wall
+            raise SolverError(
+                "could not locate a wall crossing stepped over before "
+                f"t = {self.origin + tau_turn!r}"
+            )
         self.tau = float(res.t)
         self.model.u, self.model.v = float(res.y[0]), float(res.y[1])
         return None
