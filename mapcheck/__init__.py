@@ -10,10 +10,13 @@ Modules, by concern:
 * :mod:`mapcheck.windows`  -- ``window_1d(M)`` (64); maximal period-M orbits and their windows
 * :mod:`mapcheck.bifurcation` -- vectorized iteration over sigma/rho grids (fresh, up, down)
 * :mod:`mapcheck.duration` -- impact duration: exact (41) and (42), (45), (50)
+* :mod:`mapcheck.orbits`   -- Newton periodic orbits and window edges of any map (e.g. the exact map)
+* :mod:`mapcheck.fig9`     -- figure 9's window table for every map variant
 """
 from .coeffs import A_GRAZING, Coefficients, coefficients, grazing_acceleration
 from .exact import ExactOscillator
 from .bifurcation import PiecewiseMap, classify, orbit_diagram
+from .duration import duration_42, duration_45, duration_50, duration_exact
 from .linear import alpha_gamma, invert_alpha_gamma, propagator
 from .maps import (
     damped_1d_map,
@@ -27,11 +30,19 @@ from .maps import (
     rho_1d,
     to_natural,
 )
+from .orbits import PeriodicOrbit, solve_periodic_orbit, window_edge
 from .windows import MapParams, Window, maximal_orbits, window_1d, windows
 
 __all__ = [
     "A_GRAZING",
     "MapParams",
+    "PeriodicOrbit",
+    "duration_42",
+    "duration_45",
+    "duration_50",
+    "duration_exact",
+    "solve_periodic_orbit",
+    "window_edge",
     "PiecewiseMap",
     "Window",
     "classify",

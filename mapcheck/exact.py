@@ -92,9 +92,6 @@ class _Mode:
         """External force (1 + sigma) F_g cos(th + phi)."""
         return self.amp * (self.fr * np.cos(th) - self.fi * np.sin(th))
 
-    def dforce(self, th) -> np.ndarray:
-        return self.amp * TWO_PI * (-self.fr * np.sin(th) - self.fi * np.cos(th))
-
 
 class _Segment:
     """Closed-form solution of one mode, anchored at (t_a, u_a, v_a)."""
@@ -128,10 +125,6 @@ class _Segment:
     def accel(self, tau, u, v) -> np.ndarray:
         m = self.m
         return m.force(self.th_a + TWO_PI * tau) - m.nu * v - m.k2 * u - m.Om2
-
-    def jerk(self, tau, u, v, a) -> np.ndarray:
-        m = self.m
-        return m.dforce(self.th_a + TWO_PI * tau) - m.nu * a - m.k2 * v
 
     # scalar helpers for brentq (pure Python: called ~10 times per root)
     def scalar_state(self, tau: float) -> tuple[float, float]:
