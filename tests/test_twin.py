@@ -36,6 +36,7 @@ from fmpy.fmi2 import (
     fmi2CallbackFunctions,
     fmi2CallbackLoggerTYPE,
 )
+from fmpy.logging import addLoggerProxy
 from fmpy.validation import validate_fmu
 
 from harness.fmi import FmuModel
@@ -104,6 +105,7 @@ class Slave:
         cb.logger = fmi2CallbackLoggerTYPE(log)
         cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
         cb.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
+        addLoggerProxy(ctypes.byref(cb))  # formats printf-style messages (the C FMU's)
         self._keep = (cb, log)  # the callbacks must outlive the instance
         self.fmu.instantiate(callbacks=cb, loggingOn=logging)
         self.t = 0.0
@@ -329,6 +331,27 @@ def test_importer_tolerance_tightens_rtol_as_in_the_c_fmu(twin_fmu, c_fmu, toler
                                atol=1e-12)
     changed = np.any(results["twin", tolerance] != results["twin", None])
     assert changed == (tolerance < 1e-12)
+
+
+def test_event_log_is_the_c_fmus(twin_fmu, c_fmu) -> None:
+    """With logging on, both FMUs report the wall events of each step in the same words; with
+    logging off, neither says anything."""
+    logs = {}
+    for path in (twin_fmu, c_fmu):
+        for logging in (True, False):
+            s = Slave(path, logging=logging)
+            try:
+                u0, v0 = on_orbit(THETA, 0.5)
+                s.start(t0=THETA, sigma=0.5, u0=u0, v0=v0, **FIG9)
+                for k in range(3):
+                    s.step_to(THETA + k + 1)
+                logs[path.name, logging] = s.messages
+            finally:
+                s.close()
+    assert logs[twin_fmu.name, True] == logs[c_fmu.name, True]
+    assert len(logs[twin_fmu.name, True]) == 3
+    assert all(cat == "logEvents" for _, cat, _ in logs[twin_fmu.name, True])
+    assert logs[twin_fmu.name, False] == logs[c_fmu.name, False] == []
 
 
 # ---------------------------------------------------------------------------------------------

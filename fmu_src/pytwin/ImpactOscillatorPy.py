@@ -96,11 +96,12 @@ class ImpactOscillatorPy(Fmi2Slave):
         "de Water, Nonlinearity 14 (2001) 301); wall crossings located by CVODE root finding"
     )
     default_experiment = DefaultExperiment(start_time=0.0, stop_time=100.0, step_size=1.0)
-    #: The C FMU's error category (pythonfmu's defaults name one per status instead).  The C
-    #: FMU's "logEvents" is left out: pythonfmu 0.7 cannot see fmi2SetDebugLogging, so the
-    #: twin could not keep per-step event messages quiet when logging is off.
+    #: The C FMU's log categories (pythonfmu's defaults name one per status instead).  pythonfmu
+    #: 0.7 forwards a message only while the importer has logging on (and the category is
+    #: among those it asked for), so per-step "logEvents" messages cost nothing otherwise.
     log_categories = {
         "logStatusError": "errors: bad parameters, calls in the wrong state, solver failures",
+        "logEvents": "wall events per step, and those the grazing guard recovered",
     }
 
     def __init__(self, **kwargs: Any) -> None:
@@ -315,9 +316,18 @@ class ImpactOscillatorPy(Fmi2Slave):
                 f"fmi2DoStep: currentCommunicationPoint {current_time!r} differs from the FMU's "
                 f"time {now!r}"
             )
+        events_before, guard_before = self.driver.events, self.driver.guard_hits
         try:
             self.driver.advance(current_time + step_size)
         except Exception as exc:  # SolverError, or a bug: either way through _reject
             self.failed = True
             self._reject(f"fmi2DoStep: integration failed: {exc}")
+        if self.driver.events != events_before:
+            self.log(
+                f"fmi2DoStep: {self.driver.events - events_before} wall events in "
+                f"({current_time!r}, {current_time + step_size!r}], "
+                f"{self.driver.guard_hits - guard_before} of them found by the grazing guard",
+                Fmi2Status.ok,
+                "logEvents",
+            )
         return True

@@ -3,9 +3,9 @@
 This module is the counterpart of the C FMU's ``fmu_src/model.c`` (the physics) and
 ``fmu_src/solver_cvode.c`` (the CVODE driver): the same specification and the same rules
 (thresholds, directions, re-origin), a separate implementation on a separate SUNDIALS build, so
-that the two check each other (differences, on purpose: how a
-stepped-over crossing is located, and the tail of rigid-wall chatter; see :class:`CvodeDriver`
-and :meth:`OscillatorModel._rigid_impact`).  It is also the place to change the contact law
+that the two check each other.  The differences, on purpose: how a stepped-over crossing is
+located (:class:`CvodeDriver`) and the tail of rigid-wall chatter
+(:meth:`OscillatorModel._rigid_impact`).  It is also the place to change the contact law
 without touching C: everything that defines what happens at the wall is in
 :class:`OscillatorModel` (``make_rhs``, ``make_jacobian``, ``make_indicators``,
 ``event_update``, ``missed_crossing``, ``release_now``).
