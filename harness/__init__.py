@@ -26,20 +26,33 @@ try:
 except _metadata.PackageNotFoundError:  # pragma: no cover - running from a bare checkout
     __version__ = "0+unknown"
 
-from .classify import OrbitClass, classify_orbit, classify_samples, windows
-from .config import Experiment, SamplingSpec, SweepSpec
-from .errors import FmuError, HarnessInputError
-from .fmi import FmuModel, FmuSource
-from .jacobian import JacobianResult, JacobianScan, jacobian_vs_x, map_jacobian
-from .results import read_netcdf, write_netcdf
-from .sampling import StrobeResult, simulate, strobe
-from .simulator import FmuSimulator, MappingSimulator, Simulator
-from .sweeps import SweepStats, run_sweep
+# Public names -> defining module.  Loaded lazily (PEP 562) so that a worker process that
+# only needs harness.tasks does not import xarray, matplotlib or Dask.
+_EXPORTS = {
+    "OrbitClass": "classify", "classify_orbit": "classify", "classify_samples": "classify", "windows": "classify",
+    "Experiment": "config", "SamplingSpec": "config", "SweepSpec": "config",
+    "FmuError": "errors", "HarnessInputError": "errors",
+    "FmuModel": "fmi", "FmuSource": "fmi",
+    "JacobianResult": "jacobian", "JacobianScan": "jacobian", "jacobian_vs_x": "jacobian", "map_jacobian": "jacobian",
+    "read_netcdf": "results", "write_netcdf": "results",
+    "StrobeResult": "sampling", "simulate": "sampling", "strobe": "sampling",
+    "FmuSimulator": "simulator", "MappingSimulator": "simulator", "Simulator": "simulator",
+    "SweepStats": "sweeps", "run_sweep": "sweeps",
+}
 
-__all__ = [
-    "Experiment", "FmuError", "FmuModel", "FmuSimulator", "FmuSource", "HarnessInputError",
-    "JacobianResult", "JacobianScan", "MappingSimulator", "OrbitClass", "SamplingSpec",
-    "Simulator", "StrobeResult", "SweepSpec", "SweepStats", "classify_orbit", "classify_samples",
-    "jacobian_vs_x", "map_jacobian", "read_netcdf", "run_sweep", "simulate", "strobe", "windows",
-    "write_netcdf", "__version__",
-]
+__all__ = sorted(_EXPORTS) + ["__version__"]
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'harness' has no attribute {name!r}")
+    from importlib import import_module
+
+    value = getattr(import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return __all__

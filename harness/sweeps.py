@@ -19,7 +19,7 @@ that process's reused FMU instance.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
@@ -27,83 +27,15 @@ import xarray as xr
 
 from .backends import Backend, make_backend
 from .checkpoint import Checkpoint, fingerprint
-from .classify import classify_orbit
 from .config import SamplingSpec, SweepSpec
 from .errors import HarnessInputError
-from .fmi import INITIAL_STATE, FmuModel, FmuSource
+from .fmi import INITIAL_STATE, FmuModel
 from .progress import progress_bar
 from .results import provenance
-from .sampling import check_theta, sample_periods
-from .simulator import simulator_for
+from .sampling import check_theta
+from .tasks import RESULT_FIELDS, SweepTask, execute, run_task
 
-RESULT_FIELDS = ("u", "v", "impacts", "t", "period", "orbit_impacts")
-
-
-@dataclass(frozen=True)
-class SweepTask:
-    """One unit of work: a fresh point or a continuation chain.
-
-    Attributes
-    ----------
-    key : str
-        Stable identifier (checkpoint file name, ordering).
-    mode : str
-        ``"fresh"``, ``"up"`` or ``"down"``.
-    param : str
-        Swept parameter.
-    values : tuple of float
-        One value (fresh) or the chain in the order it is run (continuation).
-    params : dict
-        All other FMU parameters (including the fixed second-axis value of a 2D scan).
-    state0 : (float, float)
-        Initial state at the first section time.
-    sampling : SamplingSpec
-    """
-
-    key: str
-    mode: str
-    param: str
-    values: tuple[float, ...]
-    params: dict[str, Any] = field(hash=False)
-    state0: tuple[float, float]
-    sampling: SamplingSpec
-
-
-def execute(task: SweepTask, sim: Any) -> dict[str, np.ndarray]:
-    """Run ``task`` on simulator ``sim``; arrays indexed (point in ``task.values``, sample)."""
-    s = task.sampling
-    k, n = len(task.values), s.n_samples
-    out = {
-        "u": np.empty((k, n)),
-        "v": np.empty((k, n)),
-        "impacts": np.empty((k, n), dtype=np.int64),
-        "t": np.empty((k, n)),
-        "period": np.empty(k, dtype=np.int64),
-        "orbit_impacts": np.empty(k, dtype=np.int64),
-    }
-    params = dict(task.params)
-    state0 = task.state0
-    for i, value in enumerate(task.values):
-        if i == 0:
-            if task.param in INITIAL_STATE:  # sweeping the initial state (basin scans)
-                state0 = (value, state0[1]) if task.param == INITIAL_STATE[0] else (state0[0], value)
-            else:
-                params[task.param] = value
-            sim.start(params, s.theta, state0)
-        else:
-            sim.set_parameter(task.param, value)
-        r = sample_periods(sim, s.n_transient, s.n_samples)
-        orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
-        out["u"][i], out["v"][i], out["impacts"][i], out["t"][i] = r.u, r.v, r.impacts, r.t
-        out["period"][i], out["orbit_impacts"][i] = orbit.period, orbit.impacts
-    return out
-
-
-def run_task(task: SweepTask, source: Any) -> dict[str, np.ndarray]:
-    """Worker entry point: this thread's FMU instance (or a user simulator) runs ``task``."""
-    sim = simulator_for(source) if isinstance(source, FmuSource) else source
-    return execute(task, sim)
-
+__all__ = ["SweepStats", "SweepTask", "assemble", "execute", "plan_tasks", "run_sweep", "run_task"]
 
 # ----------------------------------------------------------------------------------------
 # Planning
