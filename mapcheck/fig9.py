@@ -10,18 +10,28 @@ of the stable maximal period-M windows:
 * ``"64_eq56"``   -- (64) with the nu >> 1 rho of (56);
 * ``"64_tilde"``  -- (64) with rho(sigma) using |A~(sigma)| (section 6);
 * ``"2d"``        -- the 2D map (37)/(38), (48), periodic orbits + bisection;
-* ``"2d_tilde"``  -- the same with rho~(sigma).
+* ``"2d_tilde"``  -- the same with rho~(sigma);
+* ``"phys"``, ``"phys_tilde"`` -- the map in physical coordinates (31)/(32) with A or
+  A~(sigma) (Newton orbits + continuation, :func:`physical_windows`);
+* ``"ode"``       -- the exact pre-impact map of the ODE (53) with a compliant wall
+  (closed form, Newton orbits + continuation, :func:`ode_windows`; slow: minutes).
+
+Run ``python -m mapcheck.fig9 [--physical] [--ode GAMMA]``.
 """
 from __future__ import annotations
 
 import numpy as np
 
-from .coeffs import coefficients
-from .linear import invert_alpha_gamma
-from .maps import rho_1d
-from .windows import MapParams, window_1d, windows
+import sys
 
-__all__ = ["fig9_windows", "format_table"]
+from .coeffs import coefficients, grazing_acceleration
+from .exact import ExactOscillator
+from .linear import invert_alpha_gamma
+from .maps import chi, from_natural, physical_map, rho_1d
+from .orbits import map_step, window_edge
+from .windows import MapParams, maximal_orbits, window_1d, windows
+
+__all__ = ["fig9_windows", "physical_windows", "ode_windows", "format_table"]
 
 ALPHA, GAMMA, R = 0.99, 0.01, 0.9
 
@@ -56,9 +66,77 @@ def fig9_windows(M_max: int = 4, sigma_max: float = 3.0, n_grid: int = 12001) ->
     return out
 
 
+def _fig9_coefficients():
+    inv = invert_alpha_gamma(ALPHA, GAMMA)
+    return inv.nu, inv.Omega, coefficients(inv.nu, inv.Omega, R, "compliant")
+
+
+def _newton_windows(step_of, guess_variant: str, M_max: int, xtol: float, sigma_max: float) -> dict[int, tuple]:
+    """Windows of a map without closed-form orbits: start inside the natural map's window
+    (``guess_variant`` rho), guess the orbit with (35), continue it both ways (Newton)."""
+    nu, Om, c = _fig9_coefficients()
+    p = MapParams.from_coefficients(c)
+    grid = np.linspace(0.0, sigma_max, 6001)
+    rho_of = (lambda q: c.rho(q, guess_variant))
+    out: dict[int, tuple] = {}
+    for M in range(1, M_max + 1):
+        ws = windows(p, M, grid, rho_of)
+        if not ws:
+            out[M] = None
+            continue
+        w = ws[0]
+        hi = w.hi if w.kind_hi != "range" else 1.25 * w.lo
+        s0 = 0.5 * (w.lo + hi)
+        dp = min(0.02, (hi - w.lo) / 6.0)
+        orb = maximal_orbits(p, M, rho_of(np.array([s0])))
+        k = int(np.argmax(orb.stable[:, 0]))
+        u0, v0 = from_natural(orb.x[k, 0, 0], orb.y[k, 0, 0], s0, c, guess_variant)
+        kw = dict(tol=1e-11, scale=np.array([1e-2, 1e-1]))
+        try:
+            lo_e = window_edge(step_of, M, s0, [float(u0), float(v0)], -1.0, dp, 0.0, xtol=xtol, **kw)
+            hi_e = window_edge(step_of, M, s0, [float(u0), float(v0)], +1.0, dp, sigma_max, xtol=xtol, **kw)
+        except ValueError:
+            out[M] = None
+            continue
+        out[M] = (lo_e[0], np.inf if hi_e[1] == "range" else hi_e[0])
+    return out
+
+
+def physical_windows(variant: str = "paper", M_max: int = 4, xtol: float = 1e-8,
+                     sigma_max: float = 3.0) -> dict[int, tuple]:
+    """Windows of the physical-coordinate map (31)/(32) (A, or A~(sigma) in chi and L)."""
+    nu, Om, c = _fig9_coefficients()
+
+    def step_of(s: float):
+        A = grazing_acceleration(s, Om, variant)
+        return map_step(physical_map, s, c, variant, contact=lambda u, v: chi(u, v, A) >= 0)
+
+    return _newton_windows(step_of, variant, M_max, xtol, sigma_max)
+
+
+def ode_windows(Gamma: float = 10.0, M_max: int = 4, xtol: float = 1e-5, sigma_max: float = 1.6) -> dict[int, tuple]:
+    """Windows of the exact stroboscopic (pre-impact) map of the ODE with a compliant wall.
+
+    Slow (closed-form integration inside Newton + bisection): minutes per window.
+    """
+    nu, Om, c = _fig9_coefficients()
+
+    def step_of(s: float):
+        osc = ExactOscillator(nu, Om, s, r=R, Gamma=Gamma, wall="compliant")
+
+        def st(u: float, v: float):
+            u1, v1, k = osc.pre_impact_map(u, v)
+            return float(u1), float(v1), int(k)
+        return st
+
+    return _newton_windows(step_of, "tilde", M_max, xtol, sigma_max)
+
+
 def format_table(res: dict[str, dict[int, tuple]]) -> str:
     """Plain-text table of :func:`fig9_windows`."""
     names = {
+        "phys": "map (31)/(32), A",
+        "phys_tilde": "map (31)/(32), A~(sigma)",
         "64": "(64), rho from (48)",
         "64_eq56": "(64), rho from (56)",
         "64_tilde": "(64), rho with A~(sigma)",
@@ -72,9 +150,16 @@ def format_table(res: dict[str, dict[int, tuple]]) -> str:
         for M in Ms:
             w = row[M]
             cells.append("none" if w is None else f"[{w[0]:.4f}, {w[1]:.4f}]")
-        lines.append(names[key].ljust(28) + "".join(cell.ljust(22) for cell in cells))
+        lines.append(names.get(key, key).ljust(28) + "".join(cell.ljust(22) for cell in cells))
     return "\n".join(lines)
 
 
 if __name__ == "__main__":
-    print(format_table(fig9_windows()))
+    res = fig9_windows()
+    if "--physical" in sys.argv:
+        res["phys"] = physical_windows("paper")
+        res["phys_tilde"] = physical_windows("tilde")
+    if "--ode" in sys.argv:
+        G = float(sys.argv[sys.argv.index("--ode") + 1])
+        res[f"ODE, Gamma={G:g}"] = ode_windows(G)
+    print(format_table(res))

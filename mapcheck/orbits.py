@@ -200,6 +200,11 @@ def window_edge(step_of: Callable[[float], Step], M: int, p_in: float, z_in, dir
     kind = _kind(orb_bad, M)
     if kind == "lost":
         # Newton found nothing beyond the edge: look at the edge orbit's contacts there
-        cont = _orbit(step_of(p_bad), orb.z[0], M)[1]
-        kind = "graze" if np.count_nonzero(cont) > 1 else ("no-impact" if not cont.any() else "lost")
+        for cont in (_orbit(step_of(p_bad), orb.z[0], M)[1], orb_bad.contacts):
+            if np.count_nonzero(cont) > 1 or cont.max() > 1:
+                kind = "graze"
+                break
+            if not cont.any():
+                kind = "no-impact"
+                break
     return p_good, kind, orb

@@ -5,7 +5,7 @@ import numpy as np
 
 from mapcheck import coefficients, physical_map
 from mapcheck.bifurcation import PiecewiseMap, classify, iterate, orbit_diagram
-from mapcheck.maps import natural_map, piecewise_map
+from mapcheck.maps import natural_map
 from mapcheck.windows import MapParams, windows
 
 FIG9 = (4.605170185988091, 0.3059238689620112)
