@@ -226,9 +226,10 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
     exp = _experiment(args)
     L = exp.layers
     params = dict(exp.params)
-    # Tight integrator tolerances unless the user set them: differences need clean maps.
+    # [jacobian] rtol/atol, when given, override the model's tolerances for these runs only
+    # (differences of maps need tight tolerances; the FMU's defaults are tight already).
     for key in ("rtol", "atol"):
-        if ("model", key) not in L.origin and key in params:
+        if L.get("jacobian", key) is not None and key in params:
             params[key] = float(L.get("jacobian", key))
     theta = check_theta(L.get("jacobian", "theta"), L.arg("jacobian", "theta"))
     sim = FmuSimulator(exp.model.source())

@@ -118,8 +118,8 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "x_stop": 1e-2,
         "x_num": 25,
         "state": None,
-        "rtol": 1e-10,
-        "atol": 1e-12,
+        "rtol": None,  # None: the FMU's own (tight) default tolerances
+        "atol": None,
     },
     "simulate": {"t_end": 10.0, "dt": 0.01},
     "run": {
