@@ -10,6 +10,7 @@ function here takes the stiffness ``k2`` (not Omega) where that is useful.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,11 +26,13 @@ __all__ = [
     "underdamped_branches",
 ]
 
-# Below this value of |d| t^2 (d = nu^2/4 - k2) the cosh/sinh (or cos/sin) form
-# loses relative accuracy in S = sinh(sqrt(d) t)/sqrt(d); a Taylor series in d t^2
-# is used instead (12 terms give < 1e-24 relative truncation error for |d t^2| <= 1).
-_SERIES_D = 1.0
-_N_SERIES = 12
+# Below this value of |d| t^2 (d = nu^2/4 - k2) a Taylor series in d t^2 replaces the
+# cosh/sinh (cos/sin) form, which is 0/0 at critical damping (4 terms: < 1e-28 relative).
+_SERIES_D = 1e-6
+# P(t) - I: matrix series where rate*t <= 0.05 (terms <= 0.05^k/k!: 12 terms reach 1e-24
+# relative); beyond, P - I from the closed form has relative error <= eps/(rate t) ~ 1e-14.
+_SERIES_RATE_T = 0.05
+_N_SERIES_RATE_T = 13
 
 
 def eigenvalues(nu: float, Omega: float) -> tuple[complex, complex]:
@@ -48,44 +51,42 @@ def eigenvalues(nu: float, Omega: float) -> tuple[complex, complex]:
 def _damped_c_and_s(t: np.ndarray, nu: float, k2: float) -> tuple[np.ndarray, np.ndarray]:
     """e^{-nu t/2} C and e^{-nu t/2} S, C = cosh(sqrt(d) t), S = sinh(sqrt(d) t)/sqrt(d).
 
-    d = nu^2/4 - k2 of any sign: cos/sin for d < 0, a Taylor series in d t^2 where
-    |d| t^2 <= 1 (there S = sinh(..)/sqrt(d) would lose relative accuracy), and for
-    d > 0 the exponentials are combined, (e^{(q-b)t} +- e^{-(q+b)t})/2, so that
-    nothing overflows at large t (FORMULAS.md section 2).
+    d = nu^2/4 - k2 of any sign (FORMULAS.md section 2): cosh/sinh for d > 0, cos/sin for
+    d < 0 (both accurate to a few ulp, also for small sqrt(|d|) t); a short Taylor series
+    in d t^2 only where |d| t^2 <= 1e-6 (there sqrt(d) may vanish: critical damping); and
+    for sqrt(d) t > 30 the exponentials are combined, (e^{(q-b)t} +- e^{-(q+b)t})/2, so
+    that nothing overflows at large t.
     """
     b = 0.5 * nu
     d = b * b - k2
     z = d * t * t
-    eC = np.empty_like(t)
-    eS = np.empty_like(t)
-    small = np.abs(z) <= _SERIES_D
-    if np.any(small):
-        zs, ts = z[small], t[small]
-        c_sum = np.zeros_like(zs)
-        s_sum = np.zeros_like(zs)
-        term_c = np.ones_like(zs)
-        term_s = np.ones_like(zs)
-        for k in range(_N_SERIES):
-            c_sum += term_c
-            s_sum += term_s
-            term_c = term_c * zs / ((2 * k + 1) * (2 * k + 2))
-            term_s = term_s * zs / ((2 * k + 2) * (2 * k + 3))
-        E = np.exp(-b * ts)
-        eC[small] = E * c_sum
-        eS[small] = E * s_sum * ts
-    big = ~small
-    if np.any(big):
-        tb = t[big]
-        if d > 0:
-            q = np.sqrt(d)
-            ep, em = np.exp((q - b) * tb), np.exp(-(q + b) * tb)
-            eC[big] = 0.5 * (ep + em)
-            eS[big] = 0.5 * (ep - em) / q
-        else:
-            w = np.sqrt(-d)
-            E = np.exp(-b * tb)
-            eC[big] = E * np.cos(w * tb)
-            eS[big] = E * np.sin(w * tb) / w
+    E = np.exp(-b * t)
+    if d > 0:
+        q = math.sqrt(d)
+        qt = q * t
+        with np.errstate(over="ignore", invalid="ignore"):
+            eC = E * np.cosh(qt)
+            eS = E * np.sinh(qt) / q
+        far = np.abs(qt) > 30.0
+        if np.any(far):
+            tf = t[far]
+            ep, em = np.exp((q - b) * tf), np.exp(-(q + b) * tf)
+            eC[far] = 0.5 * (ep + em)
+            eS[far] = 0.5 * (ep - em) / q
+    elif d < 0:
+        w = math.sqrt(-d)
+        eC = E * np.cos(w * t)
+        eS = E * np.sin(w * t) / w
+    else:
+        eC, eS = E, E * t
+    tiny = np.abs(z) <= _SERIES_D
+    if d != 0 and np.any(tiny):
+        zs = z[tiny]
+        # C = 1 + z/2 + z^2/24 + z^3/720, S/t = 1 + z/6 + z^2/120 + z^3/5040: error < z^4/8!
+        c = 1.0 + zs * (1.0 / 2 + zs * (1.0 / 24 + zs / 720))
+        sv = 1.0 + zs * (1.0 / 6 + zs * (1.0 / 120 + zs / 5040))
+        eC[tiny] = E[tiny] * c
+        eS[tiny] = E[tiny] * sv * t[tiny]
     return eC, eS
 
 
@@ -135,7 +136,7 @@ def propagator_minus_identity(t, nu: float, k2: float) -> np.ndarray:
 
     Needed by the exact integrator: the displacement from an anchor point over a
     short time (e.g. between chattering impacts 1e-8 apart) must not be computed
-    as a difference of O(1) numbers.  For ``rate * t <= 0.5`` the matrix series
+    as a difference of O(1) numbers.  For ``rate * t <= 0.05`` the matrix series
     ``sum_k M^k t^k / k!`` with ``M = [[0, 1], [-k2, -nu]]`` is summed using
     ``M^k = a_k M + b_k I`` (from ``M^2 = -nu M - k2 I``); otherwise
     ``propagator_k2(t) - I``.
@@ -147,23 +148,33 @@ def propagator_minus_identity(t, nu: float, k2: float) -> np.ndarray:
     t = np.asarray(t, dtype=float)
     shape = t.shape
     t = t.reshape(-1)
-    out = propagator_k2(t, nu, k2)
-    out[:, 0, 0] -= 1.0
-    out[:, 1, 1] -= 1.0
+    out = np.empty(t.shape + (2, 2))
     # spectral radius of M bounds the growth of the series terms
     rate = spectral_rate(nu, k2)
-    small = rate * np.abs(t) <= 0.5
+    small = rate * np.abs(t) <= _SERIES_RATE_T
+    big = ~small
+    if np.any(big):
+        P = propagator_k2(t[big], nu, k2)
+        P[:, 0, 0] -= 1.0
+        P[:, 1, 1] -= 1.0
+        out[big] = P
     if np.any(small):
         ts = t[small]
         A = np.zeros_like(ts)
         B = np.zeros_like(ts)
         a_k, b_k = 1.0, 0.0
         fac = ts.copy()  # t^k / k!
-        for k in range(1, 40):
+        # terms are bounded by x^k / k!, x = rate * max|t|: sum until that is < 1e-17 relative
+        x = rate * float(np.max(np.abs(ts)))
+        bound = x
+        for k in range(1, _N_SERIES_RATE_T):
             A += a_k * fac
             B += b_k * fac
             a_k, b_k = -nu * a_k + b_k, -k2 * a_k
             fac = fac * ts / (k + 1)
+            bound *= x / (k + 1)
+            if bound < 1e-17 * x:
+                break
         out[small, 0, 0] = B
         out[small, 0, 1] = A
         out[small, 1, 0] = -k2 * A
@@ -261,10 +272,10 @@ def propagator_minus_identity_scalar(t: float, nu: float, k2: float, rate: float
     ``rate`` is the spectral radius max|s_i| of the generator (precomputed by the caller).
     Returns the entries (E11, E12, E21, E22) of P(t) - I.
     """
-    if rate * abs(t) <= 0.5:
+    if rate * abs(t) <= _SERIES_RATE_T:
         A = B = 0.0
         a_k, b_k, fac = 1.0, 0.0, t
-        for k in range(1, 40):
+        for k in range(1, _N_SERIES_RATE_T):
             A += a_k * fac
             B += b_k * fac
             a_k, b_k = -nu * a_k + b_k, -k2 * a_k
@@ -272,13 +283,34 @@ def propagator_minus_identity_scalar(t: float, nu: float, k2: float, rate: float
             if abs(fac) * (abs(a_k) + abs(b_k)) < 1e-18 * (abs(A) + abs(B)):
                 break
         return B, A, -k2 * A, B - nu * A
-    P = propagator_k2(np.array([t]), nu, k2)[0]
-    return P[0, 0] - 1.0, P[0, 1], P[1, 0], P[1, 1] - 1.0
+    eC, eS = _scalar_damped_c_and_s(t, nu, k2)
+    b = 0.5 * nu
+    return eC + b * eS - 1.0, eS, -k2 * eS, eC - b * eS - 1.0
+
+
+def _scalar_damped_c_and_s(t: float, nu: float, k2: float) -> tuple[float, float]:
+    """Pure-Python scalar version of :func:`_damped_c_and_s`."""
+    b = 0.5 * nu
+    d = b * b - k2
+    z = d * t * t
+    E = math.exp(-b * t)
+    if abs(z) <= _SERIES_D:
+        c = 1.0 + z * (1.0 / 2 + z * (1.0 / 24 + z / 720))
+        sv = 1.0 + z * (1.0 / 6 + z * (1.0 / 120 + z / 5040))
+        return E * c, E * sv * t
+    if d > 0:
+        q = math.sqrt(d)
+        if abs(q * t) > 30.0:
+            ep, em = math.exp((q - b) * t), math.exp(-(q + b) * t)
+            return 0.5 * (ep + em), 0.5 * (ep - em) / q
+        return E * math.cosh(q * t), E * math.sinh(q * t) / q
+    w = math.sqrt(-d)
+    return E * math.cos(w * t), E * math.sin(w * t) / w
 
 
 def spectral_rate(nu: float, k2: float) -> float:
     """max |s_i| for s^2 + nu s + k2 = 0."""
     d = nu * nu / 4.0 - k2
     if d >= 0:
-        return nu / 2.0 + float(np.sqrt(d))
-    return float(np.sqrt(k2))
+        return nu / 2.0 + math.sqrt(d)
+    return math.sqrt(k2)
