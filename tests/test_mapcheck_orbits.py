@@ -91,3 +91,33 @@ def test_exact_map_period2_orbit_is_periodic_in_the_ode():
     states, counts = osc.strobe(float(z[0]), float(z[1]), [1.0, 2.0], t0=0.0)
     np.testing.assert_allclose(states[1], z, rtol=0, atol=1e-10)
     assert counts[1] == 1
+
+
+def test_ode_period1_window_edge_needs_the_tilde_variant():
+    """Figure 9, compliant wall Gamma = 10: the flip edge of the period-1 window of the exact
+    ODE map (Newton + bisection on the closed-form map) agrees with the 2D map using A~(sigma)
+    to < 0.5 %, while the paper's linear rho(sigma) puts it at sigma ~ 0.45 instead of ~ 0.81."""
+    nu, Om = FIG9
+    c = coefficients(nu, Om, 0.9, "compliant")
+    p = MapParams.from_coefficients(c)
+    grid = np.linspace(0.0, 1.5, 3001)
+    (w_t,) = windows(p, 1, grid, lambda s: c.rho(s, "tilde"))
+    (w_p,) = windows(p, 1, grid, c.rho)
+
+    def step_of(s):
+        osc = ExactOscillator(nu, Om, s, r=0.9, Gamma=10.0, wall="compliant")
+
+        def st(u, v):
+            u1, v1, k = osc.pre_impact_map(u, v)
+            return float(u1), float(v1), int(k)
+        return st
+
+    s0 = 0.86
+    o = maximal_orbits(p, 1, c.rho(np.array([s0]), "tilde"))
+    k = int(np.argmax(o.stable[:, 0]))
+    u0, v0 = from_natural(o.x[k, 0, 0], o.y[k, 0, 0], s0, c, "tilde")
+    lo, kind, _ = window_edge(step_of, 1, s0, [float(u0), float(v0)], -1.0, 0.02, 0.0, xtol=2e-4,
+                              tol=1e-11, scale=np.array([1e-2, 1e-1]))
+    assert kind == "flip"
+    assert abs(lo - w_t.lo) < 0.005 * w_t.lo, (lo, w_t.lo)
+    assert lo - w_p.lo > 0.3
