@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import shlex
 import sys
 from typing import Any, Sequence
 
@@ -114,7 +115,10 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``impact-harness``; returns the exit status."""
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(argv)
+    # recorded in the results' attributes
+    args.command_line = " ".join([PROG, *(shlex.quote(a) for a in argv)])
     prog = f"{PROG} {args.command}"
     try:
         return int(args.func(args) or 0)

@@ -94,8 +94,9 @@ def _outputs(args: argparse.Namespace, exp: Experiment, default_stem: str) -> tu
     return out, Path(exp.run.plot) if exp.run.plot else out.with_suffix(".png")
 
 
-def _command_line() -> str:
-    return " ".join(["impact-harness", *sys.argv[1:]])
+def _command_line(args: argparse.Namespace | None = None) -> str:
+    line = getattr(args, "command_line", None)
+    return line if line else " ".join(["impact-harness", *sys.argv[1:]])
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -114,7 +115,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     with progress_bar(total=n, desc="simulate", unit="step", disable=not exp.run.progress) as bar:
         series = simulate(sim, exp.params, exp.state0, args.t0, t_end, dt, progress=bar)
     settings = {**exp.as_attrs(), "simulate.t0": args.t0, "simulate.t_end": t_end, "simulate.dt": dt}
-    ds = timeseries_dataset(series, provenance(settings, exp.model, "serial", time.perf_counter() - t_start, _command_line()))
+    ds = timeseries_dataset(series, provenance(settings, exp.model, "serial", time.perf_counter() - t_start, _command_line(args)))
     write_netcdf(ds, out)
     print(f"{len(series['t'])} points, {int(series['impacts'][-1])} impacts; wrote {out}")
     if plot:
@@ -136,7 +137,7 @@ def cmd_strobe(args: argparse.Namespace) -> int:
     with progress_bar(total=s.n_transient + s.n_samples, desc="strobe", unit="period", disable=not exp.run.progress) as bar:
         r = strobe(sim, exp.params, exp.state0, s.theta, s.n_transient, s.n_samples, progress=bar)
     orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
-    attrs = provenance(exp.as_attrs(), exp.model, "serial", time.perf_counter() - t_start, _command_line())
+    attrs = provenance(exp.as_attrs(), exp.model, "serial", time.perf_counter() - t_start, _command_line(args))
     ds = strobe_dataset(r, orbit, attrs)
     write_netcdf(ds, out)
     print(f"{orbit.label} (residual {orbit.residual:.2e}); wrote {out}")
@@ -180,7 +181,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             exp.model, spec, exp.params, exp.state0, exp.sampling,
             backend=exp.run.backend, workers=exp.run.workers, scheduler=exp.run.scheduler,
             checkpoint=str(ckpt), progress=exp.run.progress,
-            settings={**exp.as_attrs(), "command": _command_line()}, stats=stats,
+            settings={**exp.as_attrs(), "command": _command_line(args)}, stats=stats,
         )
     except HarnessInputError as exc:
         if explicit or "different run" not in str(exc):
@@ -192,7 +193,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             exp.model, spec, exp.params, exp.state0, exp.sampling,
             backend=exp.run.backend, workers=exp.run.workers, scheduler=exp.run.scheduler,
             checkpoint=str(ckpt), progress=exp.run.progress,
-            settings={**exp.as_attrs(), "command": _command_line()}, stats=stats,
+            settings={**exp.as_attrs(), "command": _command_line(args)}, stats=stats,
         )
     except KeyboardInterrupt:
         print(f"interrupted: finished points are kept in {ckpt}; rerun the same command to resume", file=sys.stderr)
@@ -257,7 +258,7 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
         scan = jacobian_vs_x(sim, params, x, theta, float(L.get("jacobian", "measure_theta")), progress=bar)
     settings = {**exp.as_attrs(), **{f"model.{k}": v for k, v in params.items()},
                 **{f"jacobian.{k}": v for k, v in L.values["jacobian"].items()}}
-    ds = jacobian_dataset(scan, provenance(settings, exp.model, "serial", time.perf_counter() - t_start, _command_line()))
+    ds = jacobian_dataset(scan, provenance(settings, exp.model, "serial", time.perf_counter() - t_start, _command_line(args)))
     write_netcdf(ds, out)
     dJ = np.abs(scan.J - scan.P1)
     ok = (dJ[:, 0, 0] > 0)

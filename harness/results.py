@@ -95,7 +95,10 @@ def provenance(
     if wall_time is not None:
         attrs["wall_time_s"] = float(wall_time)
     attrs["created_utc"] = _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds")
-    attrs["command"] = command if command is not None else " ".join(sys.argv)
+    if command is not None:
+        attrs["command"] = command
+    elif "command" not in attrs:
+        attrs["command"] = " ".join(sys.argv)
     # The whole record once more as JSON, for programs that want a dict back.
     attrs["settings_json"] = json.dumps({k: _jsonable(v) for k, v in settings.items()}, sort_keys=True)
     return attrs

@@ -1,0 +1,160 @@
+"""The command line on the real FMU: bad input (exit 2, one line), outputs and provenance."""
+from __future__ import annotations
+
+import hashlib
+import re
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+import xarray as xr
+
+from harness.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def me_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The real FMU with its CoSimulation element replaced by ModelExchange."""
+    assert FMU.is_file(), f"build the FMU first ({FMU} missing)"
+    out = tmp_path_factory.mktemp("me") / "me.fmu"
+    with zipfile.ZipFile(FMU) as src, zipfile.ZipFile(out, "w") as dst:
+        for item in src.infolist():
+            data = src.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = re.sub(rb"<CoSimulation[^>]*/>", b'<ModelExchange modelIdentifier="ImpactOscillator"/>', data)
+            dst.writestr(item, data)
+    return out
+
+
+def _run_main(argv: list[str], capsys) -> tuple[int, str, str]:
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's own errors
+        code = exc.code
+    cap = capsys.readouterr()
+    return code, cap.out, cap.err
+
+
+BAD_INPUT = [
+    (["strobe", "--theta", "1.5"], "--theta", r"\[0, 1\)"),
+    (["strobe", "--theta", "-0.2"], "--theta", r"\[0, 1\)"),
+    (["strobe", "--samples", "-3"], "--samples", "negative count"),
+    (["strobe", "--transient", "-1"], "--transient", "negative count"),
+    (["sweep", "--num", "0"], "--num", "empty range"),
+    (["sweep", "--start", "0.3", "--stop", "0.3", "--num", "5"], "--stop", "empty range"),
+    (["sweep", "--values", ""], "--values", "empty range"),
+    (["sweep", "--param", "sigmaa"], "--param", "unknown FMU variable 'sigmaa'"),
+    (["strobe", "--set", "foo=1"], "--set foo", "unknown FMU variable 'foo'"),
+    (["strobe", "--set", "wall=soft"], "--set wall", "not a valid Integer"),
+    (["strobe", "--set", "sigma"], "--set", "NAME=VALUE"),
+    (["strobe", "--fmu", "/nonexistent/x.fmu"], "--fmu", "no such file"),
+    (["sweep", "--mode", "sideways"], "--mode", "unknown sweep mode"),
+    (["sweep", "--scheduler", "localhost:8786"], "--scheduler", "tcp://HOST:PORT"),
+    (["sweep", "--workers", "0"], "--workers", "must be >= 1"),
+    (["sweep", "--scan", "Gamma"], "--scan", "NAME=V1,V2"),
+    (["jacobian", "--x-start", "-1"], "--x-start", "must be > 0"),
+    (["jacobian", "--theta", "2"], "--theta", r"\[0, 1\)"),
+    (["sweep", "--transient", "abc"], "--transient", "invalid int value"),
+    (["simulate", "--dt", "0"], "dt", "must be > 0"),
+]
+
+
+@pytest.mark.parametrize("argv, argument, reason", BAD_INPUT, ids=[" ".join(a) for a, _, _ in BAD_INPUT])
+def test_bad_input_exits_2_with_one_line(tmp_path: Path, capsys, argv, argument, reason) -> None:
+    code, out, err = _run_main([*argv, "--out", str(tmp_path / "x.nc"), "--no-progress"], capsys)
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    assert f"argument {argument}" in lines[0] and re.search(reason, lines[0]), lines[0]
+    assert not (tmp_path / "x.nc").exists()
+
+
+def test_model_exchange_fmu_is_refused(me_fmu: Path, capsys) -> None:
+    code, _, err = _run_main(["strobe", "--fmu", str(me_fmu), "--no-progress"], capsys)
+    assert code == 2
+    assert err.count("\n") == 1 and "argument --fmu" in err and "not a Co-Simulation FMU" in err
+
+
+@pytest.mark.parametrize("launcher", [[sys.executable, "-m", "harness"], [str(Path(sys.executable).with_name("impact-harness"))]],
+                         ids=["python -m harness", "impact-harness"])
+def test_real_processes_exit_2_without_traceback(launcher: list[str], tmp_path: Path) -> None:
+    res = subprocess.run([*launcher, "strobe", "--theta", "1", "--out", str(tmp_path / "x.nc")],
+                         capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert res.returncode == 2
+    assert res.stderr.strip().count("\n") == 0 and "argument --theta" in res.stderr and "Traceback" not in res.stderr
+
+
+@pytest.mark.parametrize("command", ["simulate", "strobe", "sweep", "jacobian"])
+def test_help_of_each_subcommand(command: str, capsys) -> None:
+    code, out, _ = _run_main([command, "--help"], capsys)
+    assert code == 0
+    assert "--config" in out and "--fmu" in out and "--out" in out
+
+
+def test_sweep_from_toml_with_flag_override_writes_results_with_provenance(tmp_path: Path, capsys) -> None:
+    cfg = tmp_path / "exp.toml"
+    cfg.write_text(f"""
+[fmu]
+path = "{FMU}"
+[model]
+Gamma = 10.0
+[sampling]
+transient = 300
+samples = 8
+[sweep]
+values = [0.25, 0.55, 1.0]
+mode = "both"
+[run]
+backend = "serial"
+""")
+    out = tmp_path / "res" / "fig9.nc"
+    code, stdout, err = _run_main(["sweep", "--config", str(cfg), "--samples", "12", "--out", str(out), "--no-progress"], capsys)
+    assert code == 0, err
+    assert "windows of maximal orbits" in stdout
+    png = out.with_suffix(".png")
+    assert png.read_bytes()[:8] == PNG_MAGIC and png.stat().st_size > 10_000
+    with xr.open_dataset(out) as ds:
+        assert ds["u"].dims == ("direction", "sigma", "sample")
+        assert list(ds["direction"].values) == ["up", "down"] and ds.sizes["sample"] == 12  # flag beats file
+        assert ds["sigma"].values.tolist() == [0.25, 0.55, 1.0]
+        a = ds.attrs
+        assert a["fmu_sha256"] == hashlib.sha256(FMU.read_bytes()).hexdigest()
+        assert a["fmi_version"] == "2.0" and a["backend"].startswith("serial")
+        assert a["model.Gamma"] == 10.0 and a["sampling.samples"] == 12 and a["sampling.transient"] == 300
+        for lib in ("impact-grazing", "fmpy", "numpy", "xarray", "dask"):
+            assert a[f"version.{lib}"] not in ("", "not installed")
+        assert a["wall_time_s"] > 0 and "sweep --config" in a["command"]
+        # P2 at sigma = 0.55 in both directions (inside the eq (64) window, see the sweep tests)
+        assert ds["period"].sel(sigma=0.55).values.tolist() == [2, 2]
+
+
+def test_strobe_simulate_jacobian_write_files(tmp_path: Path, capsys) -> None:
+    code, out, err = _run_main(["strobe", "--set", "sigma=1.0", "--transient", "300", "--samples", "10",
+                                "--out", str(tmp_path / "s.nc"), "--no-progress"], capsys)
+    assert code == 0, err
+    assert "P1, 1 impact" in out
+    with xr.open_dataset(tmp_path / "s.nc") as ds:
+        assert int(ds["period"]) == 1 and ds.attrs["classification"] == "P1, 1 impact"
+        assert ds.attrs["model.sigma"] == 1.0
+    assert (tmp_path / "s.png").read_bytes()[:8] == PNG_MAGIC
+
+    code, out, err = _run_main(["simulate", "--t-end", "3", "--dt", "0.05", "--out", str(tmp_path / "t.nc"),
+                                "--no-progress"], capsys)
+    assert code == 0, err
+    with xr.open_dataset(tmp_path / "t.nc") as ds:
+        assert ds.sizes["t"] == 61 and ds["t"].values[-1] == pytest.approx(3.0)
+
+    code, out, err = _run_main(["jacobian", "--set", "sigma=0", "--x-start", "1e-4", "--x-stop", "1e-2", "--x-num", "3",
+                                "--out", str(tmp_path / "j.nc"), "--no-progress"], capsys)
+    assert code == 0, err
+    assert "log-log slope of |J11 - P11|" in out
+    with xr.open_dataset(tmp_path / "j.nc") as ds:
+        assert ds["J"].shape == (3, 2, 2)
+    assert (tmp_path / "j.png").read_bytes()[:8] == PNG_MAGIC
