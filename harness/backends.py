@@ -136,7 +136,7 @@ class DaskBackend:
         else:
             address = str(client_or_address)
             try:
-                self.client = Client(address, timeout="20s")
+                self.client = Client(address, timeout="10s")
             except (OSError, TimeoutError) as exc:
                 raise HarnessInputError("--scheduler", f"cannot connect to the Dask scheduler at {address}: {exc}") from None
             self._owns_client = True

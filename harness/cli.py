@@ -60,10 +60,10 @@ def sampling_parent() -> argparse.ArgumentParser:
     g.add_argument("--theta", dest="sampling__theta", type=float, metavar="PHASE",
                    help="section phase in [0, 1): samples at t = n + theta (default 0)")
     g.add_argument("--transient", dest="sampling__transient", type=int, metavar="N",
-                   help="periods discarded before sampling (default 150)")
+                   help="periods discarded before sampling (default 300)")
     g.add_argument("--samples", dest="sampling__samples", type=int, metavar="N",
                    help="periods sampled (default 40)")
-    g.add_argument("--tol", dest="sampling__tol", type=float, help="periodicity tolerance, relative (default 1e-5)")
+    g.add_argument("--tol", dest="sampling__tol", type=float, metavar="TOL", help="periodicity tolerance, relative (default 1e-5)")
     g.add_argument("--max-period", dest="sampling__max_period", type=int, metavar="M",
                    help="largest period tried (default samples/2)")
     return p

@@ -29,9 +29,9 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     p = sub.add_parser("simulate", parents=[common], help="time series of one run",
                        description="Integrate the FMU from (u0, v0) at --t0 and record u, v and impacts on a uniform grid.")
     g = p.add_argument_group("simulate")
-    g.add_argument("--t0", type=float, default=0.0, help="start time (default 0; t = n is the grazing phase)")
+    g.add_argument("--t0", dest="simulate__t0", type=float, metavar="T", help="start time (default 0; t = n is the grazing phase)")
     g.add_argument("--t-end", dest="simulate__t_end", type=float, metavar="T", help="end time (default 10)")
-    g.add_argument("--dt", dest="simulate__dt", type=float, help="output step (default 0.01)")
+    g.add_argument("--dt", dest="simulate__dt", type=float, metavar="DT", help="output step (default 0.01)")
     p.set_defaults(func=cmd_simulate)
 
     p = sub.add_parser("strobe", parents=[common, sampling], help="stroboscopic samples at t = n + theta",
@@ -44,9 +44,9 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
                        "quasi-static continuation up and/or down carrying the state. Draws the bifurcation diagram.")
     g = p.add_argument_group("sweep")
     g.add_argument("--param", dest="sweep__param", metavar="NAME", help="swept FMU parameter (default sigma)")
-    g.add_argument("--start", dest="sweep__start", type=float, help="first value (default 0.8)")
-    g.add_argument("--stop", dest="sweep__stop", type=float, help="last value (default 0.1)")
-    g.add_argument("--num", dest="sweep__num", type=int, help="number of values (default 71)")
+    g.add_argument("--start", dest="sweep__start", type=float, metavar="X", help="first value (default 1.0)")
+    g.add_argument("--stop", dest="sweep__stop", type=float, metavar="X", help="last value (default 0.1)")
+    g.add_argument("--num", dest="sweep__num", type=int, metavar="N", help="number of values (default 91)")
     g.add_argument("--values", dest="sweep__values", metavar="V1,V2,...", help="explicit values (instead of start/stop/num)")
     g.add_argument("--mode", dest="sweep__mode", metavar="MODE",
                    help="fresh, up, down or both (= up and down); comma-separated list allowed (default both)")
@@ -72,9 +72,9 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
                    help="section phase of the coordinates, in [0, 1) (default 0)")
     g.add_argument("--measure-theta", dest="jacobian__measure_theta", type=float, metavar="PHASE",
                    help="phase where J is measured, away from the impact (default 0.5)")
-    g.add_argument("--x-start", dest="jacobian__x_start", type=float, help="smallest x (default 1e-6)")
-    g.add_argument("--x-stop", dest="jacobian__x_stop", type=float, help="largest x (default 1e-2)")
-    g.add_argument("--x-num", dest="jacobian__x_num", type=int, help="number of x values, log-spaced (default 25)")
+    g.add_argument("--x-start", dest="jacobian__x_start", type=float, metavar="X", help="smallest x (default 1e-6)")
+    g.add_argument("--x-stop", dest="jacobian__x_stop", type=float, metavar="X", help="largest x (default 1e-2)")
+    g.add_argument("--x-num", dest="jacobian__x_num", type=int, metavar="N", help="number of x values, log-spaced (default 25)")
     g.add_argument("--state", dest="jacobian__state", metavar="U,V", help="J at this state at t = theta instead of a scan")
     p.set_defaults(func=cmd_jacobian)
 
@@ -106,15 +106,16 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .simulator import FmuSimulator
 
     exp = _experiment(args)
+    t0 = float(exp.layers.get("simulate", "t0"))
     t_end = float(exp.layers.get("simulate", "t_end"))
     dt = float(exp.layers.get("simulate", "dt"))
     out, plot = _outputs(args, exp, "simulate")
     t_start = time.perf_counter()
     sim = FmuSimulator(exp.model.source())
-    n = max(1, int((t_end - args.t0) / dt)) if dt > 0 else 1
+    n = max(1, int((t_end - t0) / dt)) if dt > 0 else 1
     with progress_bar(total=n, desc="simulate", unit="step", disable=not exp.run.progress) as bar:
-        series = simulate(sim, exp.params, exp.state0, args.t0, t_end, dt, progress=bar)
-    settings = {**exp.as_attrs(), "simulate.t0": args.t0, "simulate.t_end": t_end, "simulate.dt": dt}
+        series = simulate(sim, exp.params, exp.state0, t0, t_end, dt, progress=bar)
+    settings = {**exp.as_attrs(), "simulate.t0": t0, "simulate.t_end": t_end, "simulate.dt": dt}
     ds = timeseries_dataset(series, provenance(settings, exp.model, "serial", time.perf_counter() - t_start, _command_line(args)))
     write_netcdf(ds, out)
     print(f"{len(series['t'])} points, {int(series['impacts'][-1])} impacts; wrote {out}")
@@ -164,7 +165,7 @@ def _scan_option(text: str | None) -> dict[str, Any]:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
-    from .plots import bifurcation_diagram
+    from .plots import bifurcation_diagram, period_map
     from .results import write_netcdf
     from .sweeps import SweepStats, run_sweep
 
@@ -213,7 +214,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             print(f"  {direction}: windows of maximal orbits (1 impact per period): {text}")
     print(f"wrote {out}")
     if plot:
-        print(f"plot: {bifurcation_diagram(ds, plot)}")
+        drawn = period_map(ds, plot) if spec.scan_param else bifurcation_diagram(ds, plot)
+        print(f"plot: {drawn}")
     return 0
 
 

@@ -117,3 +117,36 @@ def timeseries_plot(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     a2.set_xlabel("t (forcing periods)")
     fig.tight_layout()
     return _save(fig, path)
+
+
+def period_map(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+    """2D scan: orbit period over (swept parameter, second parameter), one panel per direction.
+
+    Maximal orbits (one impact per orbit period) are drawn in colour by period; other
+    periodic orbits hatched grey; "not periodic" white.
+    """
+    param = ds.attrs["sweep.param"]
+    scan = ds.attrs["sweep.scan_param"]
+    directions = list(ds["direction"].values)
+    fig, axes = plt.subplots(1, len(directions), figsize=(5 * len(directions), 4.2), squeeze=False)
+    x = ds[param].values
+    # the second axis usually has few, unevenly spaced values (Gamma = 10, 100, 1000):
+    # one row per value, labelled with the value
+    y_values = ds[scan].values
+    y = np.arange(len(y_values))
+    vmax = max(1, int(ds["period"].max()))
+    for ax, direction in zip(axes[0], directions):
+        sel = ds.sel(direction=direction).transpose(scan, param, ...)
+        period = sel["period"].values.astype(float)
+        maximal = np.where(sel["orbit_impacts"].values == 1, period, np.nan)
+        other = np.where((period > 0) & (sel["orbit_impacts"].values != 1), 1.0, np.nan)
+        ax.pcolormesh(x, y, other, cmap="Greys", vmin=0, vmax=2, shading="nearest")
+        mesh = ax.pcolormesh(x, y, np.where(maximal > 0, maximal, np.nan), cmap="viridis", vmin=0.5,
+                             vmax=vmax + 0.5, shading="nearest")
+        ax.set_xlabel(param)
+        ax.set_ylabel(scan)
+        ax.set_yticks(y, [f"{v:g}" for v in y_values])
+        ax.set_title(f"{direction}: period of maximal orbits")
+        fig.colorbar(mesh, ax=ax, label="period M (1 impact per M periods)")
+    fig.tight_layout()
+    return _save(fig, path)

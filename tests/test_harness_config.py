@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness import Experiment, FmuModel, HarnessInputError
+from harness import Experiment, FmuModel, HarnessInputError, SamplingSpec
 from harness.config import Layered, parameter_values, parse_modes
 
 FMU = Path(__file__).resolve().parents[1] / "build" / "fmu" / "ImpactOscillator.fmu"
@@ -47,7 +47,8 @@ workers = 3
     assert exp.params["wall"] == 2               # symbolic value converted to the FMU's Integer
     assert exp.params["nu"] == model.defaults()["nu"]  # FMU default
     assert exp.state0 == (-0.5, model.defaults()["v0"])
-    assert (exp.sampling.theta, exp.sampling.n_samples, exp.sampling.n_transient) == (0.25, 20, 150)
+    assert (exp.sampling.theta, exp.sampling.n_samples) == (0.25, 20)
+    assert exp.sampling.n_transient == SamplingSpec().n_transient  # built-in default
     assert exp.run.workers == 3 and exp.run.backend == "processes"
     spec = exp.sweep_spec()
     assert spec.modes == ("fresh",) and spec.values.tolist() == [0.1, 0.2]
@@ -113,3 +114,12 @@ def test_layers_keep_lower_values_for_missing_flags() -> None:
     layers.merge({"sampling": {"theta": None, "samples": 7}}, "cli")
     assert layers.get("sampling", "theta") == 0.5 and layers.arg("sampling", "theta") == "a.toml: sampling.theta"
     assert layers.arg("sampling", "samples") == "--samples"
+
+
+@pytest.mark.parametrize("name", ["fig9.toml", "fig7-hysteresis.toml"])
+def test_shipped_experiment_files_are_valid(model: FmuModel, name: str) -> None:
+    path = Path(__file__).resolve().parents[1] / "harness" / "experiments" / name
+    exp = Experiment.from_sources(path, model=model)
+    spec = exp.sweep_spec()
+    assert spec.param == "sigma" and spec.modes == ("up", "down") and len(spec.values) > 10
+    assert exp.run.out and exp.run.plot

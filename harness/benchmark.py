@@ -1,0 +1,101 @@
+"""Overhead of the harness over a bare fmpy loop, per forcing period.
+
+    python -m harness.benchmark [--fmu PATH] [--periods N] [--repeat R]
+
+The bare loop is what a user would write by hand: one FMU2Slave, ``doStep(t, 1)`` and a
+``getReal``/``getInteger`` of (u, v, impacts) per period.  The harness loop is
+:func:`harness.sampling.strobe` on :class:`harness.simulator.FmuSimulator`, which does the
+same FMI calls plus its bookkeeping.  Both run the same parameters from the same state;
+the best of ``repeat`` runs is reported (the machine may be shared).
+"""
+from __future__ import annotations
+
+import argparse
+import time
+from typing import Any
+
+import numpy as np
+
+from .config import default_fmu_path
+from .fmi import FmuModel, open_source
+from .sampling import strobe
+from .simulator import FmuSimulator
+
+
+def bare_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, float], periods: int) -> float:
+    """Seconds for ``periods`` periods with fmpy's FMU2Slave driven by hand."""
+    from fmpy.fmi2 import FMU2Slave
+
+    unzipdir, _ = open_source(model.source())
+    v = model.variables
+    fmu = FMU2Slave(guid=model.guid, unzipDirectory=unzipdir, modelIdentifier=model.model_identifier,
+                    instanceName="bare")
+    fmu.instantiate()
+    try:
+        values = {**params, "u0": state0[0], "v0": state0[1]}
+        t0 = time.perf_counter()
+        fmu.setupExperiment(startTime=0.0)
+        fmu.enterInitializationMode()
+        reals = [n for n in values if v[n].type == "Real"]
+        ints = [n for n in values if v[n].type == "Integer"]
+        fmu.setReal([v[n].value_reference for n in reals], [float(values[n]) for n in reals])
+        fmu.setInteger([v[n].value_reference for n in ints], [int(values[n]) for n in ints])
+        fmu.exitInitializationMode()
+        vr_state = [v["u"].value_reference, v["v"].value_reference]
+        vr_imp = [v["impacts"].value_reference]
+        out = np.empty((periods, 3))
+        for k in range(periods):
+            fmu.doStep(currentCommunicationPoint=float(k), communicationStepSize=1.0)
+            out[k, :2] = fmu.getReal(vr_state)
+            out[k, 2] = fmu.getInteger(vr_imp)[0]
+        elapsed = time.perf_counter() - t0
+        fmu.terminate()
+    finally:
+        fmu.freeInstance()
+    return elapsed
+
+
+def harness_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, float], periods: int) -> float:
+    """Seconds for ``periods`` sampled periods through :func:`harness.sampling.strobe`."""
+    sim = FmuSimulator(model.source(), instance_name="bench")
+    t0 = time.perf_counter()
+    strobe(sim, params, state0, theta=0.0, n_transient=0, n_samples=periods)
+    elapsed = time.perf_counter() - t0
+    sim.close()
+    return elapsed
+
+
+def measure(fmu: str | None = None, periods: int = 2000, repeat: int = 5, sigma: float = 0.5) -> dict[str, float]:
+    """Best-of-``repeat`` seconds per period, bare and through the harness, and the overhead."""
+    model = FmuModel(fmu or default_fmu_path())
+    params = model.defaults()
+    params.pop("u0", None)
+    params.pop("v0", None)
+    params["sigma"] = sigma
+    state0 = (-1.0, 0.0)
+    bare_runs, our_runs = [], []
+    for _ in range(repeat):  # interleaved, so that load changes on a shared machine hit both
+        bare_runs.append(bare_loop(model, params, state0, periods))
+        our_runs.append(harness_loop(model, params, state0, periods))
+    bare = min(bare_runs) / periods
+    ours = min(our_runs) / periods
+    return {"bare_s_per_period": bare, "harness_s_per_period": ours, "overhead_s_per_period": ours - bare,
+            "overhead_fraction": (ours - bare) / bare}
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog="python -m harness.benchmark", description=__doc__.split("\n\n")[0])
+    p.add_argument("--fmu", help="FMU (default: build/fmu/ImpactOscillator.fmu)")
+    p.add_argument("--periods", type=int, default=2000)
+    p.add_argument("--repeat", type=int, default=5)
+    p.add_argument("--sigma", type=float, default=0.5)
+    args = p.parse_args(argv)
+    r = measure(args.fmu, args.periods, args.repeat, args.sigma)
+    print(f"bare FMU2Slave loop : {r['bare_s_per_period'] * 1e6:8.1f} us/period")
+    print(f"harness strobe      : {r['harness_s_per_period'] * 1e6:8.1f} us/period")
+    print(f"overhead            : {r['overhead_s_per_period'] * 1e6:8.1f} us/period ({100 * r['overhead_fraction']:.1f} %)")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
