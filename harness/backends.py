@@ -15,6 +15,7 @@ Fault tolerance:
 from __future__ import annotations
 
 import multiprocessing
+import signal
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -23,6 +24,12 @@ from typing import Any, Callable, Hashable, Mapping, Protocol
 from .errors import HarnessInputError
 
 ResultCallback = Callable[[Hashable, Any], None]
+
+
+def _ignore_sigint() -> None:
+    """Pool-worker initializer: Ctrl-C is handled by the parent alone (no tracebacks from
+    every worker; the parent stops the pool and keeps the checkpoint)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 class Backend(Protocol):
@@ -79,7 +86,8 @@ class ProcessBackend:
     def _new_pool(self) -> ProcessPoolExecutor:
         # spawn, not fork: the parent may hold loaded FMU libraries and helper threads
         # (tqdm's monitor, Dask), which a forked child must not inherit.
-        return ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"))
+        return ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"),
+                                   initializer=_ignore_sigint)
 
     def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback) -> None:
         pending = dict(tasks)
@@ -103,8 +111,17 @@ class ProcessBackend:
                 if self.restarts > self.max_restarts:
                     raise
             except BaseException:
+                # Interrupted or a task failed: do not wait for running tasks (a continuation
+                # chain may run for minutes); finished results are already delivered.
+                self._kill_workers()
                 self._shutdown(cancel=True)
                 raise
+
+    def _kill_workers(self) -> None:
+        processes = getattr(self._pool, "_processes", None) or {}
+        for proc in list(processes.values()):
+            if proc.is_alive():
+                proc.terminate()
 
     def _shutdown(self, cancel: bool) -> None:
         if self._pool is not None:

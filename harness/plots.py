@@ -12,6 +12,7 @@ import numpy as np
 import xarray as xr
 
 import matplotlib
+import matplotlib.ticker
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  (after selecting the backend)
@@ -61,6 +62,7 @@ def bifurcation_diagram(ds: xr.Dataset, path: str | os.PathLike, variable: str =
         title += f" ({scan} = {float(ds[scan].values[scan_index]):g})"
     ax.set_title(title)
     axp.set_ylabel("period (0: none)")
+    axp.yaxis.set_major_locator(matplotlib.ticker.MaxNLocator(integer=True))
     axp.set_xlabel(param)
     fig.tight_layout()
     return _save(fig, path)
