@@ -16,7 +16,21 @@ of the stable maximal period-M windows:
 * ``"ode"``       -- the exact pre-impact map of the ODE (53) with a compliant wall
   (closed form, Newton orbits + continuation, :func:`ode_windows`; slow: minutes).
 
-Run ``python -m mapcheck.fig9 [--physical] [--ode GAMMA]``.
+Run ``python -m mapcheck.fig9 [--physical] [--ode GAMMA]``.  Output of
+``--physical --ode 10`` (sigma-edges; inf: no upper edge)::
+
+    variant                     M=1              M=2               M=3               M=4
+    (64), rho from (48)         [0.4454, inf]    [0.2227, 0.4454]  [0.1485, 0.1979]  [0.1113, 0.1113]
+    (64), rho from (56)         [0.4580, inf]    [0.2290, 0.4580]  [0.1527, 0.2036]  [0.1145, 0.1145]
+    (64), rho with A~(sigma)    [0.8015, inf]    [0.2863, 0.8015]  [0.1743, 0.2466]  [0.1253, 0.1253]
+    2D map (48)                 [0.4482, inf]    [0.2248, 0.4504]  [0.1476, 0.1998]  [0.1089, 0.1102]
+    2D map (48), A~(sigma)      [0.8107, inf]    [0.2898, 0.8178]  [0.1730, 0.2496]  [0.1222, 0.1238]
+    map (31)/(32), A            [0.4473, inf]    [0.2246, 0.4494]  [0.1475, 0.1996]  [0.1089, 0.1101]
+    map (31)/(32), A~(sigma)    [0.8078, inf]    [0.2894, 0.8147]  [0.1729, 0.2493]  [0.1221, 0.1237]
+    ODE, Gamma=10               [0.8121, inf]    [0.2900, 0.8190]  [0.1731, 0.2497]  [0.1222, 0.1238]
+
+The ODE agrees with the A~(sigma) maps to ~1e-3 in sigma; the paper's linear rho(sigma)
+puts the upper edges at about half the sigma.
 """
 from __future__ import annotations
 
