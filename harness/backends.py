@@ -15,7 +15,7 @@ Fault tolerance:
 from __future__ import annotations
 
 import multiprocessing
-import signal
+import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -24,12 +24,8 @@ from typing import Any, Callable, Hashable, Mapping, Protocol
 from .errors import HarnessInputError
 
 ResultCallback = Callable[[Hashable, Any], None]
-
-
-def _ignore_sigint() -> None:
-    """Pool-worker initializer: Ctrl-C is handled by the parent alone (no tracebacks from
-    every worker; the parent stops the pool and keeps the checkpoint)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+#: ``on_progress(key, points_done)``: a task reports how far it got (long chains).
+ProgressCallback = Callable[[Hashable, int], None]
 
 
 class Backend(Protocol):
@@ -37,8 +33,10 @@ class Backend(Protocol):
 
     name: str
 
-    def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback) -> None:
-        """Run ``func(task, source)`` for each task; call ``on_result(key, result)`` as they finish."""
+    def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback,
+            on_progress: ProgressCallback | None = None) -> None:
+        """Run ``func(task, source, progress=...)`` for each task; call ``on_result(key, result)``
+        as they finish and ``on_progress(key, points_done)`` as tasks report."""
 
     def describe(self) -> str:
         """One line for the results' attributes (backend, workers, address)."""
@@ -51,9 +49,10 @@ class SerialBackend:
 
     name = "serial"
 
-    def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback) -> None:
+    def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback,
+            on_progress: ProgressCallback | None = None) -> None:
         for key, task in tasks.items():
-            on_result(key, func(task, source))
+            on_result(key, func(task, source, progress=on_progress))
 
     def describe(self) -> str:
         return "serial (1 process)"
@@ -84,17 +83,44 @@ class ProcessBackend:
         self._pool: ProcessPoolExecutor | None = None
 
     def _new_pool(self) -> ProcessPoolExecutor:
+        from .tasks import init_pool_worker
+
         # spawn, not fork: the parent may hold loaded FMU libraries and helper threads
         # (tqdm's monitor, Dask), which a forked child must not inherit.
-        return ProcessPoolExecutor(self.workers, mp_context=multiprocessing.get_context("spawn"),
-                                   initializer=_ignore_sigint)
+        ctx = multiprocessing.get_context("spawn")
+        self._queue = ctx.Queue()
+        return ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=init_pool_worker,
+                                   initargs=(self._queue,))
 
-    def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback) -> None:
+    def _drain(self, on_progress: ProgressCallback, stop: threading.Event) -> None:
+        """Forward the workers' progress reports to ``on_progress`` (a helper thread)."""
+        import queue as _queue
+
+        while not stop.is_set():
+            try:
+                key, n = self._queue.get(timeout=0.2)
+            except (_queue.Empty, OSError, EOFError, ValueError):
+                continue
+            on_progress(key, n)
+
+    def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback,
+            on_progress: ProgressCallback | None = None) -> None:
+        stop = threading.Event()
+        try:
+            self._run(func, tasks, source, on_result, on_progress, stop)
+        finally:
+            stop.set()
+
+    def _run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback,
+             on_progress: ProgressCallback | None, stop: threading.Event) -> None:
         pending = dict(tasks)
         while pending:
             if self._pool is None:
                 self._pool = self._new_pool()
-            futures = {self._pool.submit(func, task, source): key for key, task in pending.items()}
+                if on_progress is not None:
+                    threading.Thread(target=self._drain, args=(on_progress, stop), daemon=True).start()
+            mode = "pool" if on_progress is not None else None
+            futures = {self._pool.submit(func, task, source, progress=mode): key for key, task in pending.items()}
             try:
                 not_done = set(futures)
                 while not_done:
@@ -162,7 +188,8 @@ class DaskBackend:
     def address(self) -> str:
         return str(self.client.scheduler.address)
 
-    def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback) -> None:
+    def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback,
+            on_progress: ProgressCallback | None = None) -> None:
         from distributed import as_completed
 
         if not tasks:
@@ -170,11 +197,16 @@ class DaskBackend:
         remote_source = self.client.scatter(source, broadcast=True, hash=False)
         # Unique keys per run: a rerun of the same sweep must not pick up stale results.
         stamp = f"{time.time_ns():x}"
+        topic = f"impact-harness-progress-{stamp}"
+        if on_progress is not None:
+            # workers log (key, points done) events on this topic; the client forwards them
+            self.client.subscribe_topic(topic, lambda event: on_progress(*event[1]))
         keys = list(tasks)
         futures = self.client.map(
             func,
             [tasks[k] for k in keys],
             source=remote_source,
+            progress=f"dask:{topic}" if on_progress is not None else None,
             key=[f"impact-harness-{stamp}-{i}" for i in range(len(keys))],
             pure=False,
         )
@@ -184,6 +216,8 @@ class DaskBackend:
                 on_result(by_future[fut.key], fut.result())
         finally:
             self.client.cancel(futures)
+            if on_progress is not None:
+                self.client.unsubscribe_topic(topic)
 
     def n_workers(self) -> int:
         return len(self.client.scheduler_info().get("workers", {}))

@@ -253,15 +253,29 @@ def _count(layers: Layered, section: str, key: str, minimum: int = 0) -> int:
     return check_count(layers.get(section, key), layers.arg(section, key), minimum)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, kw_only=True)
 class SamplingSpec:
-    """Section phase, transient and sampled periods, classification tolerance."""
+    """Section phase, transient and sampled periods, classification tolerance.
+
+    Keyword-only, and checked on creation (theta in [0, 1), counts >= 0, tol > 0).
+    """
 
     theta: float = 0.0
     n_transient: int = 300
     n_samples: int = 40
     tol: float = 1e-5
     max_period: int | None = None
+
+    def __post_init__(self) -> None:
+        from .sampling import check_count, check_theta
+
+        check_theta(self.theta, "theta")
+        check_count(self.n_transient, "n_transient")
+        check_count(self.n_samples, "n_samples", minimum=2)
+        if not (isinstance(self.tol, (int, float)) and self.tol > 0):
+            raise HarnessInputError("tol", f"must be > 0, got {self.tol!r}")
+        if self.max_period is not None:
+            check_count(self.max_period, "max_period", minimum=1)
 
     @classmethod
     def from_layers(cls, layers: Layered) -> "SamplingSpec":

@@ -18,6 +18,7 @@ that process's reused FMU instance.
 """
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass
 from typing import Any, Mapping
@@ -241,18 +242,41 @@ def run_sweep(
     if be.name == "dask" and model is not None:
         source = model.source(embed=True)  # remote workers may not share the file system
     total_points = sum(len(t.values) for t in tasks.values())
-    done_points = sum(len(tasks[k].values) for k in results)
-    bar = progress_bar(total=total_points, initial=done_points, desc=f"sweep {spec.param}", unit="pt", disable=not progress)
+    finished = {"points": sum(len(tasks[k].values) for k in results)}
+    in_flight: dict[str, int] = {}  # points reported by tasks still running
+    lock = threading.Lock()
+    bar = progress_bar(total=total_points, initial=finished["points"], desc=f"sweep {spec.param}", unit="pt",
+                       disable=not progress)
+
+    last_draw = [0.0]
+
+    def show(force: bool = False) -> None:
+        # Called from the result loop and from progress threads; a task rerun after a lost
+        # worker reports from 1 again, so the count is recomputed, never accumulated.
+        bar.n = min(total_points, finished["points"] + sum(in_flight.values()))
+        now = time.monotonic()
+        if force or now - last_draw[0] > 0.2:  # redraw at most 5 times a second
+            bar.refresh()
+            last_draw[0] = now
+
+    def on_progress(key: str, points: int) -> None:
+        with lock:
+            if key not in results:
+                in_flight[key] = points
+                show()
 
     def on_result(key: str, arrays: dict[str, np.ndarray]) -> None:
-        results[key] = arrays
         if store is not None:
             store.save(key, arrays)
-        stats.computed += 1
-        bar.update(len(tasks[key].values))
+        with lock:
+            results[key] = arrays
+            in_flight.pop(key, None)
+            finished["points"] += len(tasks[key].values)
+            stats.computed += 1
+            show(force=finished["points"] == total_points)
 
     try:
-        be.run(run_task, todo, source, on_result)
+        be.run(run_task, todo, source, on_result, on_progress if progress else None)
         description = be.describe()
     finally:
         bar.close()

@@ -7,7 +7,7 @@ paid once per worker and per sweep.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -50,8 +50,12 @@ class SweepTask:
     sampling: SamplingSpec
 
 
-def execute(task: SweepTask, sim: Any) -> dict[str, np.ndarray]:
-    """Run ``task`` on simulator ``sim``; arrays indexed (point in ``task.values``, sample)."""
+def execute(task: SweepTask, sim: Any, report: Callable[[str, int], None] | None = None) -> dict[str, np.ndarray]:
+    """Run ``task`` on simulator ``sim``; arrays indexed (point in ``task.values``, sample).
+
+    ``report(key, points_done)`` is called after each point, so that a long continuation
+    chain moves the progress bar while it runs.
+    """
     s = task.sampling
     k, n = len(task.values), s.n_samples
     out = {
@@ -77,10 +81,46 @@ def execute(task: SweepTask, sim: Any) -> dict[str, np.ndarray]:
         orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
         out["u"][i], out["v"][i], out["impacts"][i], out["t"][i] = r.u, r.v, r.impacts, r.t
         out["period"][i], out["orbit_impacts"][i] = orbit.period, orbit.impacts
+        if report is not None and i + 1 < k:  # the last point arrives with the result
+            report(task.key, i + 1)
     return out
 
 
-def run_task(task: SweepTask, source: Any) -> dict[str, np.ndarray]:
-    """Worker entry point: this thread's FMU instance (or a user simulator) runs ``task``."""
+# Progress channel of a process-pool worker, set by the pool's initializer.
+_POOL_PROGRESS_QUEUE: Any = None
+
+
+def init_pool_worker(progress_queue: Any) -> None:
+    """Process-pool initializer: Ctrl-C is left to the parent (which stops the pool and keeps
+    the checkpoint), and per-point progress goes to ``progress_queue``."""
+    import signal
+
+    global _POOL_PROGRESS_QUEUE
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _POOL_PROGRESS_QUEUE = progress_queue
+
+
+def _reporter(progress: Any) -> Callable[[str, int], None] | None:
+    if progress is None:
+        return None
+    if callable(progress):  # in-process
+        return progress
+    if progress == "pool":
+        queue = _POOL_PROGRESS_QUEUE
+        return None if queue is None else (lambda key, n: queue.put((key, n)))
+    if isinstance(progress, str) and progress.startswith("dask:"):
+        from distributed import get_worker
+
+        worker, topic = get_worker(), progress[len("dask:"):]
+        return lambda key, n: worker.log_event(topic, (key, n))
+    return None
+
+
+def run_task(task: SweepTask, source: Any, progress: Any = None) -> dict[str, np.ndarray]:
+    """Worker entry point: this thread's FMU instance (or a user simulator) runs ``task``.
+
+    ``progress`` selects the channel for per-point progress: a callable (in-process),
+    ``"pool"`` (the process pool's queue) or ``"dask:<topic>"`` (a Dask event topic).
+    """
     sim = simulator_for(source) if isinstance(source, FmuSource) else source
-    return execute(task, sim)
+    return execute(task, sim, _reporter(progress))

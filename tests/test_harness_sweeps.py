@@ -194,3 +194,27 @@ def test_process_pool_loses_no_point_when_a_worker_dies(model: FmuModel) -> None
     assert killed and backend.restarts >= 1
     reference = run_sweep(model, spec, sampling=sampling, backend="serial", progress=False)
     assert_same_results(ds, reference)
+
+
+def test_continuation_chain_reports_each_point(model: FmuModel) -> None:
+    """A long chain moves the progress bar while it runs: one report per finished point
+    (the last one arrives with the result)."""
+    from harness import FmuSimulator
+    from harness.sweeps import execute, plan_tasks
+
+    base = {k: v for k, v in model.defaults().items() if k not in ("u0", "v0")}
+    tasks = plan_tasks(SweepSpec("sigma", np.array([0.5, 0.6, 0.7]), ("down",)), base, (-1.0, 0.0),
+                       SamplingSpec(n_transient=5, n_samples=3))
+    seen: list[tuple[str, int]] = []
+    out = execute(tasks["down"], FmuSimulator(model.source()), lambda key, n: seen.append((key, n)))
+    assert seen == [("down", 1), ("down", 2)]
+    assert out["u"].shape == (3, 3)
+
+
+def test_sampling_spec_is_checked_on_creation() -> None:
+    with pytest.raises(HarnessInputError, match="theta"):
+        SamplingSpec(theta=200.0)
+    with pytest.raises(HarnessInputError, match="n_transient: negative"):
+        SamplingSpec(n_transient=-1)
+    with pytest.raises(TypeError):
+        SamplingSpec(0.0, 100)  # keyword-only: no silent mix-up of theta and counts
