@@ -113,7 +113,8 @@ def test_accuracy_does_not_decay_over_1e4_periods(fmu):
 
     def error_of_next_period() -> float:
         x, t = fmu.state(), fmu.t
-        exact, _ = osc.strobe(x[0], x[1], [t + 1.0], t0=t)
+        t_loc = t - np.floor(t)  # the ODE is 1-periodic in t; keep the oracle's clock small
+        exact, _ = osc.strobe(x[0], x[1], [t_loc + 1.0], t0=t_loc)
         fmu.step_to(t + 1.0)
         return float(np.max(np.abs(fmu.state() - exact[0])))
 
