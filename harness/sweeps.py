@@ -18,6 +18,7 @@ that process's reused FMU instance.
 """
 from __future__ import annotations
 
+import pickle
 import threading
 import time
 from dataclasses import dataclass
@@ -33,7 +34,6 @@ from .errors import HarnessInputError
 from .fmi import INITIAL_STATE, FmuModel
 from .progress import progress_bar
 from .results import provenance
-from .sampling import check_theta
 from .tasks import RESULT_FIELDS, SweepTask, execute, run_task
 
 __all__ = ["SweepStats", "SweepTask", "assemble", "execute", "plan_tasks", "run_sweep", "run_task"]
@@ -201,8 +201,7 @@ def run_sweep(
         orbit_impacts (direction, param[, scan]); attributes with the full provenance.
     """
     t_start = time.perf_counter()
-    sampling = sampling or SamplingSpec()
-    check_theta(sampling.theta, "sampling.theta")
+    sampling = sampling or SamplingSpec()  # checked on creation
     model: FmuModel | None = None
     if isinstance(fmu, (str,)) or hasattr(fmu, "__fspath__"):
         model = FmuModel(fmu)
@@ -239,6 +238,15 @@ def run_sweep(
     stats.resumed = len(results)
 
     be: Backend = make_backend(backend, workers, scheduler)
+    if model is None and be.name != "serial":
+        try:  # a user simulator travels to the workers by pickle
+            pickle.dumps(source)
+        except Exception as exc:
+            if backend is None or isinstance(backend, str):
+                be.close()
+            raise HarnessInputError(
+                "backend", f"the simulator cannot be sent to {be.name} workers ({exc}); "
+                "define its map at module level or use backend='serial'") from None
     if be.name == "dask" and model is not None:
         source = model.source(embed=True)  # remote workers may not share the file system
     total_points = sum(len(t.values) for t in tasks.values())
@@ -284,6 +292,8 @@ def run_sweep(
             be.close()  # a backend or client passed in stays open for the caller
     stats.wall_time = time.perf_counter() - t_start
     record = {
+        # the caller's record first: the values actually used below win over it
+        **dict(settings or {}),
         "sweep.param": spec.param,
         "sweep.values": np.sort(np.asarray(spec.values, dtype=float)),
         "sweep.modes": ",".join(spec.modes),
@@ -297,7 +307,6 @@ def run_sweep(
         "initial.u0": state0[0],
         "initial.v0": state0[1],
         **{f"model.{k}": v for k, v in base.items()},
-        **dict(settings or {}),
         "tasks_computed": stats.computed,
         "tasks_resumed": stats.resumed,
     }

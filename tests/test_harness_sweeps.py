@@ -218,3 +218,9 @@ def test_sampling_spec_is_checked_on_creation() -> None:
         SamplingSpec(n_transient=-1)
     with pytest.raises(TypeError):
         SamplingSpec(0.0, 100)  # keyword-only: no silent mix-up of theta and counts
+
+
+def test_unpicklable_user_mapping_needs_the_serial_backend() -> None:
+    sim = MappingSimulator(lambda u, v, t, p: (u, v, 0))
+    with pytest.raises(HarnessInputError, match="backend='serial'"):
+        run_sweep(sim, SweepSpec("a", np.array([1.0]), ("fresh",)), backend="processes", workers=1, progress=False)
