@@ -11,9 +11,9 @@ never to fmpy directly.  This module is the only place that knows about fmpy and
   that travels to worker processes and Dask workers.
 * :class:`FmuSimulator` owns *one* slave instance and reuses it between runs with
   ``reset`` (instantiating is far more expensive than resetting).
-* :func:`make_slave` picks the slave class from the FMU's ``fmiVersion``.  Only FMI 2.0
-  exists now; an FMI 3.0 build adds a class with the same small interface as
-  :class:`Fmi2Slave` and one entry in :data:`SLAVE_CLASSES`.
+* :func:`make_slave` picks the slave class from the FMU's ``fmiVersion``:
+  :class:`Fmi2Slave` (fmpy's ``FMU2Slave``) or :class:`Fmi3Slave` (``FMU3Slave``), which
+  share one small interface; another version is one more entry in :data:`SLAVE_CLASSES`.
 """
 from __future__ import annotations
 
@@ -26,7 +26,7 @@ import threading
 import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 from .errors import FmuError, HarnessInputError
 
@@ -41,6 +41,11 @@ REQUIRED_VARIABLES = (*STATE_OUTPUTS, IMPACT_COUNTER, *INITIAL_STATE)
 WALL_NAMES = {"none": 0, "compliant": 1, "rigid": 2}
 
 _SETTABLE_CAUSALITIES = {"parameter", "input"}
+
+#: FMI 2 and FMI 3 type names, by family.
+REAL_TYPES = {"Real", "Float64", "Float32"}
+INTEGER_TYPES = {"Integer", "Enumeration", "Int8", "Int16", "Int32", "Int64", "UInt8", "UInt16", "UInt32", "UInt64"}
+BOOLEAN_TYPES = {"Boolean"}
 
 
 def sha256_of(path: str | os.PathLike) -> str:
@@ -193,7 +198,7 @@ class FmuModel:
         out: dict[str, float | int | bool] = {}
         for name in self.parameter_names():
             var = self.variables[name]
-            if var.start is not None and var.type in ("Real", "Integer", "Boolean"):
+            if var.start is not None and var.type in REAL_TYPES | INTEGER_TYPES | BOOLEAN_TYPES:
                 out[name] = coerce_value(var, var.start, name)
         return out
 
@@ -201,11 +206,11 @@ class FmuModel:
 def coerce_value(var: VariableInfo, value: Any, argument: str) -> float | int | bool:
     """Convert a user value (number, string from TOML or CLI) to the variable's type."""
     try:
-        if var.type == "Real":
+        if var.type in REAL_TYPES:
             if isinstance(value, bool):
                 raise ValueError
             return float(value)
-        if var.type in ("Integer", "Enumeration"):
+        if var.type in INTEGER_TYPES:
             if var.name == "wall" and isinstance(value, str) and value.lower() in WALL_NAMES:
                 return WALL_NAMES[value.lower()]
             if isinstance(value, bool):
@@ -214,7 +219,7 @@ def coerce_value(var: VariableInfo, value: Any, argument: str) -> float | int | 
             if f != int(f):
                 raise ValueError
             return int(f)
-        if var.type == "Boolean":
+        if var.type in BOOLEAN_TYPES:
             if isinstance(value, str):
                 if value.lower() in ("true", "1", "yes"):
                     return True
@@ -297,9 +302,8 @@ def open_source(source: FmuSource) -> tuple[str, FmuModel]:
 class Fmi2Slave:
     """One FMI 2.0 Co-Simulation instance (fmpy's low-level ``FMU2Slave``).
 
-    The interface (``initialize``, ``reset``, ``set``, ``do_step``, ``get_real``,
-    ``get_integer``, ``close``) is all the simulator uses, so an ``Fmi3Slave`` around
-    fmpy's ``FMU3Slave`` only has to provide the same methods.
+    The interface (``initialize``, ``reset``, ``set``, ``do_step``, ``getter``, ``close``)
+    is all the simulator uses; :class:`Fmi3Slave` provides the same methods.
     """
 
     def __init__(self, model: FmuModel, unzipdir: str, instance_name: str) -> None:
@@ -330,11 +334,11 @@ class Fmi2Slave:
             vrs.append(var.value_reference)
             vals.append(value)
         for typ, (vrs, vals) in by_type.items():
-            if typ == "Real":
+            if typ in REAL_TYPES:
                 self._fmu.setReal(vrs, [float(x) for x in vals])
-            elif typ in ("Integer", "Enumeration"):
+            elif typ in INTEGER_TYPES:
                 self._fmu.setInteger(vrs, [int(x) for x in vals])
-            elif typ == "Boolean":
+            elif typ in BOOLEAN_TYPES:
                 self._fmu.setBoolean(vrs, [bool(x) for x in vals])
             else:  # pragma: no cover - rejected earlier by coerce_value
                 raise FmuError(f"cannot set variables of type {typ}")
@@ -348,11 +352,16 @@ class Fmi2Slave:
     def do_step(self, t: float, h: float) -> None:
         self._fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
 
-    def get_real(self, vrs: list[int]) -> list[float]:
-        return self._fmu.getReal(vrs)
-
-    def get_integer(self, vrs: list[int]) -> list[int]:
-        return self._fmu.getInteger(vrs)
+    def getter(self, variables: list[VariableInfo]) -> Callable[[], list]:
+        """A function returning the current values of ``variables`` (all of one type family),
+        bound once so that the per-period read is a single FMI call."""
+        vrs = [v.value_reference for v in variables]
+        family = variables[0].type
+        if family in REAL_TYPES:
+            return lambda: self._fmu.getReal(vrs)
+        if family in INTEGER_TYPES:
+            return lambda: self._fmu.getInteger(vrs)
+        return lambda: self._fmu.getBoolean(vrs)
 
     def close(self) -> None:
         try:
@@ -362,11 +371,84 @@ class Fmi2Slave:
             self._fmu.freeInstance()
 
 
-#: Slave class per FMI major version.  FMI 3.0: add ``"3": Fmi3Slave``.
-SLAVE_CLASSES: dict[str, type] = {"2": Fmi2Slave}
+class Fmi3Slave:
+    """One FMI 3.0 Co-Simulation instance (fmpy's ``FMU3Slave``), same interface as
+    :class:`Fmi2Slave`.
+
+    Instantiated without event mode and without early return, so ``doStep`` integrates the
+    whole communication step and handles wall events inside it, as the FMI 2 build does.
+    """
+
+    def __init__(self, model: FmuModel, unzipdir: str, instance_name: str) -> None:
+        from fmpy.fmi3 import FMU3Slave
+
+        self._fmu = FMU3Slave(
+            guid=model.guid,
+            unzipDirectory=unzipdir,
+            modelIdentifier=model.model_identifier,
+            instanceName=instance_name,
+        )
+        self._fmu.instantiate(loggingOn=False, eventModeUsed=False, earlyReturnAllowed=False)
+        self._initialized = False
+
+    def initialize(self, t0: float, values: Mapping[VariableInfo, Any]) -> None:
+        self._fmu.enterInitializationMode(startTime=t0)
+        self.set(values)
+        self._fmu.exitInitializationMode()
+        self._initialized = True
+
+    _SETTERS = {"Float64": "setFloat64", "Float32": "setFloat32", "Int8": "setInt8", "Int16": "setInt16",
+                "Int32": "setInt32", "Int64": "setInt64", "UInt8": "setUInt8", "UInt16": "setUInt16",
+                "UInt32": "setUInt32", "UInt64": "setUInt64", "Boolean": "setBoolean", "Enumeration": "setInt64"}
+
+    def set(self, values: Mapping[VariableInfo, Any]) -> None:
+        by_type: dict[str, tuple[list[int], list[Any]]] = {}
+        for var, value in values.items():
+            vrs, vals = by_type.setdefault(var.type, ([], []))
+            vrs.append(var.value_reference)
+            vals.append(value)
+        for typ, (vrs, vals) in by_type.items():
+            setter = self._SETTERS.get(typ)
+            if setter is None:  # pragma: no cover - rejected earlier by coerce_value
+                raise FmuError(f"cannot set variables of type {typ}")
+            convert = float if typ in REAL_TYPES else (bool if typ in BOOLEAN_TYPES else int)
+            getattr(self._fmu, setter)(vrs, [convert(x) for x in vals])
+
+    def reset(self) -> None:
+        if self._initialized:
+            self._fmu.reset()
+            self._initialized = False
+
+    def do_step(self, t: float, h: float) -> None:
+        target = t + h
+        while True:
+            _, terminate, early, reached = self._fmu.doStep(currentCommunicationPoint=t, communicationStepSize=target - t)
+            if terminate:
+                raise FmuError(f"the FMU asked to terminate at t={reached}")
+            if not early or reached >= target:
+                return
+            t = reached  # early return despite earlyReturnAllowed=False: continue the step
+
+    def getter(self, variables: list[VariableInfo]) -> Callable[[], list]:
+        vrs = [v.value_reference for v in variables]
+        typ = variables[0].type
+        name = {"Enumeration": "getInt64"}.get(typ, f"get{typ}")
+        get = getattr(self._fmu, name)
+        return lambda: get(vrs)
+
+    def close(self) -> None:
+        try:
+            if self._initialized:
+                self._fmu.terminate()
+        finally:
+            self._fmu.freeInstance()
 
 
-def make_slave(model: FmuModel, unzipdir: str, instance_name: str) -> Fmi2Slave:
+#: Slave class per FMI major version.
+SLAVE_CLASSES: dict[str, type] = {"2": Fmi2Slave, "3": Fmi3Slave}
+
+
+def make_slave(model: FmuModel, unzipdir: str, instance_name: str) -> Fmi2Slave | Fmi3Slave:
     """Instantiate the slave class matching the FMU's ``fmiVersion``."""
     cls = SLAVE_CLASSES[model.fmi_version.split(".")[0]]
     return cls(model, unzipdir, instance_name)

@@ -69,8 +69,8 @@ class FmuSimulator:
         self._slave = make_slave(model, unzipdir, instance_name)
         self._max_step = float(max_step)
         v = model.variables
-        self._state_vrs = [v[n].value_reference for n in STATE_OUTPUTS]
-        self._impacts_vr = [v[IMPACT_COUNTER].value_reference]
+        self._get_state = self._slave.getter([v[n] for n in STATE_OUTPUTS])
+        self._get_impacts = self._slave.getter([v[IMPACT_COUNTER]])
         self._init_vars: tuple[VariableInfo, VariableInfo] = (v[INITIAL_STATE[0]], v[INITIAL_STATE[1]])
         self._params: dict[str, Any] = {}
         self._impact_offset = 0
@@ -123,8 +123,8 @@ class FmuSimulator:
             self.restarts += 1
 
     def read(self) -> tuple[float, float, int]:
-        u, v = self._slave.get_real(self._state_vrs)
-        (n,) = self._slave.get_integer(self._impacts_vr)
+        u, v = self._get_state()
+        (n,) = self._get_impacts()
         return float(u), float(v), int(n) + self._impact_offset
 
     def close(self) -> None:
