@@ -333,6 +333,43 @@ def test_importer_tolerance_tightens_rtol_as_in_the_c_fmu(twin_fmu, c_fmu, toler
     assert changed == (tolerance < 1e-12)
 
 
+def test_fmu_state_save_restore_serialize(twin_fmu, c_fmu) -> None:
+    """fmi2GetFMUstate/SetFMUstate and serialisation: "continue" and "restore, then continue"
+    (in the same instance, and in a fresh one from the serialised bytes) give the same bits, and
+    the same bits as the C FMU doing the same."""
+    finals = {}
+    for path in (twin_fmu, c_fmu):
+        a, b = Slave(path), Slave(path)
+        try:
+            u0, v0 = on_orbit(THETA, 0.2)
+            a.start(t0=THETA, sigma=0.2, u0=u0, v0=v0, **FIG9)
+            a.step_to(THETA + 3)
+            saved = a.fmu.getFMUstate()
+            blob = a.fmu.serializeFMUstate(saved)
+            a.step_to(THETA + 8)
+            first = (a.state(), a.impacts())
+            a.fmu.setFMUstate(saved)
+            a.t = THETA + 3
+            a.step_to(THETA + 8)
+            again = (a.state(), a.impacts())
+            a.fmu.freeFMUstate(saved)
+            b.start(t0=0.0)  # another run entirely, then the serialised state
+            restored = b.fmu.deSerializeFMUstate(blob)
+            b.fmu.setFMUstate(restored)
+            b.t = THETA + 3
+            b.step_to(THETA + 8)
+            other = (b.state(), b.impacts())
+            b.fmu.freeFMUstate(restored)
+        finally:
+            a.close()
+            b.close()
+        assert np.array_equal(first[0], again[0]) and first[1] == again[1] > 0
+        assert np.array_equal(first[0], other[0]) and first[1] == other[1]
+        finals[path.name] = first
+    assert np.array_equal(finals[twin_fmu.name][0], finals[c_fmu.name][0])
+    assert finals[twin_fmu.name][1] == finals[c_fmu.name][1]
+
+
 def test_event_log_is_the_c_fmus(twin_fmu, c_fmu) -> None:
     """With logging on, both FMUs report the wall events of each step in the same words; with
     logging off, neither says anything."""

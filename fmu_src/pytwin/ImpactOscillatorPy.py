@@ -266,6 +266,51 @@ class ImpactOscillatorPy(Fmi2Slave):
             SubElement(initial, "Unknown", {"index": str(index), "dependencies": deps})
         return root
 
+    # -- FMU state (fmi2GetFMUstate / fmi2SetFMUstate / serialisation) ----------------------
+    _STATE_MAGIC = "ImpactOscillatorPy-state-1"
+    _MODEL_FIELDS = ("nu", "Omega", "sigma", "r", "Gamma", "wall", "u0", "v0", "rtol", "atol",
+                     "u", "v", "mode", "impacts")
+
+    def _get_fmu_state(self) -> dict[str, Any]:
+        """Snapshot: parameters, state, wall mode and time (a JSON-able dict, which pythonfmu
+        serialises).  CVODE's step history is not part of it; as in the C FMU the live
+        instance restarts CVODE here too, so "continue" and "restore, then continue" compute
+        the very same numbers."""
+        snap: dict[str, Any] = {"magic": self._STATE_MAGIC}
+        snap.update({k: getattr(self.model, k) for k in self._MODEL_FIELDS})
+        snap.update(start_time=self.start_time, initialized=self.initialized, failed=self.failed)
+        if self.driver is not None:
+            d = self.driver
+            snap["driver"] = dict(origin=d.origin, tau=d.tau, events=d.events,
+                                  guard_hits=d.guard_hits)
+            d.needs_reinit = True
+        else:
+            snap["driver"] = None
+        return snap
+
+    def _set_fmu_state(self, state: dict[str, Any]) -> None:
+        """Restore a snapshot of :meth:`_get_fmu_state` (CVODE restarts at its point)."""
+        if not isinstance(state, dict) or state.get("magic") != self._STATE_MAGIC:
+            self._reject("fmi2SetFMUstate: not a state of this FMU")
+        for k in self._MODEL_FIELDS:
+            setattr(self.model, k, state[k])
+        self.model.update_derived()
+        self.start_time = state["start_time"]
+        self.initialized = state["initialized"]
+        self.failed = state["failed"]
+        snap = state["driver"]
+        if snap is None:
+            self.driver = None
+            return
+        try:
+            # a new driver: the snapshot's rtol/atol may differ from the current CVODE's
+            self.driver = CvodeDriver(self.model)
+        except Exception as exc:
+            self._reject(f"fmi2SetFMUstate: CVODE set-up failed: {exc!r}")
+        self.driver.origin, self.driver.tau = snap["origin"], snap["tau"]
+        self.driver.events, self.driver.guard_hits = snap["events"], snap["guard_hits"]
+        self.driver.needs_reinit = True
+
     # -- FMI callbacks ---------------------------------------------------------------------
     def setup_experiment(
         self, start_time: float, stop_time: Optional[float] = None, tolerance: Optional[float] = None

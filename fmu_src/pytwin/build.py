@@ -53,6 +53,9 @@ def build(out: Path) -> Path:
         # pythonfmu >= 0.6 defaults needsExecutionTool to true; the FMU only needs a Python
         # with the packages of README.md, not a tool, as the C FMU it is a plain shared library.
         needsExecutionTool=False,
+        # the slave implements _get_fmu_state/_set_fmu_state (JSON-able snapshots)
+        canGetAndSetFMUstate=True,
+        canSerializeFMUstate=True,
     )
     problems = validate(Path(written))
     if problems:
