@@ -177,25 +177,25 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if args.no_resume and ckpt.exists():
         shutil.rmtree(ckpt)
     stats = SweepStats()
+
+    def sweep() -> Any:
+        return run_sweep(
+            exp.model, spec, exp.params, exp.state0, exp.sampling,
+            backend=exp.run.backend, workers=exp.run.workers, scheduler=exp.run.scheduler,
+            checkpoint=str(ckpt), progress=exp.run.progress,
+            settings={**exp.as_attrs(), "command": _command_line(args)}, stats=stats,
+        )
+
     try:
-        ds = run_sweep(
-            exp.model, spec, exp.params, exp.state0, exp.sampling,
-            backend=exp.run.backend, workers=exp.run.workers, scheduler=exp.run.scheduler,
-            checkpoint=str(ckpt), progress=exp.run.progress,
-            settings={**exp.as_attrs(), "command": _command_line(args)}, stats=stats,
-        )
-    except HarnessInputError as exc:
-        if explicit or "different run" not in str(exc):
-            raise
-        # The default checkpoint of an earlier, different sweep to the same file: start over.
-        print(f"note: discarding {ckpt} (checkpoint of a different sweep)", file=sys.stderr)
-        shutil.rmtree(ckpt)
-        ds = run_sweep(
-            exp.model, spec, exp.params, exp.state0, exp.sampling,
-            backend=exp.run.backend, workers=exp.run.workers, scheduler=exp.run.scheduler,
-            checkpoint=str(ckpt), progress=exp.run.progress,
-            settings={**exp.as_attrs(), "command": _command_line(args)}, stats=stats,
-        )
+        try:
+            ds = sweep()
+        except HarnessInputError as exc:
+            if explicit or "different run" not in str(exc):
+                raise
+            # The default checkpoint of an earlier, different sweep to the same file: start over.
+            print(f"note: discarding {ckpt} (checkpoint of a different sweep)", file=sys.stderr)
+            shutil.rmtree(ckpt)
+            ds = sweep()
     except KeyboardInterrupt:
         print(f"interrupted: finished points are kept in {ckpt}; rerun the same command to resume", file=sys.stderr)
         raise

@@ -158,3 +158,20 @@ def test_strobe_simulate_jacobian_write_files(tmp_path: Path, capsys) -> None:
     with xr.open_dataset(tmp_path / "j.nc") as ds:
         assert ds["J"].shape == (3, 2, 2)
     assert (tmp_path / "j.png").read_bytes()[:8] == PNG_MAGIC
+
+
+def test_stale_default_checkpoint_is_discarded_explicit_one_refused(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "s.nc"
+    stale = tmp_path / "s.nc.partial"
+    stale.mkdir()
+    (stale / "manifest.json").write_text('{"fingerprint": "another sweep"}')
+    argv = ["sweep", "--values", "0.5", "--mode", "fresh", "--transient", "5", "--samples", "3", "--backend", "serial",
+            "--out", str(out), "--no-plot", "--no-progress"]
+    code, _, err = _run_main(argv, capsys)
+    assert code == 0 and "discarding" in err and out.exists() and not stale.exists()
+
+    explicit = tmp_path / "mine"
+    explicit.mkdir()
+    (explicit / "manifest.json").write_text('{"fingerprint": "another sweep"}')
+    code, _, err = _run_main([*argv, "--checkpoint", str(explicit)], capsys)
+    assert code == 2 and "argument --checkpoint" in err and "different run" in err

@@ -1,0 +1,175 @@
+"""``impact-harness reproduce FIG --out DIR [--quick]``: the paper's figures, map vs FMU.
+
+Each target runs what it needs through the FMU (sweeps, Newton shooting, Jacobians), the
+maps through :mod:`mapcheck`, compares them with :mod:`mapcheck.compare`, and writes into
+DIR only: PNG figures, ``FIG.json`` (the numbers) and ``report.md`` (what was compared,
+the table, the verdict, the parameters).
+
+Targets (one module each, ``harness/repro_*.py``):
+
+* ``fig9``  -- windows of maximal period-M orbits: (64), the 2D map, the 2D map with
+  A~(sigma), and the ODE (FMU, Newton shooting + up/down scans); bifurcation diagrams.
+* ``fig6``, ``fig7`` -- J(x) of the FMU's map for Gamma = 10 ... 1e4 (r = 1, 0.9) with
+  fitted slopes, and the hysteretic period-3 -> period-1 transition at Gamma = 10, 1000.
+* ``fig1``  -- the map's bifurcation diagram at (alpha, gamma) = (0.25, 0.01) and the ODE's.
+* ``rescaling`` -- window shift soft compliant vs rigid wall against (1+r)^2/(1-r)^2.
+* ``direct`` -- one-step map prediction against the FMU's pre-impact map, error order in eps.
+
+``--quick`` gives a coarse version (under a minute on 2 cores); the default is the
+publication-quality run.
+"""
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import math
+import platform
+import time
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from .errors import HarnessInputError
+
+__all__ = ["TARGETS", "register", "cmd_reproduce", "run_target", "to_jsonable", "Context"]
+
+#: target -> module defining ``run(ctx) -> dict``.
+TARGETS: dict[str, str] = {
+    "fig9": "harness.repro_fig9",
+    "fig6": "harness.repro_fig67",
+    "fig7": "harness.repro_fig67",
+    "fig1": "harness.repro_fig1",
+    "rescaling": "harness.repro_rescaling",
+    "direct": "harness.repro_direct",
+}
+
+
+class Context:
+    """What a target needs: FMU, output directory, quality, workers, progress.
+
+    Attributes
+    ----------
+    target : str
+    out : Path
+        Output directory (created).
+    quick : bool
+    workers : int or None
+    progress : bool
+    fmu : FmuModel
+    """
+
+    def __init__(self, target: str, out: str | Path, quick: bool = False, workers: int | None = None,
+                 progress: bool = False, fmu_path: str | None = None) -> None:
+        from .config import default_fmu_path
+        from .fmi import FmuModel
+
+        self.target = target
+        self.out = Path(out)
+        self.out.mkdir(parents=True, exist_ok=True)
+        self.quick = bool(quick)
+        self.workers = workers
+        self.progress = progress
+        self.fmu = FmuModel(fmu_path or default_fmu_path(), "--fmu")
+        self.t_start = time.perf_counter()
+
+    def simulator(self):
+        """A fresh in-process FMU simulator (for shooting and Jacobians)."""
+        from .simulator import FmuSimulator
+
+        return FmuSimulator(self.fmu.source(), instance_name=f"reproduce-{self.target}")
+
+    def params(self, **overrides: Any) -> dict[str, Any]:
+        """The FMU's defaults with ``overrides`` (initial state removed)."""
+        p = self.fmu.defaults()
+        p.pop("u0", None)
+        p.pop("v0", None)
+        for k, v in overrides.items():
+            p[k] = self.fmu.coerce(k, v, k)
+        return p
+
+    def elapsed(self) -> float:
+        return time.perf_counter() - self.t_start
+
+
+def to_jsonable(obj: Any) -> Any:
+    """numpy scalars/arrays, tuples, inf/nan -> JSON (non-finite numbers -> null)."""
+    if isinstance(obj, Mapping):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return to_jsonable(obj.tolist())
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        return float(obj) if math.isfinite(float(obj)) else None
+    if isinstance(obj, (complex, np.complexfloating)):
+        return [to_jsonable(obj.real), to_jsonable(obj.imag)]
+    return obj
+
+
+def write_outputs(ctx: Context, result: Mapping[str, Any], report: str) -> tuple[Path, Path]:
+    """Write ``FIG.json`` and ``report.md`` into the output directory."""
+    from . import __version__
+
+    data = dict(result)
+    data.setdefault("run", {})
+    data["run"].update({
+        "target": ctx.target, "quick": ctx.quick, "runtime_s": round(ctx.elapsed(), 2),
+        "fmu": str(ctx.fmu.path), "fmu_sha256": ctx.fmu.sha256, "version": __version__,
+        "python": platform.python_version(),
+    })
+    jpath = ctx.out / f"{ctx.target}.json"
+    jpath.write_text(json.dumps(to_jsonable(data), indent=2) + "\n")
+    rpath = ctx.out / "report.md"
+    footer = (f"\n\n---\nRun: `impact-harness reproduce {ctx.target}{' --quick' if ctx.quick else ''} "
+              f"--out {ctx.out}`, {ctx.elapsed():.1f} s, FMU sha256 {ctx.fmu.sha256[:12]}, "
+              f"harness {__version__}. Numbers: `{jpath.name}`.\n")
+    rpath.write_text(report.rstrip() + footer)
+    return jpath, rpath
+
+
+def run_target(target: str, out: str | Path, quick: bool = False, workers: int | None = None,
+               progress: bool = False, fmu_path: str | None = None) -> dict[str, Any]:
+    """Run one reproduction; returns its result dict (also written to ``out``)."""
+    if target not in TARGETS:
+        raise HarnessInputError("FIG", f"unknown target {target!r}; choose from {', '.join(TARGETS)}")
+    ctx = Context(target, out, quick, workers, progress, fmu_path)
+    module = importlib.import_module(TARGETS[target])
+    result, report = module.run(ctx)
+    write_outputs(ctx, result, report)
+    return result
+
+
+def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
+    """Add the ``reproduce`` subcommand (picked up by :mod:`harness.cli`)."""
+    p = sub.add_parser(
+        "reproduce", help="reproduce a figure of the paper: FMU vs maps, with a report",
+        description="Run the FMU sweeps / shooting / Jacobians and the maps for one of the paper's figures, "
+        "compare them, and write PNG figures, FIG.json and report.md into --out.")
+    p.add_argument("figure", metavar="FIG", choices=sorted(TARGETS),
+                   help="one of: " + ", ".join(TARGETS))
+    p.add_argument("--out", "-o", metavar="DIR", help="output directory (default results/FIG)")
+    p.add_argument("--quick", action="store_true", help="coarse version (under a minute on 2 cores)")
+    p.add_argument("--workers", "-j", type=int, metavar="N", help="local worker processes for sweeps (default: all cores)")
+    p.add_argument("--fmu", metavar="PATH", help="FMU (default build/fmu/ImpactOscillator.fmu)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.set_defaults(func=cmd_reproduce)
+
+
+def cmd_reproduce(args: argparse.Namespace) -> int:
+    if args.workers is not None and args.workers < 1:
+        raise HarnessInputError("--workers", f"must be >= 1, got {args.workers}")
+    out = args.out or f"results/{args.figure}"
+    t0 = time.perf_counter()
+    result = run_target(args.figure, out, args.quick, args.workers, not args.no_progress, args.fmu)
+    verdict = result.get("verdict", "")
+    print(f"{args.figure}: {verdict}")
+    print(f"wrote {Path(out) / 'report.md'} and {Path(out) / (args.figure + '.json')} "
+          f"({time.perf_counter() - t0:.1f} s)")
+    return 0
+
+
+Runner = Callable[[Context], tuple[dict[str, Any], str]]

@@ -1,0 +1,205 @@
+"""Newton shooting on the FMU's stroboscopic map: periodic orbits and window edges.
+
+The map is the FMU's one-period map at the section phase ``theta`` (default 1/2: half a
+period away from the impacts near t = n, so every sample is out of contact).  It is
+written in coordinates relative to the wall-free orbit p(t) of (4), w = z - p(theta),
+a translation (same fixed points and multipliers) that makes continuation in sigma work:
+a change of sigma moves p(theta) by O(dsigma) while the impacting orbit lives within
+O(1e-3) of grazing, so continuing z itself would lose the impact on the first step.
+
+Edges of a stable window of maximal period-M orbits (one impact per period):
+
+* lower (flip): the largest multiplier of D(F^M) leaves the unit circle;
+* upper (graze): an extra contact appears in a non-impacting period (its maximal u
+  reaches 0), detected by the FMU's impact counter.
+
+Both are bracketed by marching in sigma from inside the window and bisected on "Newton
+converges to a stable maximal orbit" (:func:`window_edges`).  Newton itself is
+:func:`mapcheck.orbits.solve_periodic_orbit` (finite-difference Jacobian, restarts of the
+FMU from perturbed states).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from mapcheck.orbits import PeriodicOrbit, solve_periodic_orbit
+
+from .simulator import Simulator
+
+__all__ = ["StroboscopicMap", "Edge", "NEWTON", "good_orbit", "window_edges"]
+
+TWO_PI = 2.0 * math.pi
+
+#: Newton settings for the FMU map in w coordinates.  Scale (1e-2, 1e-1): the size of the
+#: impacting orbit's offset from p.  rel_h = 1e-4 -> difference steps (1e-6, 1e-5): the
+#: FMU's one-period error (~3e-11) then costs ~3e-5 in J, and the square-root curvature
+#: (x ~ 1e-3 from grazing) ~ h^2 x^(-5/2) ~ 3e-5 as well.  tol 1e-9 -> |F^M(w) - w| < 1e-10.
+NEWTON: dict[str, Any] = {"tol": 1e-9, "rel_h": 1e-4, "scale": np.array([1e-2, 1e-1]), "max_iter": 30}
+
+
+class StroboscopicMap:
+    """The FMU's one-period map at phase ``theta``, in coordinates w = z - p(theta).
+
+    Parameters
+    ----------
+    sim : Simulator
+        Restarted for every evaluation (``start`` at t0 = theta).
+    params : mapping
+        FMU parameters (sigma is set per call of :meth:`at`).
+    theta : float
+        Section phase; keep it away from the impacts (1/2).
+    """
+
+    def __init__(self, sim: Simulator, params: Mapping[str, Any], theta: float = 0.5) -> None:
+        self.sim = sim
+        self.params = {k: v for k, v in params.items() if k not in ("u0", "v0")}
+        self.theta = float(theta)
+        self.evaluations = 0
+
+    def offset(self, sigma: float) -> np.ndarray:
+        """p(theta) of (4) at this sigma."""
+        th = TWO_PI * self.theta
+        return np.array([(1.0 + sigma) * math.cos(th) - 1.0, -TWO_PI * (1.0 + sigma) * math.sin(th)])
+
+    def at(self, sigma: float) -> Callable[[float, float], tuple[float, float, int]]:
+        """The map at ``sigma`` as ``step(wu, wv) -> (wu1, wv1, wall entries)``."""
+        params = {**self.params, "sigma": float(sigma)}
+        off = self.offset(sigma)
+        t0 = self.theta
+
+        def step(wu: float, wv: float) -> tuple[float, float, int]:
+            self.sim.start(params, t0, (wu + off[0], wv + off[1]))
+            self.sim.advance(t0 + 1.0)
+            u, v, n = self.sim.read()
+            self.evaluations += 1
+            return u - off[0], v - off[1], n
+
+        return step
+
+    def iterate(self, sigma: float, w: np.ndarray, n: int) -> tuple[np.ndarray, int]:
+        """n periods in one run (no restarts) from w; returns (w_n, wall entries)."""
+        off = self.offset(sigma)
+        self.sim.start({**self.params, "sigma": float(sigma)}, self.theta, tuple(np.asarray(w) + off))
+        self.sim.advance(self.theta + n)
+        u, v, k = self.sim.read()
+        return np.array([u, v]) - off, k
+
+
+@dataclass
+class Edge:
+    """A window edge in sigma.
+
+    Attributes
+    ----------
+    sigma : float or None
+        Last sigma with a stable maximal orbit (None: the search range was reached).
+    kind : str
+        "flip"/"fold"/"torus" (stability), "graze" (extra contact), "no-impact", "lost"
+        (Newton found nothing), "range".
+    bracket : float
+        Width of the final bracket (the edge lies in [sigma, sigma +- bracket]).
+    multipliers : ndarray
+        Of the orbit at ``sigma``.
+    """
+
+    sigma: float | None
+    kind: str
+    bracket: float
+    multipliers: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
+
+
+def _kind(orb: PeriodicOrbit) -> str:
+    if not orb.converged:
+        return "lost"
+    if np.count_nonzero(orb.contacts) > 1 or orb.contacts.max() > 1:
+        return "graze"
+    if np.count_nonzero(orb.contacts) == 0:
+        return "no-impact"
+    m = orb.multipliers[np.argmax(np.abs(orb.multipliers))]
+    if abs(m.imag) > 1e-9:
+        return "torus"
+    return "flip" if m.real < 0 else "fold"
+
+
+def _rotate_to_impact(orb: PeriodicOrbit, M: int) -> np.ndarray:
+    """The orbit point right after its impacting period (the continuation's anchor)."""
+    return orb.z[(int(np.argmax(orb.contacts > 0)) + 1) % M]
+
+
+def good_orbit(smap: StroboscopicMap, M: int, sigma: float, guesses: list[np.ndarray | None]
+               ) -> tuple[bool, PeriodicOrbit | None]:
+    """Try Newton from each guess; True with the orbit if one converges to a stable maximal
+    period-M orbit, else False with the most informative failed orbit (a converged one)."""
+    step = smap.at(sigma)
+    failed: PeriodicOrbit | None = None
+    for g in guesses:
+        if g is None:
+            continue
+        orb = solve_periodic_orbit(step, g, M, **NEWTON)
+        if orb.maximal and orb.stable:
+            return True, orb
+        if failed is None or (orb.converged and not failed.converged):
+            failed = orb
+    return False, failed
+
+
+def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarray,
+                 guess_of: Callable[[float], np.ndarray | None], sigma_range: tuple[float, float],
+                 dp: float, xtol: float) -> tuple[Edge, Edge]:
+    """Lower and upper sigma-edges of the stable maximal period-M window containing
+    ``sigma_in``.
+
+    Parameters
+    ----------
+    smap : StroboscopicMap
+    M : int
+    sigma_in : float
+        A sigma inside the window; ``w_in`` a guess of the orbit there (w coordinates).
+    guess_of : callable
+        sigma -> a second guess (e.g. from the A~(sigma) map), tried when continuing the
+        last good orbit fails (Newton on a square-root map can jump to another branch).
+    sigma_range : (float, float)
+        Search limits; an edge not found inside is reported as ``Edge(None, "range")``.
+    dp : float
+        Marching step (smaller than the window).
+    xtol : float
+        Bisection tolerance in sigma.
+    """
+    ok, orb = good_orbit(smap, M, sigma_in, [w_in, guess_of(sigma_in)])
+    if not ok or orb is None:
+        raise ValueError(f"no stable maximal period-{M} orbit found at sigma = {sigma_in}")
+    edges = []
+    for direction, limit in ((-1.0, sigma_range[0]), (+1.0, sigma_range[1])):
+        s_good, o_good = sigma_in, orb
+        s_bad, o_bad = None, None
+        while s_bad is None:
+            s = s_good + direction * dp
+            if (s - limit) * direction > 0:
+                break
+            ok, o = good_orbit(smap, M, s, [_rotate_to_impact(o_good, M), guess_of(s)])
+            if ok:
+                s_good, o_good = s, o
+            else:
+                s_bad, o_bad = s, o
+        if s_bad is None:
+            edges.append(Edge(None, "range", abs(limit - s_good), o_good.multipliers))
+            continue
+        while abs(s_bad - s_good) > xtol:
+            s = 0.5 * (s_good + s_bad)
+            ok, o = good_orbit(smap, M, s, [_rotate_to_impact(o_good, M), guess_of(s)])
+            if ok:
+                s_good, o_good = s, o
+            else:
+                s_bad, o_bad = s, o
+        kind = _kind(o_bad) if o_bad is not None else "lost"
+        if kind == "lost":
+            # Newton found no orbit beyond the edge: iterate the last good orbit there and
+            # look at its contacts (an extra one in a non-impacting period: a graze)
+            _, n = smap.iterate(s_bad, _rotate_to_impact(o_good, M), M)
+            kind = "graze" if n > 1 else ("no-impact" if n == 0 else "lost")
+        edges.append(Edge(float(s_good), kind, abs(s_bad - s_good), o_good.multipliers))
+    return edges[0], edges[1]
