@@ -97,6 +97,9 @@ def jacobian_plot(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     if xs.size:
         ref = np.abs(dJ[:, 0, 0])[x > 0]
         axes[0].loglog(xs, ref[-1] * np.sqrt(xs[-1] / xs), "k--", lw=0.8, label="slope -1/2")
+        err = ds["error"].values[x > 0]
+        if np.any(err > 0):  # below this line an element is difference noise, not signal
+            axes[0].loglog(xs[err > 0], err[err > 0], ":", color="0.5", lw=1.2, label="estimated error of J")
     axes[0].set_xlabel("x (wall-free penetration at t = n)")
     axes[0].set_ylabel("|J - P|")
     axes[0].legend(fontsize=8)
