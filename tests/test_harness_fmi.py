@@ -157,3 +157,12 @@ def test_other_builds_with_the_same_variables_give_the_same_map(model: FmuModel,
     np.testing.assert_allclose(runs[1].v, runs[0].v, atol=1e-8)
     np.testing.assert_array_equal(runs[1].impacts, runs[0].impacts)
     assert runs[0].impacts.sum() > 0
+
+
+def test_benchmark_runs_the_bare_loop_and_the_harness_on_the_same_orbit() -> None:
+    from harness.benchmark import measure
+
+    r = measure(str(FMU), periods=40, repeat=1)
+    assert r["bare_s_per_period"] > 0 and r["harness_s_per_period"] > 0
+    # sanity, not speed: the harness does the same FMI calls, so it cannot be wildly slower
+    assert r["harness_s_per_period"] < 5 * r["bare_s_per_period"]

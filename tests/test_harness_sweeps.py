@@ -6,7 +6,6 @@ Expected windows come from the paper's 1D theory (FORMULAS.md section 6, eq (56)
 from __future__ import annotations
 
 import math
-import multiprocessing
 import os
 import signal
 import subprocess
@@ -174,14 +173,15 @@ def test_process_pool_loses_no_point_when_a_worker_dies(model: FmuModel) -> None
     killed: list[int] = []
 
     def killer() -> None:
-        # kill one pool worker once the pool is busy
+        # kill one worker of this backend's pool once both workers are up and busy
         deadline = time.time() + 60
         while time.time() < deadline and not killed:
-            children = [c for c in multiprocessing.active_children() if c.pid]
-            if len(children) >= 2:
-                time.sleep(1.0)  # let both start on their tasks
-                os.kill(children[0].pid, signal.SIGKILL)
-                killed.append(children[0].pid)
+            pool = backend._pool
+            procs = [p for p in (getattr(pool, "_processes", None) or {}).values() if p.pid and p.is_alive()]
+            if len(procs) >= 2:
+                time.sleep(1.0)  # let both start on their tasks (~0.2 s each)
+                os.kill(procs[0].pid, signal.SIGKILL)
+                killed.append(procs[0].pid)
             time.sleep(0.05)
 
     thread = threading.Thread(target=killer, daemon=True)
