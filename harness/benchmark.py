@@ -22,8 +22,10 @@ from .sampling import strobe
 from .simulator import FmuSimulator
 
 
-def bare_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, float], periods: int) -> float:
-    """Seconds for ``periods`` periods with fmpy's FMU2Slave driven by hand."""
+def bare_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, float],
+              periods: int) -> tuple[float, np.ndarray]:
+    """Seconds for ``periods`` periods with fmpy's FMU2Slave driven by hand, and the
+    (u, v, impacts) it read after each period."""
     from fmpy.fmi2 import FMU2Slave
 
     unzipdir, _ = open_source(model.source())
@@ -52,21 +54,24 @@ def bare_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, floa
         fmu.terminate()
     finally:
         fmu.freeInstance()
-    return elapsed
+    return elapsed, out
 
 
-def harness_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, float], periods: int) -> float:
-    """Seconds for ``periods`` sampled periods through :func:`harness.sampling.strobe`."""
+def harness_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, float],
+                 periods: int) -> tuple[float, np.ndarray]:
+    """Seconds for ``periods`` sampled periods through :func:`harness.sampling.strobe`, and
+    the samples (u, v, cumulative impacts)."""
     sim = FmuSimulator(model.source(), instance_name="bench")
     t0 = time.perf_counter()
-    strobe(sim, params, state0, theta=0.0, n_transient=0, n_samples=periods)
+    r = strobe(sim, params, state0, theta=0.0, n_transient=0, n_samples=periods)
     elapsed = time.perf_counter() - t0
     sim.close()
-    return elapsed
+    return elapsed, np.column_stack([r.u, r.v, np.cumsum(r.impacts)])
 
 
-def measure(fmu: str | None = None, periods: int = 2000, repeat: int = 5, sigma: float = 0.5) -> dict[str, float]:
-    """Best-of-``repeat`` seconds per period, bare and through the harness, and the overhead."""
+def measure(fmu: str | None = None, periods: int = 2000, repeat: int = 5, sigma: float = 0.5) -> dict[str, Any]:
+    """Best-of-``repeat`` seconds per period, bare and through the harness, and the overhead;
+    ``same_orbit`` says whether both loops read identical values (they must)."""
     model = FmuModel(fmu or default_fmu_path())
     params = model.defaults()
     params.pop("u0", None)
@@ -74,13 +79,17 @@ def measure(fmu: str | None = None, periods: int = 2000, repeat: int = 5, sigma:
     params["sigma"] = sigma
     state0 = (-1.0, 0.0)
     bare_runs, our_runs = [], []
+    same = True
     for _ in range(repeat):  # interleaved, so that load changes on a shared machine hit both
-        bare_runs.append(bare_loop(model, params, state0, periods))
-        our_runs.append(harness_loop(model, params, state0, periods))
+        t_bare, x_bare = bare_loop(model, params, state0, periods)
+        t_ours, x_ours = harness_loop(model, params, state0, periods)
+        bare_runs.append(t_bare)
+        our_runs.append(t_ours)
+        same = same and bool(np.array_equal(x_bare, x_ours))
     bare = min(bare_runs) / periods
     ours = min(our_runs) / periods
     return {"bare_s_per_period": bare, "harness_s_per_period": ours, "overhead_s_per_period": ours - bare,
-            "overhead_fraction": (ours - bare) / bare}
+            "overhead_fraction": (ours - bare) / bare, "same_orbit": same}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -94,6 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"bare FMU2Slave loop : {r['bare_s_per_period'] * 1e6:8.1f} us/period")
     print(f"harness strobe      : {r['harness_s_per_period'] * 1e6:8.1f} us/period")
     print(f"overhead            : {r['overhead_s_per_period'] * 1e6:8.1f} us/period ({100 * r['overhead_fraction']:.1f} %)")
+    print(f"same orbit          : {r['same_orbit']}")
     return 0
 
 

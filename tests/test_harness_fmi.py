@@ -164,5 +164,5 @@ def test_benchmark_runs_the_bare_loop_and_the_harness_on_the_same_orbit() -> Non
 
     r = measure(str(FMU), periods=40, repeat=1)
     assert r["bare_s_per_period"] > 0 and r["harness_s_per_period"] > 0
-    # sanity, not speed: the harness does the same FMI calls, so it cannot be wildly slower
-    assert r["harness_s_per_period"] < 5 * r["bare_s_per_period"]
+    # the comparison is fair only if both loops compute the very same thing
+    assert r["same_orbit"] is True
