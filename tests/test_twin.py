@@ -580,7 +580,41 @@ def test_only_sigma_is_tunable_after_initialisation(twin_fmu) -> None:
         s.close()
 
 
+def test_exit_guard_against_pythonfmu_use_after_free(twin_fmu: Path, tmp_path: Path) -> None:
+    """pythonfmu 0.7's binary writes into freed memory at process exit (see
+    ImpactOscillatorPy._guard_pythonfmu_exit; found with valgrind, an abort in about one pytest
+    process in twenty).  In a Python importer the twin must register one atexit handler per
+    loaded copy of its binary, and the process must exit cleanly."""
+    script = f"""
+import atexit, sys
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Slave
+md = read_model_description({str(twin_fmu)!r})
+before = atexit._ncallbacks()
+for copy in range(2):  # two extractions: two loaded copies of the binary
+    d = extract({str(twin_fmu)!r})
+    for _ in range(2):  # two instances of one copy: one handler for that copy
+        s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier="ImpactOscillatorPy",
+                      instanceName="exit")
+        s.instantiate()
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        s.doStep(0.0, 1.0)
+        s.terminate()
+        s.fmi2FreeInstance(s.component)  # the library stays loaded, as in a harness worker
+print("guarded", len(sys.modules["ImpactOscillatorPy"]._EXIT_GUARDED),
+      "handlers", atexit._ncallbacks() - before)
+"""
+    proc = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=120, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    guarded, handlers = (int(x) for x in proc.stdout.split()[1::2])
+    assert guarded == 2 and handlers >= 2, proc.stdout
+
+
 # ---------------------------------------------------------------------------------------------
+# a non-Python importer# ---------------------------------------------------------------------------------------------
 # a non-Python importer: the runtime needs stated in fmu_src/pytwin/README.md
 # ---------------------------------------------------------------------------------------------
 _C_IMPORTER = r"""

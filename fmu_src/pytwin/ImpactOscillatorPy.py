@@ -16,9 +16,12 @@ Build with ``python fmu_src/pytwin/build.py --out build/fmu/ImpactOscillatorPy.f
 """
 from __future__ import annotations
 
+import atexit
 import ctypes
 import math
+import os
 import sys
+from pathlib import Path
 from typing import Any, Optional
 from xml.etree.ElementTree import Element, SubElement
 
@@ -86,6 +89,48 @@ _INITIAL_UNKNOWNS = (
 )
 
 
+#: Binaries of this FMU whose exit-time clean-up is already arranged (one per loaded copy).
+_EXIT_GUARDED: set[str] = set()
+
+
+def _guard_pythonfmu_exit(resources: Optional[str]) -> None:
+    """Work around a use-after-free in pythonfmu 0.7's binary at process exit.
+
+    The binary keeps a global ``std::shared_ptr<PyState>``; C++ static destruction frees it at
+    exit, and then the library's ``__attribute__((destructor))`` (``onLibraryUnload`` ->
+    ``finalizePythonInterpreter``) assigns to it again, writing into freed heap memory
+    (valgrind: "Invalid read ... in finalizePythonInterpreter", a block freed by
+    ``__run_exit_handlers``).  The library is never unloaded before exit (its C++ unique symbols
+    make it undeletable), so every Python process that instantiated the FMU does this, and
+    about one in twenty aborts at exit ("corrupted double-linked list", exit status 134).
+
+    Calling the exported ``finalizePythonInterpreter`` once from a Python ``atexit`` handler
+    empties the global before the C++ destructors run, so both later steps see an empty
+    pointer.  Only where the importer is a Python process (``sys.orig_argv`` non-empty): when
+    pythonfmu itself started the interpreter (a non-Python importer), that same function
+    finalises Python, which must not be re-entered from an atexit handler.
+
+    Parameters
+    ----------
+    resources : str or None
+        The FMU's unpacked ``resources`` folder (pythonfmu's ``resources`` argument).
+    """
+    if not (sys.platform.startswith("linux") and getattr(sys, "orig_argv", None) and resources):
+        return
+    lib = str(Path(resources).resolve().parent / "binaries" / "linux64" / "ImpactOscillatorPy.so")
+    if lib in _EXIT_GUARDED:
+        return
+    _EXIT_GUARDED.add(lib)
+
+    def release() -> None:
+        try:  # RTLD_NOLOAD: only the copy that is loaded, never a fresh one at exit
+            ctypes.CDLL(lib, mode=os.RTLD_NOLOAD | os.RTLD_NOW).finalizePythonInterpreter()
+        except (OSError, AttributeError):
+            pass
+
+    atexit.register(release)
+
+
 class ImpactOscillatorPy(Fmi2Slave):
     """Driven oscillator with a rigid or compliant wall; CVODE (scikit-sundae) inside."""
 
@@ -106,6 +151,7 @@ class ImpactOscillatorPy(Fmi2Slave):
 
     def __init__(self, **kwargs: Any) -> None:
         super().__init__(**kwargs)
+        _guard_pythonfmu_exit(self.resources)
         self.model = OscillatorModel()
         self.driver: Optional[CvodeDriver] = None
         self.start_time = 0.0
