@@ -18,7 +18,7 @@ import shlex
 import sys
 from typing import Any, Sequence
 
-from .errors import FmuError, HarnessInputError
+from .errors import FmuError, FmuRejectedInput, HarnessInputError
 
 PROG = "impact-harness"
 
@@ -124,6 +124,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except HarnessInputError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except FmuRejectedInput as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     except FmuError as exc:

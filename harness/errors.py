@@ -27,3 +27,10 @@ class HarnessInputError(ValueError):
 
 class FmuError(RuntimeError):
     """The FMU itself failed (an fmi2Status of Error or Fatal during a run)."""
+
+
+class FmuRejectedInput(FmuError):
+    """The FMU refused the settings at initialization (e.g. a start inside a rigid wall).
+
+    Bad input, found by the FMU rather than by the harness: the CLI exits with status 2.
+    """

@@ -18,6 +18,7 @@ never to fmpy directly.  This module is the only place that knows about fmpy and
 from __future__ import annotations
 
 import atexit
+import collections
 import hashlib
 import os
 import shutil
@@ -299,32 +300,76 @@ def open_source(source: FmuSource) -> tuple[str, FmuModel]:
 # ----------------------------------------------------------------------------------------
 # Slaves: the version-specific part
 # ----------------------------------------------------------------------------------------
-class Fmi2Slave:
+_STATUS_NAMES = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
+
+
+class _LogMixin:
+    """The FMU's log messages, kept instead of printed, so errors can quote them."""
+
+    messages: collections.deque
+
+    def _log(self, status: int, category: bytes | str, message: bytes | str) -> None:
+        def text(x: bytes | str) -> str:
+            return x.decode("utf-8", "replace") if isinstance(x, bytes) else str(x)
+
+        self.messages.append((int(status), text(category), text(message)))
+
+    def last_error(self) -> str:
+        """The most recent message with status Warning or worse ('' if none)."""
+        for status, _, message in reversed(self.messages):
+            if status >= 1:
+                return message
+        return ""
+
+
+class Fmi2Slave(_LogMixin):
     """One FMI 2.0 Co-Simulation instance (fmpy's low-level ``FMU2Slave``).
 
-    The interface (``initialize``, ``reset``, ``set``, ``do_step``, ``getter``, ``close``)
-    is all the simulator uses; :class:`Fmi3Slave` provides the same methods.
+    The interface (``initialize``, ``reset``, ``set``, ``do_step``, ``getter``,
+    ``last_error``, ``close``) is all the simulator uses; :class:`Fmi3Slave` provides the
+    same methods.
     """
 
     def __init__(self, model: FmuModel, unzipdir: str, instance_name: str) -> None:
-        from fmpy.fmi2 import FMU2Slave
+        from ctypes import byref
 
+        from fmpy import calloc, free
+        from fmpy.fmi2 import (
+            FMU2Slave,
+            fmi2CallbackAllocateMemoryTYPE,
+            fmi2CallbackFreeMemoryTYPE,
+            fmi2CallbackFunctions,
+            fmi2CallbackLoggerTYPE,
+        )
+        from fmpy.logging import addLoggerProxy
+
+        self.messages = collections.deque(maxlen=50)
         self._fmu = FMU2Slave(
             guid=model.guid,
             unzipDirectory=unzipdir,
             modelIdentifier=model.model_identifier,
             instanceName=instance_name,
         )
-        self._fmu.instantiate(loggingOn=False)
-        self._initialized = False
+
+        def logger(env: Any, instance: Any, status: int, category: bytes, message: bytes) -> None:
+            self._log(status, category, message)
+
+        callbacks = fmi2CallbackFunctions()
+        callbacks.logger = fmi2CallbackLoggerTYPE(logger)
+        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        addLoggerProxy(byref(callbacks))  # formats the FMU's printf-style messages
+        self._callbacks = (callbacks, logger)  # must outlive the instance
+        self._fmu.instantiate(callbacks=callbacks, loggingOn=False)
+        self._needs_reset = False
 
     def initialize(self, t0: float, values: Mapping[VariableInfo, Any]) -> None:
         """setupExperiment(t0), enter initialization, set ``values``, exit initialization."""
+        self._needs_reset = True  # also after a failure part-way: reset is allowed in Error
         self._fmu.setupExperiment(startTime=t0)
         self._fmu.enterInitializationMode()
         self.set(values)
         self._fmu.exitInitializationMode()
-        self._initialized = True
 
     def set(self, values: Mapping[VariableInfo, Any]) -> None:
         """Set variables grouped by type (one FMI call per type)."""
@@ -345,9 +390,9 @@ class Fmi2Slave:
 
     def reset(self) -> None:
         """fmi2Reset: back to the instantiated state, instance and library kept."""
-        if self._initialized:
+        if self._needs_reset:
             self._fmu.reset()
-            self._initialized = False
+            self._needs_reset = False
 
     def do_step(self, t: float, h: float) -> None:
         self._fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
@@ -365,13 +410,15 @@ class Fmi2Slave:
 
     def close(self) -> None:
         try:
-            if self._initialized:
+            if self._needs_reset:
                 self._fmu.terminate()
+        except Exception:  # an instance in Error state cannot terminate; free it anyway
+            pass
         finally:
             self._fmu.freeInstance()
 
 
-class Fmi3Slave:
+class Fmi3Slave(_LogMixin):
     """One FMI 3.0 Co-Simulation instance (fmpy's ``FMU3Slave``), same interface as
     :class:`Fmi2Slave`.
 
@@ -382,20 +429,27 @@ class Fmi3Slave:
     def __init__(self, model: FmuModel, unzipdir: str, instance_name: str) -> None:
         from fmpy.fmi3 import FMU3Slave
 
+        self.messages = collections.deque(maxlen=50)
         self._fmu = FMU3Slave(
             guid=model.guid,
             unzipDirectory=unzipdir,
             modelIdentifier=model.model_identifier,
             instanceName=instance_name,
         )
-        self._fmu.instantiate(loggingOn=False, eventModeUsed=False, earlyReturnAllowed=False)
-        self._initialized = False
+
+        def log_message(env: Any, status: int, category: bytes, message: bytes) -> None:
+            self._log(status, category, message)
+
+        self._fmu.instantiate(loggingOn=False, eventModeUsed=False, earlyReturnAllowed=False,
+                              logMessage=log_message)
+        self._log_message = log_message  # keep the callback alive
+        self._needs_reset = False
 
     def initialize(self, t0: float, values: Mapping[VariableInfo, Any]) -> None:
+        self._needs_reset = True
         self._fmu.enterInitializationMode(startTime=t0)
         self.set(values)
         self._fmu.exitInitializationMode()
-        self._initialized = True
 
     _SETTERS = {"Float64": "setFloat64", "Float32": "setFloat32", "Int8": "setInt8", "Int16": "setInt16",
                 "Int32": "setInt32", "Int64": "setInt64", "UInt8": "setUInt8", "UInt16": "setUInt16",
@@ -415,9 +469,9 @@ class Fmi3Slave:
             getattr(self._fmu, setter)(vrs, [convert(x) for x in vals])
 
     def reset(self) -> None:
-        if self._initialized:
+        if self._needs_reset:
             self._fmu.reset()
-            self._initialized = False
+            self._needs_reset = False
 
     def do_step(self, t: float, h: float) -> None:
         target = t + h
@@ -438,8 +492,10 @@ class Fmi3Slave:
 
     def close(self) -> None:
         try:
-            if self._initialized:
+            if self._needs_reset:
                 self._fmu.terminate()
+        except Exception:  # an instance in Error state cannot terminate; free it anyway
+            pass
         finally:
             self._fmu.freeInstance()
 

@@ -38,7 +38,9 @@ TWO_PI = 2.0 * math.pi
 #: impacting orbit's offset from p.  rel_h = 1e-4 -> difference steps (1e-6, 1e-5): the
 #: FMU's one-period error (~3e-11) then costs ~3e-5 in J, and the square-root curvature
 #: (x ~ 1e-3 from grazing) ~ h^2 x^(-5/2) ~ 3e-5 as well.  tol 1e-9 -> |F^M(w) - w| < 1e-10.
-NEWTON: dict[str, Any] = {"tol": 1e-9, "rel_h": 1e-4, "scale": np.array([1e-2, 1e-1]), "max_iter": 30}
+#: max_iter 12: from a continued or map guess Newton converges in <= 6 iterations; a
+#: failing solve (beyond an edge) should not cost more than that.
+NEWTON: dict[str, Any] = {"tol": 1e-9, "rel_h": 1e-4, "scale": np.array([1e-2, 1e-1]), "max_iter": 12}
 
 
 class StroboscopicMap:

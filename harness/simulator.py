@@ -14,7 +14,7 @@ import math
 import threading
 from typing import Any, Callable, Mapping, Protocol, runtime_checkable
 
-from .errors import FmuError, HarnessInputError
+from .errors import FmuError, FmuRejectedInput, HarnessInputError
 from .fmi import (
     IMPACT_COUNTER,
     INITIAL_STATE,
@@ -91,11 +91,15 @@ class FmuSimulator:
             values[self.model.check_settable(name)] = value
         values[self._init_vars[0]] = float(state[0])
         values[self._init_vars[1]] = float(state[1])
-        self._slave.reset()
         try:
+            self._slave.reset()
             self._slave.initialize(float(t0), values)
         except Exception as exc:
-            raise FmuError(f"FMU initialization at t={t0} with {self._params} failed: {exc}") from exc
+            said = self._slave.last_error()
+            raise FmuRejectedInput(
+                f"the FMU rejected the settings at initialization (t0 = {t0}, u0 = {state[0]}, v0 = {state[1]}): "
+                + (said or str(exc))
+            ) from exc
         self.time = float(t0)
 
     def advance(self, t: float) -> None:
@@ -106,7 +110,8 @@ class FmuSimulator:
             try:
                 self._slave.do_step(self.time, t_next - self.time)
             except Exception as exc:
-                raise FmuError(f"FMU doStep from t={self.time} to t={t_next} failed: {exc}") from exc
+                said = self._slave.last_error()
+                raise FmuError(f"doStep from t = {self.time} to {t_next} failed: {said or exc}") from exc
             self.time = t_next
 
     def set_parameter(self, name: str, value: Any) -> None:

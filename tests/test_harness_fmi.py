@@ -166,3 +166,17 @@ def test_benchmark_runs_the_bare_loop_and_the_harness_on_the_same_orbit() -> Non
     assert r["bare_s_per_period"] > 0 and r["harness_s_per_period"] > 0
     # the comparison is fair only if both loops compute the very same thing
     assert r["same_orbit"] is True
+
+
+def test_rejected_initialization_is_reported_and_the_instance_recovers(model: FmuModel) -> None:
+    """A start inside the rigid wall is refused by the FMU: the error quotes the FMU's own log
+    message, and the same instance then runs the next (valid) start normally."""
+    from harness.errors import FmuRejectedInput
+
+    sim = FmuSimulator(model.source())
+    with pytest.raises(FmuRejectedInput, match="rigid wall"):
+        strobe(sim, _params(model, wall=2), (0.01, 0.0), theta=0.0, n_transient=0, n_samples=2)
+    good = strobe(sim, _params(model, wall=2, sigma=8.0), (-1.0, 0.3), theta=0.37, n_transient=0, n_samples=5)
+    fresh = strobe(FmuSimulator(model.source(), instance_name="other"), _params(model, wall=2, sigma=8.0),
+                   (-1.0, 0.3), theta=0.37, n_transient=0, n_samples=5)
+    np.testing.assert_array_equal(good.u, fresh.u)
