@@ -6,8 +6,9 @@ later ``harness/reproduce.py``) are picked up when they exist.  A command module
 ``register(subparsers, parents)``, which adds its parser(s) with ``set_defaults(func=...)``;
 ``func(args)`` returns the exit status.
 
-Exit status: 0 success, 1 the FMU or a run failed, 2 bad input (a one-line message naming
-the argument, never a traceback), 130 interrupted.
+Exit status: 0 success, 1 the FMU failed during a run, 2 bad input (a one-line message
+naming the argument, or quoting the FMU when it refuses the settings at initialization;
+never a traceback), 130 interrupted.
 """
 from __future__ import annotations
 

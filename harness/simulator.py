@@ -132,6 +132,11 @@ class FmuSimulator:
         (n,) = self._get_impacts()
         return float(u), float(v), int(n) + self._impact_offset
 
+    @property
+    def messages(self) -> list[tuple[int, str, str]]:
+        """The FMU's recent log messages (status, category, text), newest last."""
+        return list(self._slave.messages)
+
     def close(self) -> None:
         self._slave.close()
 
