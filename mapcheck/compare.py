@@ -1,0 +1,250 @@
+"""Map vs ODE (FMU) comparisons: window tables, coordinates, fits and report tables.
+
+The harness measures (sweep Datasets, shooting edges, Jacobians); this module holds the
+comparison logic, so that it can be tested without the FMU:
+
+* coordinates: the FMU samples the real state at t = n + theta; the maps' state is the
+  pre-impact ("virtual") state at t = n (FORMULAS.md section 3), related by the free
+  propagator (8).  :func:`virtual_to_phase`, :func:`phase_to_natural`.
+* Figure 9 windows: :func:`theory_windows` (the maps, from :mod:`mapcheck.fig9`),
+  :func:`sweep_windows` (runs of maximal period-M orbits in an up or down scan),
+  :func:`maximal_orbit_guess` (the A~(sigma) map's orbit as a starting guess for shooting),
+  :func:`window_differences`, :func:`best_variant`, :func:`markdown_window_table`.
+* fits: :func:`loglog_slope` (Jacobian slopes, orders of errors).
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from .coeffs import Coefficients
+from .linear import propagator
+from .maps import from_natural, to_natural
+from .windows import MapParams, maximal_orbits
+
+__all__ = [
+    "VARIANTS",
+    "wall_free_state",
+    "virtual_to_phase",
+    "phase_to_natural",
+    "maximal_orbit_guess",
+    "theory_windows",
+    "sweep_windows",
+    "window_differences",
+    "scan_confirmation",
+    "best_variant",
+    "markdown_window_table",
+    "loglog_slope",
+]
+
+TWO_PI = 2.0 * math.pi
+
+#: The map variants of Figure 9's table (key in ``fig9.json`` -> (fig9_windows key, label)).
+VARIANTS: dict[str, tuple[str, str]] = {
+    "theory_64": ("64", "(64), rho(sigma) from (48)"),
+    "map": ("2d", "2D map (37)/(38) with (48)"),
+    "map_A_tilde": ("2d_tilde", "2D map (37)/(38) with (48), A~(sigma)"),
+}
+
+Windows = dict[int, "tuple[float, float | None] | None"]
+
+
+# ----------------------------------------------------------------------------------------
+# Coordinates
+# ----------------------------------------------------------------------------------------
+def wall_free_state(sigma: float, t: float) -> np.ndarray:
+    """(p, p') of (4): p(t) = (1 + sigma) cos(2 pi t) - 1, the wall-free periodic orbit."""
+    return np.array([(1.0 + sigma) * math.cos(TWO_PI * t) - 1.0,
+                     -TWO_PI * (1.0 + sigma) * math.sin(TWO_PI * t)])
+
+
+def virtual_to_phase(z: Sequence[float], sigma: float, nu: float, Omega: float, dt: float) -> np.ndarray:
+    """Free-propagate a state at t = n by ``dt`` (either sign), equation (8):
+    u(n + dt) = P(dt) [u(n) - p(n)] + p(n + dt).
+
+    With ``dt = -1/2`` a virtual state at t = n (the maps' state) becomes the real state at
+    n - 1/2, before the impact near n; with ``dt = 1 - theta`` a real state sampled at
+    n + theta (after the impact near n) becomes the virtual state at n + 1.
+    """
+    z = np.asarray(z, dtype=float)
+    return propagator(dt, nu, Omega) @ (z - wall_free_state(sigma, 0.0)) + wall_free_state(sigma, dt)
+
+
+def phase_to_natural(u, v, sigma, c: Coefficients, theta: float = 0.5, variant: str = "tilde"):
+    """Natural coordinates (33)/(34) of FMU samples taken at t = n + theta.
+
+    Each sample (taken between impacts) is propagated freely to the virtual state at
+    n + 1 and mapped by (33)/(34), with A or A~(sigma) (``variant``), so that ODE and map
+    bifurcation diagrams share their axes.  Vectorized over u, v (sigma broadcast).
+    """
+    u, v, sigma = np.broadcast_arrays(np.asarray(u, float), np.asarray(v, float), np.asarray(sigma, float))
+    P = propagator(1.0 - theta, c.nu, c.Omega)
+    pu0, pv0 = (1.0 + sigma) * math.cos(TWO_PI * theta) - 1.0, -TWO_PI * (1.0 + sigma) * math.sin(TWO_PI * theta)
+    du, dv = u - pu0, v - pv0
+    uu = P[0, 0] * du + P[0, 1] * dv + sigma  # p(n+1) = (sigma, 0)
+    vv = P[1, 0] * du + P[1, 1] * dv
+    return to_natural(uu, vv, sigma, c, variant)
+
+
+def maximal_orbit_guess(c: Coefficients, M: int, sigma: float, variant: str = "tilde") -> np.ndarray | None:
+    """Virtual state (u, v) at t = n of the stable maximal period-M orbit of (37)/(38)
+    at ``sigma`` (rho from (48), with A~(sigma) for ``variant="tilde"``), at the point
+    right after the impacting step (x_1 < 0 for M > 1); None if there is none.
+
+    Inverse coordinates (35) with the exact inverse of (33).
+    """
+    p = MapParams.from_coefficients(c)
+    orb = maximal_orbits(p, M, c.rho(np.array([sigma]), variant))
+    stable = orb.stable[:, 0]
+    if not np.any(stable):
+        return None
+    k = int(np.argmax(stable))
+    u, v = from_natural(orb.x[k, 0, 0], orb.y[k, 0, 0], sigma, c, variant)
+    return np.array([float(u), float(v)])
+
+
+# ----------------------------------------------------------------------------------------
+# Window tables
+# ----------------------------------------------------------------------------------------
+def _clean(w: Any) -> "tuple[float, float | None] | None":
+    if w is None:
+        return None
+    if isinstance(w[0], tuple):  # several windows of one period: keep the widest
+        w = max(w, key=lambda e: e[1] - e[0])
+    lo, hi = float(w[0]), float(w[1])
+    return (lo, None if not math.isfinite(hi) else hi)
+
+
+def theory_windows(M_max: int = 4) -> dict[str, Windows]:
+    """The three map predictions of Figure 9's window edges in sigma.
+
+    Returns
+    -------
+    dict
+        ``{"theory_64": {M: (lo, hi)}, "map": ..., "map_A_tilde": ...}``; ``hi = None``
+        where a window has no upper edge (M = 1).  (64) with rho(sigma) of (48); the 2D map
+        (37)/(38) with (48) and rho linear in sigma; the same with |A~(sigma)| in rho.
+    """
+    from .fig9 import fig9_windows
+
+    res = fig9_windows(M_max=M_max)
+    return {name: {M: _clean(res[key][M]) for M in range(1, M_max + 1)} for name, (key, _) in VARIANTS.items()}
+
+
+def sweep_windows(values: np.ndarray, period: np.ndarray, impacts: np.ndarray) -> dict[int, tuple[float, float]]:
+    """Windows of maximal period-M orbits (period M, one impact per period) seen in a scan.
+
+    Parameters
+    ----------
+    values : ndarray (K,)
+        Sorted sigma grid.
+    period, impacts : ndarray of int (K,)
+        The harness's classification at each grid point (``period``, ``orbit_impacts``).
+
+    Returns
+    -------
+    dict
+        M -> (lowest, highest) sigma of the longest run of maximal period-M points.
+        Grid points only: the true edge lies within one grid step outside.
+    """
+    values = np.asarray(values, dtype=float)
+    keep = (np.asarray(period) > 0) & (np.asarray(impacts) == 1)
+    best: dict[int, tuple[int, float, float]] = {}
+    k = 0
+    while k < len(values):
+        if not keep[k]:
+            k += 1
+            continue
+        j = k
+        while j + 1 < len(values) and keep[j + 1] and period[j + 1] == period[k]:
+            j += 1
+        M = int(period[k])
+        if M not in best or j - k + 1 > best[M][0]:
+            best[M] = (j - k + 1, float(values[k]), float(values[j]))
+        k = j + 1
+    return {M: (lo, hi) for M, (_, lo, hi) in sorted(best.items())}
+
+
+def scan_confirmation(shooting: Windows, up: Mapping[int, tuple[float, float]],
+                      down: Mapping[int, tuple[float, float]]) -> dict[int, dict[str, float | None]]:
+    """Compare shooting edges with quasi-static scans.
+
+    The lower edge is compared with the lowest maximal period-M point of the down scan,
+    the upper edge with the highest of the up scan (the order in which a continuation
+    reaches them; M = 1 and M = 2 overlap with hysteresis).  Differences are scan minus
+    shooting: >= -(grid step) if the scans never see a stable maximal orbit where the
+    shooting finds none.
+    """
+    out: dict[int, dict[str, float | None]] = {}
+    for M, w in shooting.items():
+        if w is None:
+            continue
+        lo_scan = down.get(M, (None, None))[0]
+        hi_scan = up.get(M, (None, None))[1] if w[1] is not None else None
+        out[M] = {
+            "scan_lower": lo_scan, "scan_upper": hi_scan,
+            "lower_minus_shooting": None if lo_scan is None else lo_scan - w[0],
+            "upper_minus_shooting": None if (hi_scan is None or w[1] is None) else hi_scan - w[1],
+        }
+    return out
+
+
+def window_differences(reference: Windows, other: Windows) -> dict[int, tuple[float | None, float | None]]:
+    """Per period, (other - reference) at the lower and upper edges (None where either is
+    missing or unbounded)."""
+    out: dict[int, tuple[float | None, float | None]] = {}
+    for M, ref in reference.items():
+        w = other.get(M)
+        if ref is None or w is None:
+            out[M] = (None, None)
+            continue
+        dlo = w[0] - ref[0]
+        dhi = None if (ref[1] is None or w[1] is None) else w[1] - ref[1]
+        out[M] = (dlo, dhi)
+    return out
+
+
+def best_variant(ode: Windows, variants: Mapping[str, Windows]) -> tuple[str, dict[str, float]]:
+    """The variant whose edges are closest to the ODE's (largest absolute difference over
+    every finite edge); returns (name, {name: max |difference|})."""
+    score: dict[str, float] = {}
+    for name, w in variants.items():
+        diffs = [abs(d) for pair in window_differences(ode, w).values() for d in pair if d is not None]
+        missing = sum(1 for M in ode if ode[M] is not None and w.get(M) is None)
+        score[name] = math.inf if missing else (max(diffs) if diffs else math.inf)
+    return min(score, key=score.get), score
+
+
+def _fmt_window(w: Any, digits: int = 4) -> str:
+    if w is None:
+        return "none"
+    hi = "none (no upper edge)" if w[1] is None else f"{w[1]:.{digits}f}"
+    return f"[{w[0]:.{digits}f}, {hi}]"
+
+
+def markdown_window_table(rows: Mapping[str, Windows], labels: Mapping[str, str] | None = None,
+                          digits: int = 4) -> str:
+    """Markdown table: one row per source, one column per period M."""
+    Ms = sorted({M for w in rows.values() for M in w})
+    head = "| source | " + " | ".join(f"M = {M}" for M in Ms) + " |"
+    sep = "|---|" + "---|" * len(Ms)
+    lines = [head, sep]
+    for name, w in rows.items():
+        label = (labels or {}).get(name, name)
+        lines.append(f"| {label} | " + " | ".join(_fmt_window(w.get(M), digits) for M in Ms) + " |")
+    return "\n".join(lines)
+
+
+# ----------------------------------------------------------------------------------------
+# Fits
+# ----------------------------------------------------------------------------------------
+def loglog_slope(x: Sequence[float], y: Sequence[float]) -> float:
+    """Least-squares slope of log|y| against log x (power-law exponent)."""
+    x = np.asarray(x, dtype=float)
+    y = np.abs(np.asarray(y, dtype=float))
+    ok = (x > 0) & (y > 0) & np.isfinite(y)
+    if np.count_nonzero(ok) < 2:
+        return math.nan
+    return float(np.polyfit(np.log(x[ok]), np.log(y[ok]), 1)[0])
