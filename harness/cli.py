@@ -109,9 +109,17 @@ def build_parser() -> argparse.ArgumentParser:
         except ModuleNotFoundError as exc:
             if exc.name == name:
                 continue  # not written yet
-            raise
+            _warn_plugin(name, exc)
+            continue
+        except Exception as exc:  # a broken add-on must not take the other commands down
+            _warn_plugin(name, exc)
+            continue
         module.register(sub, parents)
     return parser
+
+
+def _warn_plugin(name: str, exc: BaseException) -> None:
+    print(f"{PROG}: warning: commands of {name} unavailable ({type(exc).__name__}: {exc})", file=sys.stderr)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
