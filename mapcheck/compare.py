@@ -28,6 +28,7 @@ __all__ = [
     "VARIANTS",
     "wall_free_state",
     "virtual_to_phase",
+    "free_flight",
     "phase_to_natural",
     "maximal_orbit_guess",
     "theory_windows",
@@ -37,6 +38,9 @@ __all__ = [
     "best_variant",
     "markdown_window_table",
     "loglog_slope",
+    "scaled_state",
+    "map_one_step_error",
+    "natural_distance",
 ]
 
 TWO_PI = 2.0 * math.pi
@@ -60,6 +64,13 @@ def wall_free_state(sigma: float, t: float) -> np.ndarray:
                      -TWO_PI * (1.0 + sigma) * math.sin(TWO_PI * t)])
 
 
+def free_flight(z: Sequence[float], sigma: float, nu: float, Omega: float, t0: float, t1: float) -> np.ndarray:
+    """Wall-free propagation (8) of the state z at time t0 to t1 (either order):
+    u(t1) = P(t1 - t0) [u(t0) - p(t0)] + p(t1)."""
+    z = np.asarray(z, dtype=float)
+    return propagator(t1 - t0, nu, Omega) @ (z - wall_free_state(sigma, t0)) + wall_free_state(sigma, t1)
+
+
 def virtual_to_phase(z: Sequence[float], sigma: float, nu: float, Omega: float, dt: float) -> np.ndarray:
     """Free-propagate a state at t = n by ``dt`` (either sign), equation (8):
     u(n + dt) = P(dt) [u(n) - p(n)] + p(n + dt).
@@ -68,8 +79,7 @@ def virtual_to_phase(z: Sequence[float], sigma: float, nu: float, Omega: float, 
     n - 1/2, before the impact near n; with ``dt = 1 - theta`` a real state sampled at
     n + theta (after the impact near n) becomes the virtual state at n + 1.
     """
-    z = np.asarray(z, dtype=float)
-    return propagator(dt, nu, Omega) @ (z - wall_free_state(sigma, 0.0)) + wall_free_state(sigma, dt)
+    return free_flight(z, sigma, nu, Omega, 0.0, dt)
 
 
 def phase_to_natural(u, v, sigma, c: Coefficients, theta: float = 0.5, variant: str = "tilde"):
@@ -248,3 +258,44 @@ def loglog_slope(x: Sequence[float], y: Sequence[float]) -> float:
     if np.count_nonzero(ok) < 2:
         return math.nan
     return float(np.polyfit(np.log(x[ok]), np.log(y[ok]), 1)[0])
+
+
+# ----------------------------------------------------------------------------------------
+# Direct state comparison (item 6)
+# ----------------------------------------------------------------------------------------
+def scaled_state(eps: float, direction: Sequence[float], c: Coefficients) -> tuple[float, float, float]:
+    """The physical state (u, v, sigma) at (x, y, rho) = l eps (a, b, s) in natural coordinates.
+
+    The map (37)/(38) is an expansion in the size of (x, y, rho); its error is
+    O(eps^(3/2)) (FORMULAS.md section 4).  The factor l of (36) makes eps the same physical
+    size for every wall (chi = x / l ~ eps: impact velocity ~ sqrt(eps)); l differs by
+    (1+r)^2/(1-r)^2 between the rigid (39) and the compliant (48) map.  Inverse (35) (exact
+    inverse of (33)) with A; sigma = rho / (rho/sigma) of (39)/(48).
+    """
+    a, b, s = direction
+    sigma = s * c.l * eps / c.rho_per_sigma
+    u, v = from_natural(a * c.l * eps, b * c.l * eps, sigma, c, "paper")
+    return float(u), float(v), float(sigma)
+
+
+def map_one_step_error(u: float, v: float, sigma: float, u1_ode: float, v1_ode: float,
+                       c: Coefficients, variant: str = "paper") -> float:
+    """|natural coordinates of the map's image - those of the ODE's image| / l.
+
+    The map is (31)/(32) in physical coordinates (with L from (26)-(30), r_eff of ``c``);
+    both images are expressed in the natural coordinates (33)/(34), where the state is
+    O(eps) and the map's error is O(eps^(3/2)) (FORMULAS.md section 4); divided by l (36)
+    so that the error is in the units of chi for every wall.
+    """
+    from .maps import physical_map
+
+    um, vm = physical_map(u, v, sigma, c, variant)
+    return natural_distance((um, vm), (u1_ode, v1_ode), sigma, c, variant)
+
+
+def natural_distance(za: Sequence[float], zb: Sequence[float], sigma: float, c: Coefficients,
+                     variant: str = "paper") -> float:
+    """max(|x_a - x_b|, |y_a - y_b|) / l of two physical states in natural coordinates (33)/(34)."""
+    xa, ya = to_natural(za[0], za[1], sigma, c, variant)
+    xb, yb = to_natural(zb[0], zb[1], sigma, c, variant)
+    return float(max(abs(xa - xb), abs(ya - yb))) / c.l
