@@ -6,11 +6,11 @@ and the CVODE driver live in ``impact_twin_model.py`` (bundled into the FMU's re
 is only the FMI face.
 
 Error reporting: pythonfmu turns *any* Python exception raised in a callback into
-``fmi2Fatal`` (``PySlaveInstance::handle_py_exception`` throws ``cppfmu::FatalError``), with
-the exception's repr in the logged message; it has no way to return ``fmi2Error``.  The twin
-therefore logs a clear ``fmi2Error`` message first (delivered through the importer's logger)
-and then raises, so a rejected parameter stops the importer just as the C FMU's
-``fmi2Error`` does, with the same wording.
+``fmi2Fatal`` (``PySlaveInstance::handle_py_exception`` throws ``cppfmu::FatalError``); it has
+no way to return ``fmi2Error``.  The twin therefore logs a clear message with status
+``fmi2Error`` first (through the importer's logger when logging is on, and on stderr), then
+raises, so a rejected parameter stops the importer as the C FMU's ``fmi2Error`` does, with the
+same wording; and it keeps the instance usable afterwards (see ``ImpactOscillatorPy._reject``).
 
 Build with ``python fmu_src/pytwin/build.py --out build/fmu/ImpactOscillatorPy.fmu``.
 """
@@ -26,9 +26,8 @@ from typing import Any, Optional
 from xml.etree.ElementTree import Element, SubElement
 
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
-from pythonfmu.enums import Fmi2Status
 from pythonfmu.default_experiment import DefaultExperiment
-from pythonfmu.enums import Fmi2Initial
+from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real
 
 from impact_twin_model import (
@@ -100,9 +99,10 @@ def _guard_pythonfmu_exit(resources: Optional[str]) -> None:
     exit, and then the library's ``__attribute__((destructor))`` (``onLibraryUnload`` ->
     ``finalizePythonInterpreter``) assigns to it again, writing into freed heap memory
     (valgrind: "Invalid read ... in finalizePythonInterpreter", a block freed by
-    ``__run_exit_handlers``).  The library is never unloaded before exit (its C++ unique symbols
-    make it undeletable), so every Python process that instantiated the FMU does this, and
-    about one in twenty aborts at exit ("corrupted double-linked list", exit status 134).
+    ``__run_exit_handlers``).  The library is never unloaded before exit (13 STB_GNU_UNIQUE
+    symbols make it undeletable; it stays mapped after fmi2FreeInstance and dlclose), so every
+    Python process that instantiated the FMU does this; in our pytest runs about one process in
+    fifteen to twenty aborted at exit ("corrupted double-linked list", exit status 134).
 
     Calling the exported ``finalizePythonInterpreter`` once from a Python ``atexit`` handler
     empties the global before the C++ destructors run, so both later steps see an empty
