@@ -284,17 +284,24 @@ def test_twin_agrees_with_c_fmu_over_50_periods(twin_fmu, c_fmu, wall, sigma, li
         assert c_counts[-1] > 0, "the case was meant to hit the wall"
 
 
-@pytest.mark.xfail(reason="C FMU: chatter on the rigid wall is left to CVODE down to rebound "
-                   "speeds of 1e-9, whose flights (height s^2/2a ~ 1e-20) lie far below its "
-                   "tolerance; it stops with 'could not locate a wall crossing stepped over'. "
-                   "The twin sums that tail in closed form (impact_twin_model._rigid_impact).",
-                   strict=False)
 def test_twin_agrees_with_c_fmu_through_chatter_and_sticking(twin_fmu, c_fmu) -> None:
-    params = dict(wall=WALLS["rigid"], sigma=0.3, r=0.5, **FIG9)
-    t_states, t_counts, _ = harness_strobe(twin_fmu, params, THETA, (0.0, -0.1), 10)
-    c_states, c_counts, _ = harness_strobe(c_fmu, params, THETA, (0.0, -0.1), 10)
+    """Rigid wall, r = 0.5, released at the wall while the drive pushes in: chatter, sticking,
+    release.  States agree after the release (both stick at u = v = 0 and release at the same
+    zero of the wall force).  The impact counts of a Zeno sequence depend on where it is
+    truncated: the twin sums the unresolvable tail in closed form and matches the oracle
+    exactly; the C FMU resolves it with CVODE (observed: one impact fewer), so the two must
+    agree to within one decade of impact velocity, the C FMU's own tolerance against the
+    oracle."""
+    sigma, r, state = 0.3, 0.5, (0.0, -0.1)
+    params = dict(wall=WALLS["rigid"], sigma=sigma, r=r, **FIG9)
+    t_states, t_counts, _ = harness_strobe(twin_fmu, params, THETA, state, 10)
+    c_states, c_counts, _ = harness_strobe(c_fmu, params, THETA, state, 10)
     assert np.max(np.abs(t_states - c_states)) <= 1e-7
-    np.testing.assert_array_equal(t_counts, c_counts)
+    osc = ExactOscillator(FIG9["nu"], FIG9["Omega"], sigma, r=r, wall="rigid")
+    _, exact_counts = osc.strobe(*state, THETA + np.arange(1, 11), THETA)
+    np.testing.assert_array_equal(t_counts, exact_counts)
+    decade = math.log(10) / math.log(1 / r)
+    assert np.all(np.abs(t_counts - c_counts) <= decade), (t_counts, c_counts)
 
 
 def test_twin_agrees_with_c_fmu_when_sigma_is_tuned_mid_run(twin_fmu, c_fmu) -> None:
