@@ -30,13 +30,7 @@ from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real
 
-from impact_twin_model import (
-    MODE_FREE,
-    CvodeDriver,
-    ModelError,
-    OscillatorModel,
-    SolverError,
-)
+from impact_twin_model import MODE_FREE, CvodeDriver, ModelError, OscillatorModel
 
 # (name, description, extra attributes of the type element) in value-reference order 0..16:
 # copied from the C FMU's modelDescription.xml, which is the reference.
