@@ -300,9 +300,6 @@ def open_source(source: FmuSource) -> tuple[str, FmuModel]:
 # ----------------------------------------------------------------------------------------
 # Slaves: the version-specific part
 # ----------------------------------------------------------------------------------------
-_STATUS_NAMES = ("OK", "Warning", "Discard", "Error", "Fatal", "Pending")
-
-
 class _LogMixin:
     """The FMU's log messages, kept instead of printed, so errors can quote them."""
 

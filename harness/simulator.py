@@ -138,7 +138,14 @@ class FmuSimulator:
         return list(self._slave.messages)
 
     def close(self) -> None:
+        """Terminate and free the FMU instance."""
         self._slave.close()
+
+    def __enter__(self) -> "FmuSimulator":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
 
 OneStepMap = Callable[[float, float, float, Mapping[str, Any]], tuple[float, float, int]]
