@@ -84,3 +84,16 @@ def test_continuation_through_tunable_sigma_equals_oracle(model, sim) -> None:
     np.testing.assert_allclose(second.u, s2[:, 0], atol=1e-8)
     np.testing.assert_allclose(second.v, s2[:, 1], atol=1e-8)
     assert sim.restarts == 0, "sigma is tunable: no restart is needed"
+
+
+def test_time_series_equals_oracle(model, sim) -> None:
+    """simulate(): u, v on a fine grid through several impacts, and the cumulative count."""
+    from harness import simulate
+
+    p = _params(model, sigma=0.5)
+    out = simulate(sim, p, (-1.0, 0.3), t0=0.2, t_end=6.2, dt=0.05)
+    states, cumulative = _oracle(p).strobe(-1.0, 0.3, out["t"], t0=0.2)
+    np.testing.assert_allclose(out["u"], states[:, 0], atol=1e-8)
+    np.testing.assert_allclose(out["v"], states[:, 1], atol=1e-7)
+    np.testing.assert_array_equal(out["impacts"], cumulative)
+    assert cumulative[-1] >= 3
