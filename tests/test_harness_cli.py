@@ -178,3 +178,22 @@ def test_stale_default_checkpoint_is_discarded_explicit_one_refused(tmp_path: Pa
     (explicit / "manifest.json").write_text('{"fingerprint": "another sweep"}')
     code, _, err = _run_main([*argv, "--checkpoint", str(explicit)], capsys)
     assert code == 2 and "argument --checkpoint" in err and "different run" in err
+
+
+def test_default_sweep_shows_the_period_adding_windows(tmp_path: Path, capsys) -> None:
+    """The default `impact-harness sweep` (Figure 9, up and down), on a coarser grid: in both
+    directions the maximal orbits come as period 1, 2, 3 with decreasing sigma."""
+    from harness.classify import windows
+
+    out = tmp_path / "default.nc"
+    code, stdout, err = _run_main(["sweep", "--num", "19", "--workers", "2", "--out", str(out), "--no-progress"], capsys)
+    assert code == 0, err
+    assert out.with_suffix(".png").read_bytes()[:8] == PNG_MAGIC
+    with xr.open_dataset(out) as ds:
+        assert list(ds["direction"].values) == ["up", "down"]
+        assert ds.attrs["model.Gamma"] == 10.0 and ds.attrs["model.wall"] == 1  # the FMU's defaults
+        for direction in ("up", "down"):
+            sel = ds.sel(direction=direction)
+            found = windows(ds["sigma"].values, sel["period"].values, sel["orbit_impacts"].values)
+            by_decreasing_sigma = [m for m, lo, hi in sorted(found, key=lambda w: -w[2]) if m <= 3]
+            assert by_decreasing_sigma == [1, 2, 3], (direction, found)
