@@ -21,9 +21,24 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Callable, Hashable, Mapping, Protocol
 
-from .errors import HarnessInputError
+from .errors import FmuError, HarnessInputError, SweepTaskError
 
 ResultCallback = Callable[[Hashable, Any], None]
+
+
+def _task_result(key: Hashable, get: Callable[[], Any], where: str) -> Any:
+    """The result of one task; an unexpected failure is re-raised naming the task.
+
+    Bad input and FMU failures pass unchanged (they already say what went wrong); anything
+    else (a worker without the package, a crash in the harness) becomes
+    :class:`SweepTaskError`.
+    """
+    try:
+        return get()
+    except (HarnessInputError, FmuError, BrokenProcessPool, KeyboardInterrupt):
+        raise
+    except Exception as exc:
+        raise SweepTaskError(f"task {key} failed {where}: {type(exc).__name__}: {exc}") from exc
 #: ``on_progress(key, points_done)``: a task reports how far it got (long chains).
 ProgressCallback = Callable[[Hashable, int], None]
 
@@ -52,7 +67,7 @@ class SerialBackend:
     def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback,
             on_progress: ProgressCallback | None = None) -> None:
         for key, task in tasks.items():
-            on_result(key, func(task, source, progress=on_progress))
+            on_result(key, _task_result(key, lambda: func(task, source, progress=on_progress), "in this process"))
 
     def describe(self) -> str:
         return "serial (1 process)"
@@ -126,8 +141,9 @@ class ProcessBackend:
                 while not_done:
                     done, not_done = wait(not_done, return_when=FIRST_COMPLETED)
                     for fut in done:
-                        result = fut.result()  # re-raises task errors and BrokenProcessPool
                         key = futures[fut]
+                        # re-raises task errors and BrokenProcessPool
+                        result = _task_result(key, fut.result, "in a worker process")
                         del pending[key]
                         on_result(key, result)
             except BrokenProcessPool:
@@ -213,7 +229,8 @@ class DaskBackend:
         by_future = {f.key: k for f, k in zip(futures, keys)}
         try:
             for fut in as_completed(futures):
-                on_result(by_future[fut.key], fut.result())
+                key = by_future[fut.key]
+                on_result(key, _task_result(key, fut.result, "on a Dask worker"))
         finally:
             self.client.cancel(futures)
             if on_progress is not None:

@@ -19,7 +19,7 @@ import shlex
 import sys
 from typing import Any, Sequence
 
-from .errors import FmuError, FmuRejectedInput, HarnessInputError
+from .errors import FmuError, FmuRejectedInput, HarnessInputError, SweepTaskError
 
 PROG = "impact-harness"
 
@@ -118,6 +118,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Options whose value is a list that may start with a minus sign ("-0.5,0.1").
+_LIST_OPTIONS = ("--values", "--state", "--scan")
+
+
+def _join_list_values(argv: list[str]) -> list[str]:
+    """``--values -0.5,0.1`` -> ``--values=-0.5,0.1``: argparse would take a value starting
+    with '-' for an option unless it is a plain negative number."""
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+        nxt = argv[i + 1] if i + 1 < len(argv) else ""
+        if a in _LIST_OPTIONS and len(nxt) > 1 and nxt[0] == "-" and (nxt[1].isdigit() or nxt[1] == "."):
+            out.append(f"{a}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
+
+
 def _warn_plugin(name: str, exc: BaseException) -> None:
     print(f"{PROG}: warning: commands of {name} unavailable ({type(exc).__name__}: {exc})", file=sys.stderr)
 
@@ -126,7 +147,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of ``impact-harness``; returns the exit status."""
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_join_list_values(argv))
     # recorded in the results' attributes
     args.command_line = " ".join([PROG, *(shlex.quote(a) for a in argv)])
     prog = f"{PROG} {args.command}"
@@ -140,6 +161,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 2
     except FmuError as exc:
         print(f"{prog}: FMU failure: {exc}", file=sys.stderr)
+        return 1
+    except SweepTaskError as exc:
+        print(f"{prog}: {exc}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)

@@ -24,9 +24,18 @@ class HarnessInputError(ValueError):
         self.reason = reason
         super().__init__(f"argument {argument}: {reason}")
 
+    def __reduce__(self) -> tuple:
+        # picklable with both fields: it may be raised in a worker process
+        return (type(self), (self.argument, self.reason))
+
 
 class FmuError(RuntimeError):
     """The FMU itself failed (an fmi2Status of Error or Fatal during a run)."""
+
+
+class SweepTaskError(RuntimeError):
+    """A sweep task failed on a worker for a reason other than bad input or the FMU
+    (e.g. the package is missing on a Dask worker); names the task."""
 
 
 class FmuRejectedInput(FmuError):

@@ -197,3 +197,22 @@ def test_default_sweep_shows_the_period_adding_windows(tmp_path: Path, capsys) -
             found = windows(ds["sigma"].values, sel["period"].values, sel["orbit_impacts"].values)
             by_decreasing_sigma = [m for m, lo, hi in sorted(found, key=lambda w: -w[2]) if m <= 3]
             assert by_decreasing_sigma == [1, 2, 3], (direction, found)
+
+
+def test_fmu_refusal_inside_a_worker_process_is_still_bad_input(tmp_path: Path, capsys) -> None:
+    """Sweeping the initial state into the rigid wall: the FMU refuses one point in a pool
+    worker; the error crosses the process boundary intact and exits with status 2."""
+    code, _, err = _run_main(["sweep", "--param", "u0", "--values", "-0.5,0.01", "--mode", "fresh", "--set", "wall=rigid",
+                              "--transient", "2", "--samples", "2", "--workers", "1", "--out", str(tmp_path / "x.nc"),
+                              "--no-progress"], capsys)
+    assert code == 2, err
+    assert err.strip().count("\n") == 0 and "inside the rigid wall" in err and "Traceback" not in err
+
+
+def test_input_errors_survive_pickling() -> None:
+    import pickle
+
+    from harness import HarnessInputError
+
+    e = pickle.loads(pickle.dumps(HarnessInputError("--theta", "must lie in [0, 1)")))
+    assert (e.argument, e.reason, str(e)) == ("--theta", "must lie in [0, 1)", "argument --theta: must lie in [0, 1)")

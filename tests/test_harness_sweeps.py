@@ -224,3 +224,19 @@ def test_unpicklable_user_mapping_needs_the_serial_backend() -> None:
     sim = MappingSimulator(lambda u, v, t, p: (u, v, 0))
     with pytest.raises(HarnessInputError, match="backend='serial'"):
         run_sweep(sim, SweepSpec("a", np.array([1.0]), ("fresh",)), backend="processes", workers=1, progress=False)
+
+
+def _broken_map(u: float, v: float, t: float, params: dict) -> tuple[float, float, int]:
+    if params["a"] > 0.5:
+        raise ZeroDivisionError("model blew up")
+    return u, v, 0
+
+
+@pytest.mark.parametrize("backend", ["serial", "processes"])
+def test_a_failing_task_is_named(backend: str) -> None:
+    from harness.errors import SweepTaskError
+
+    spec = SweepSpec("a", np.array([0.1, 0.9]), ("fresh",))
+    with pytest.raises(SweepTaskError, match=r"task fresh-p00001 failed .*ZeroDivisionError: model blew up"):
+        run_sweep(MappingSimulator(_broken_map), spec, params={"a": 0.0}, backend=backend, workers=1,
+                  sampling=SamplingSpec(n_transient=1, n_samples=2), progress=False)
