@@ -501,7 +501,15 @@ class Fmi3Slave(_LogMixin):
 SLAVE_CLASSES: dict[str, type] = {"2": Fmi2Slave, "3": Fmi3Slave}
 
 
+_INSTANTIATE_LOCK = threading.Lock()
+
+
 def make_slave(model: FmuModel, unzipdir: str, instance_name: str) -> Fmi2Slave | Fmi3Slave:
-    """Instantiate the slave class matching the FMU's ``fmiVersion``."""
+    """Instantiate the slave class matching the FMU's ``fmiVersion``.
+
+    Serialized: fmpy changes the process's working directory while it loads the library,
+    which is not safe with several threads (a Dask worker with ``--nthreads > 1``).
+    """
     cls = SLAVE_CLASSES[model.fmi_version.split(".")[0]]
-    return cls(model, unzipdir, instance_name)
+    with _INSTANTIATE_LOCK:
+        return cls(model, unzipdir, instance_name)
