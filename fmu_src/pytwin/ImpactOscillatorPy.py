@@ -233,6 +233,10 @@ class ImpactOscillatorPy(Fmi2Slave):
             )
         )
 
+    def _vr(self, name: str) -> int:
+        """Value reference of a registered variable (for messages)."""
+        return next(vr for vr, var in self.vars.items() if var.name == name)
+
     def _reject(self, message: str) -> None:
         """Log ``message`` as fmi2Error, then raise (pythonfmu returns fmi2Fatal).
 
@@ -255,8 +259,8 @@ class ImpactOscillatorPy(Fmi2Slave):
     def _set_real(self, name: str, x: float) -> None:
         if self.initialized and name != "sigma":
             self._reject(
-                f"fmi2SetReal: {name} cannot be set now: only sigma is tunable after "
-                "initialisation"
+                f"fmi2SetReal: {name} (value reference {self._vr(name)}) cannot be set now: "
+                "only sigma is tunable after initialisation"
             )
         try:
             self.model.set_real(name, x)
@@ -269,8 +273,8 @@ class ImpactOscillatorPy(Fmi2Slave):
     def _set_wall(self, x: int) -> None:
         if self.initialized:
             self._reject(
-                "fmi2SetInteger: wall cannot be set now: only sigma is tunable after "
-                "initialisation"
+                f"fmi2SetInteger: wall (value reference {self._vr('wall')}) cannot be set now: "
+                "only sigma is tunable after initialisation"
             )
         try:
             self.model.set_wall(x)

@@ -69,6 +69,14 @@ _TWO_PI = 2.0 * math.pi
 _FOUR_PI2 = 4.0 * math.pi * math.pi
 
 
+def _fmt(x: object) -> str:
+    """A value as C's ``%g`` prints it (messages use the C FMU's wording)."""
+    try:
+        return f"{float(x):g}"
+    except (TypeError, ValueError):
+        return repr(x)
+
+
 class ModelError(ValueError):
     """A parameter value or combination the model rejects (message names the variable)."""
 
@@ -182,7 +190,7 @@ class OscillatorModel:
         """
         why = check_real(name, x)
         if why is not None:
-            raise ModelError(f"{name} = {x!r} rejected: {name} {why}")
+            raise ModelError(f"{name} = {_fmt(x)} rejected: {why}")  # model.c's wording
         setattr(self, name, float(x))
         self.update_derived()
 
@@ -196,7 +204,7 @@ class OscillatorModel:
         """
         why = check_wall(x)
         if why is not None:
-            raise ModelError(f"wall = {x!r} rejected: wall {why}")
+            raise ModelError(f"wall = {x!r} rejected: {why}")
         self.wall = int(x)
 
     def check_all(self) -> None:
@@ -210,10 +218,10 @@ class OscillatorModel:
         for name in ("nu", "Omega", "sigma", "r", "Gamma", "u0", "v0", "rtol", "atol"):
             why = check_real(name, getattr(self, name))
             if why is not None:
-                raise ModelError(f"{name} = {getattr(self, name)!r} rejected: {name} {why}")
+                raise ModelError(f"{name} = {_fmt(getattr(self, name))} rejected: {why}")
         why = check_wall(self.wall)
         if why is not None:
-            raise ModelError(f"wall = {self.wall!r} rejected: wall {why}")
+            raise ModelError(f"wall = {self.wall!r} rejected: {why}")
         if self.wall == WALL_COMPLIANT and not self.Gamma > 0.0:
             raise ModelError(f"Gamma = {self.Gamma:g}: a compliant wall needs Gamma > 0")
         if self.wall == WALL_RIGID and (self.u0 > 0.0 or (self.u0 == 0.0 and self.v0 > 0.0)):
