@@ -202,6 +202,7 @@ class DaskBackend:
 
     @property
     def address(self) -> str:
+        """The scheduler's address."""
         return str(self.client.scheduler.address)
 
     def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback,
@@ -237,6 +238,7 @@ class DaskBackend:
                 self.client.unsubscribe_topic(topic)
 
     def n_workers(self) -> int:
+        """Workers connected to the scheduler now."""
         return len(self.client.scheduler_info().get("workers", {}))
 
     def describe(self) -> str:

@@ -93,6 +93,7 @@ def measure(fmu: str | None = None, periods: int = 2000, repeat: int = 5, sigma:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Command line of ``python -m harness.benchmark``."""
     p = argparse.ArgumentParser(prog="python -m harness.benchmark", description=__doc__.split("\n\n")[0])
     p.add_argument("--fmu", help="FMU (default: build/fmu/ImpactOscillator.fmu)")
     p.add_argument("--periods", type=int, default=2000)

@@ -70,6 +70,7 @@ class Checkpoint:
         return self.directory / f"{safe}.npz"
 
     def has(self, key: str) -> bool:
+        """True when task ``key`` is finished and stored."""
         return self._file(key).exists()
 
     def save(self, key: str, arrays: dict[str, np.ndarray]) -> None:
@@ -80,6 +81,7 @@ class Checkpoint:
         os.replace(tmp, target)
 
     def load(self, key: str) -> dict[str, np.ndarray]:
+        """The stored arrays of task ``key``."""
         with np.load(self._file(key)) as data:
             return {k: data[k] for k in data.files}
 

@@ -37,6 +37,7 @@ class OrbitClass:
 
     @property
     def periodic(self) -> bool:
+        """True unless the orbit is "not periodic"."""
         return self.period != NOT_PERIODIC
 
     @property

@@ -100,6 +100,7 @@ def _command_line(args: argparse.Namespace | None = None) -> str:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
+    """``simulate``: time series from (u0, v0) at --t0 to --t-end; NetCDF + PNG."""
     from .plots import timeseries_plot
     from .results import provenance, timeseries_dataset, write_netcdf
     from .sampling import simulate
@@ -125,6 +126,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 
 def cmd_strobe(args: argparse.Namespace) -> int:
+    """``strobe``: samples at t = n + theta, classified; NetCDF + Poincare section."""
     from .plots import poincare_section
     from .results import provenance, strobe_dataset, write_netcdf
     from .sampling import strobe
@@ -165,6 +167,7 @@ def _scan_option(text: str | None) -> dict[str, Any]:
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
+    """``sweep``: 1D/2D sweep on the chosen backend, resumable; NetCDF + diagram."""
     from .plots import bifurcation_diagram, period_map
     from .results import write_netcdf
     from .sweeps import SweepStats, run_sweep
@@ -220,6 +223,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_jacobian(args: argparse.Namespace) -> int:
+    """``jacobian``: J at --state, or J(x) along the grazing family; NetCDF + plot."""
     from .jacobian import jacobian_vs_x, map_jacobian
     from .plots import jacobian_plot
     from .results import jacobian_dataset, provenance, write_netcdf

@@ -215,6 +215,7 @@ class Layered:
         return f"{src}: {section}.{key}"
 
     def get(self, section: str, key: str) -> Any:
+        """The current value of ``section.key``."""
         return self.values[section][key]
 
 
@@ -279,6 +280,7 @@ class SamplingSpec:
 
     @classmethod
     def from_layers(cls, layers: Layered) -> "SamplingSpec":
+        """Validated view of ``[sampling]`` (errors name the flag or file key)."""
         from .sampling import check_theta
 
         theta = check_theta(layers.get("sampling", "theta"), layers.arg("sampling", "theta"))
@@ -344,6 +346,7 @@ class SweepSpec:
 
     @classmethod
     def from_layers(cls, layers: Layered, model: Any = None) -> "SweepSpec":
+        """Validated view of ``[sweep]``; parameter names checked against ``model``."""
         s = "sweep"
         param = str(layers.get(s, "param"))
         if model is not None:
@@ -399,6 +402,7 @@ class RunSpec:
 
     @classmethod
     def from_layers(cls, layers: Layered) -> "RunSpec":
+        """Validated view of ``[run]`` (backend, workers, scheduler, outputs)."""
         r = "run"
         scheduler = layers.get(r, "scheduler") or None
         backend = layers.get(r, "backend")
@@ -494,6 +498,7 @@ class Experiment:
         )
 
     def sweep_spec(self) -> SweepSpec:
+        """The ``[sweep]`` section, validated against this experiment's FMU."""
         return SweepSpec.from_layers(self.layers, self.model)
 
     def as_attrs(self) -> dict[str, Any]:

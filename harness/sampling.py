@@ -36,6 +36,7 @@ class StrobeResult:
 
     @property
     def final_state(self) -> tuple[float, float]:
+        """(u, v) at the last sample (to carry a state on)."""
         return float(self.u[-1]), float(self.v[-1])
 
 
