@@ -299,3 +299,32 @@ def natural_distance(za: Sequence[float], zb: Sequence[float], sigma: float, c: 
     xa, ya = to_natural(za[0], za[1], sigma, c, variant)
     xb, yb = to_natural(zb[0], zb[1], sigma, c, variant)
     return float(max(abs(xa - xb), abs(ya - yb))) / c.l
+
+
+def power_law_with_offset(x: Sequence[float], y: Sequence[float], q_range: tuple[float, float] = (-1.0, 1.0),
+                          n_q: int = 2001) -> tuple[float, float, float]:
+    """Fit y = a x^q + b (signed y): the exponent q of a power law on top of a constant.
+
+    The impact contribution to the map's Jacobian, J - P, is the sum of a regular part
+    P (N - I) (O(1), (28)/(29)) and the singular part ~ x^(-1/2) (or ~ x^(1/2) where N = I,
+    r = 1 at a soft wall); the constant would bend a plain log-log slope.  For each q on
+    a grid, (a, b) are linear least squares; the q with the smallest relative residual
+    wins.
+
+    Returns
+    -------
+    (q, a, b)
+    """
+    x = np.asarray(x, dtype=float)
+    y = np.asarray(y, dtype=float)
+    best = (math.nan, math.nan, math.nan, math.inf)
+    w = 1.0 / np.maximum(np.abs(y), 1e-300)  # relative residuals: every decade counts
+    for q in np.linspace(q_range[0], q_range[1], n_q):
+        if abs(q) < 1e-9:
+            continue  # x^0 is the constant itself
+        A = np.stack([x ** q, np.ones_like(x)], axis=1) * w[:, None]
+        coef, *_ = np.linalg.lstsq(A, y * w, rcond=None)
+        res = float(np.sum((A @ coef - y * w) ** 2))
+        if res < best[3]:
+            best = (float(q), float(coef[0]), float(coef[1]), res)
+    return best[0], best[1], best[2]
