@@ -23,12 +23,10 @@ from mapcheck.compare import (
     VARIANTS,
     best_variant,
     markdown_window_table,
-    maximal_orbit_guess,
     phase_to_natural,
     scan_confirmation,
     sweep_windows,
     theory_windows,
-    virtual_to_phase,
     window_differences,
 )
 from mapcheck.fig9 import ALPHA, GAMMA, R, _fig9_coefficients
@@ -36,7 +34,7 @@ from mapcheck.windows import MapParams, window_1d
 
 from .config import SamplingSpec, SweepSpec
 from .reproduce import Context
-from .shooting import StroboscopicMap, window_edges
+from .shooting import StroboscopicMap, map_guided_windows
 
 GAMMA_WALL = 10.0
 M_MAX = 4
@@ -54,30 +52,9 @@ SETTINGS = {
 
 def ode_windows_shooting(ctx: Context, xtol: float, sigma_range: tuple[float, float]) -> dict[str, Any]:
     """ODE windows on the FMU by Newton shooting, started from the A~(sigma) map's orbits."""
-    nu, Om, c = _fig9_coefficients()
+    _, _, c = _fig9_coefficients()
     smap = StroboscopicMap(ctx.simulator(), ctx.params(Gamma=GAMMA_WALL, r=R, wall=1), THETA)
-    guide = theory_windows(M_MAX)["map_A_tilde"]
-    out: dict[str, Any] = {"windows": {}, "kinds": {}, "brackets": {}, "multipliers_at_lower_edge": {}}
-    for M in range(1, M_MAX + 1):
-        if guide[M] is None:
-            out["windows"][M] = None
-            continue
-        lo, hi = guide[M]
-        hi = hi if hi is not None else 1.25 * lo  # M = 1: no upper edge, start above the flip
-
-        def guess(s: float, M: int = M) -> np.ndarray | None:
-            z = maximal_orbit_guess(c, M, s, "tilde")
-            return None if z is None else virtual_to_phase(z, s, nu, Om, -THETA) - smap.offset(s)
-
-        s0 = 0.5 * (lo + hi)
-        dp = min(0.02, (hi - lo) / 6.0)  # several steps inside even the narrow M = 4 window
-        e_lo, e_hi = window_edges(smap, M, s0, guess(s0), guess, sigma_range, dp, xtol)
-        out["windows"][M] = (e_lo.sigma, e_hi.sigma)
-        out["kinds"][M] = (e_lo.kind, e_hi.kind)
-        out["brackets"][M] = (e_lo.bracket, e_hi.bracket)
-        out["multipliers_at_lower_edge"][M] = e_lo.multipliers
-    out["fmu_periods"] = smap.evaluations
-    return out
+    return map_guided_windows(smap, c, theory_windows(M_MAX)["map_A_tilde"], sigma_range, xtol)
 
 
 def ode_scans(ctx: Context, grid: np.ndarray, transient: int, samples: int):

@@ -30,7 +30,7 @@ from mapcheck.orbits import PeriodicOrbit, solve_periodic_orbit
 
 from .simulator import Simulator
 
-__all__ = ["StroboscopicMap", "Edge", "NEWTON", "good_orbit", "window_edges"]
+__all__ = ["StroboscopicMap", "Edge", "NEWTON", "good_orbit", "window_edges", "map_guided_windows"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -205,3 +205,42 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
             kind = "graze" if n > 1 else ("no-impact" if n == 0 else "lost")
         edges.append(Edge(float(s_good), kind, abs(s_bad - s_good), o_good.multipliers))
     return edges[0], edges[1]
+
+
+def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], sigma_range: tuple[float, float],
+                       xtol: float) -> dict[str, Any]:
+    """ODE windows on the FMU for every period in ``guide`` (the map's windows).
+
+    Newton shooting starts inside each map window from the map's own maximal orbit
+    (:func:`mapcheck.compare.maximal_orbit_section_guess`: A~(sigma) variant, coefficients
+    ``c``, the state at the FMU's section after the impact), and follows the orbit to both
+    edges (:func:`window_edges`).
+
+    Returns
+    -------
+    dict
+        ``windows`` {M: (lo, hi or None)}, ``kinds`` {M: (kind_lo, kind_hi)}, ``brackets``,
+        ``multipliers_at_lower_edge``, ``fmu_periods`` (one-period FMU runs used).
+    """
+    from mapcheck.compare import maximal_orbit_section_guess
+    out: dict[str, Any] = {"windows": {}, "kinds": {}, "brackets": {}, "multipliers_at_lower_edge": {}}
+    for M, w in guide.items():
+        if w is None:
+            out["windows"][M] = None
+            continue
+        lo, hi = w
+        hi = hi if hi is not None else 2.0 * lo  # no upper edge: start well above the flip
+
+        def guess(s: float, M: int = M) -> np.ndarray | None:
+            z = maximal_orbit_section_guess(c, M, s, smap.theta, "tilde")
+            return None if z is None else z - smap.offset(s)
+
+        s0 = 0.5 * (lo + hi)
+        dp = min(0.02, (hi - lo) / 6.0)  # several steps inside even a narrow window
+        e_lo, e_hi = window_edges(smap, M, s0, guess(s0), guess, sigma_range, dp, xtol)
+        out["windows"][M] = (e_lo.sigma, e_hi.sigma)
+        out["kinds"][M] = (e_lo.kind, e_hi.kind)
+        out["brackets"][M] = (e_lo.bracket, e_hi.bracket)
+        out["multipliers_at_lower_edge"][M] = e_lo.multipliers
+    out["fmu_periods"] = smap.evaluations
+    return out

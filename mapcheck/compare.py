@@ -31,8 +31,10 @@ __all__ = [
     "free_flight",
     "phase_to_natural",
     "maximal_orbit_guess",
+    "maximal_orbit_section_guess",
     "theory_windows",
     "sweep_windows",
+    "map_windows",
     "window_differences",
     "scan_confirmation",
     "best_variant",
@@ -115,6 +117,31 @@ def maximal_orbit_guess(c: Coefficients, M: int, sigma: float, variant: str = "t
     return np.array([float(u), float(v)])
 
 
+def maximal_orbit_section_guess(c: Coefficients, M: int, sigma: float, theta: float = 0.5,
+                                variant: str = "tilde") -> np.ndarray | None:
+    """Real state at phase ``theta`` just after the impact of the stable maximal period-M
+    orbit of (37)/(38) (None if there is none): the impacting point z_M (virtual, x_M >= 0)
+    through the local impact map L (26)-(30) (r_eff of ``c``, A or A~), then free flight (8)
+    forward by ``theta``.
+
+    Forward only: backward free flight multiplies errors by e^(|s2| dt), which is ~1e21 at
+    nu = 100 over half a period.
+    """
+    from .coeffs import grazing_acceleration
+    from .maps import local_impact_map
+
+    p = MapParams.from_coefficients(c)
+    orb = maximal_orbits(p, M, c.rho(np.array([sigma]), variant))
+    stable = orb.stable[:, 0]
+    if not np.any(stable):
+        return None
+    k = int(np.argmax(stable))
+    u, v = from_natural(orb.x[k, M - 1, 0], orb.y[k, M - 1, 0], sigma, c, variant)
+    A = grazing_acceleration(sigma, c.Omega, variant)
+    ut, vt = local_impact_map(u, v, c.nu, c.r_eff, A)
+    return free_flight((float(ut), float(vt)), sigma, c.nu, c.Omega, 0.0, theta)
+
+
 # ----------------------------------------------------------------------------------------
 # Window tables
 # ----------------------------------------------------------------------------------------
@@ -141,6 +168,24 @@ def theory_windows(M_max: int = 4) -> dict[str, Windows]:
 
     res = fig9_windows(M_max=M_max)
     return {name: {M: _clean(res[key][M]) for M in range(1, M_max + 1)} for name, (key, _) in VARIANTS.items()}
+
+
+def map_windows(c: Coefficients, M_max: int, sigma_grid: np.ndarray, variant: str = "tilde") -> Windows:
+    """Stable maximal period-M windows in sigma of the 2D map (37)/(38) with the
+    coefficients ``c`` ((39) rigid, (48) compliant), rho from A or A~(sigma) (``variant``).
+    The widest window per M; ``hi = None`` where it reaches the end of the grid."""
+    from .windows import windows
+
+    p = MapParams.from_coefficients(c)
+    out: Windows = {}
+    for M in range(1, M_max + 1):
+        ws = windows(p, M, sigma_grid, lambda q: c.rho(q, variant))
+        if not ws:
+            out[M] = None
+            continue
+        w = max(ws, key=lambda w: w.hi - w.lo)
+        out[M] = (float(w.lo), None if w.kind_hi == "range" else float(w.hi))
+    return out
 
 
 def sweep_windows(values: np.ndarray, period: np.ndarray, impacts: np.ndarray) -> dict[int, tuple[float, float]]:
