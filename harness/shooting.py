@@ -30,7 +30,7 @@ from mapcheck.orbits import PeriodicOrbit, solve_periodic_orbit
 
 from .simulator import Simulator
 
-__all__ = ["StroboscopicMap", "Edge", "NEWTON", "good_orbit", "window_edges", "map_guided_windows"]
+__all__ = ["StroboscopicMap", "Edge", "NEWTON", "good_orbit", "window_edges", "map_guided_windows", "newton_for"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -132,8 +132,8 @@ def _rotate_to_impact(orb: PeriodicOrbit, M: int) -> np.ndarray:
     return orb.z[(int(np.argmax(orb.contacts > 0)) + 1) % M]
 
 
-def good_orbit(smap: StroboscopicMap, M: int, sigma: float, guesses: list[np.ndarray | None]
-               ) -> tuple[bool, PeriodicOrbit | None]:
+def good_orbit(smap: StroboscopicMap, M: int, sigma: float, guesses: list[np.ndarray | None],
+               newton: Mapping[str, Any] | None = None) -> tuple[bool, PeriodicOrbit | None]:
     """Try Newton from each guess; True with the orbit if one converges to a stable maximal
     period-M orbit, else False with the most informative failed orbit (a converged one)."""
     step = smap.at(sigma)
@@ -141,7 +141,7 @@ def good_orbit(smap: StroboscopicMap, M: int, sigma: float, guesses: list[np.nda
     for g in guesses:
         if g is None:
             continue
-        orb = solve_periodic_orbit(step, g, M, **NEWTON)
+        orb = solve_periodic_orbit(step, g, M, **(newton or NEWTON))
         if orb.maximal and orb.stable:
             return True, orb
         if failed is None or (orb.converged and not failed.converged):
@@ -151,7 +151,8 @@ def good_orbit(smap: StroboscopicMap, M: int, sigma: float, guesses: list[np.nda
 
 def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarray,
                  guess_of: Callable[[float], np.ndarray | None], sigma_range: tuple[float, float],
-                 dp: float, xtol: float) -> tuple[Edge, Edge]:
+                 dp: float, xtol: float, newton: Mapping[str, Any] | None = None,
+                 geometric: bool = False) -> tuple[Edge, Edge]:
     """Lower and upper sigma-edges of the stable maximal period-M window containing
     ``sigma_in``.
 
@@ -170,8 +171,12 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
         Marching step (smaller than the window).
     xtol : float
         Bisection tolerance in sigma.
+    newton : mapping, optional
+        Settings of :func:`mapcheck.orbits.solve_periodic_orbit` (default :data:`NEWTON`).
+    geometric : bool
+        March by the factor exp(+-dp) instead of steps +-dp (windows at sigma -> 0).
     """
-    ok, orb = good_orbit(smap, M, sigma_in, [w_in, guess_of(sigma_in)])
+    ok, orb = good_orbit(smap, M, sigma_in, [w_in, guess_of(sigma_in)], newton)
     if not ok or orb is None:
         raise ValueError(f"no stable maximal period-{M} orbit found at sigma = {sigma_in}")
     edges = []
@@ -179,10 +184,12 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
         s_good, o_good = sigma_in, orb
         s_bad, o_bad = None, None
         while s_bad is None:
-            s = s_good + direction * dp
+            s = s_good * math.exp(direction * dp) if geometric else s_good + direction * dp
             if (s - limit) * direction > 0:
-                break
-            ok, o = good_orbit(smap, M, s, [_rotate_to_impact(o_good, M), guess_of(s)])
+                if s_good == limit:
+                    break
+                s = limit  # test the end of the range itself before giving up
+            ok, o = good_orbit(smap, M, s, [_rotate_to_impact(o_good, M), guess_of(s)], newton)
             if ok:
                 s_good, o_good = s, o
             else:
@@ -192,7 +199,7 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
             continue
         while abs(s_bad - s_good) > xtol:
             s = 0.5 * (s_good + s_bad)
-            ok, o = good_orbit(smap, M, s, [_rotate_to_impact(o_good, M), guess_of(s)])
+            ok, o = good_orbit(smap, M, s, [_rotate_to_impact(o_good, M), guess_of(s)], newton)
             if ok:
                 s_good, o_good = s, o
             else:
@@ -207,14 +214,28 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
     return edges[0], edges[1]
 
 
+def newton_for(sigma: float) -> dict[str, Any]:
+    """Newton settings for orbits at forcing ``sigma``: the impact velocity scales like
+    sqrt(chi) ~ sqrt(sigma), so below sigma = 0.1 the scale (and with it the difference
+    steps) shrinks like sqrt(10 sigma) (Figure 1's windows accumulate at sigma -> 0; the
+    steps must stay below the penetration ~ sigma); the residual target stays >= 1e-9
+    absolute, above the FMU's own error near grazing."""
+    shrink = min(1.0, (10.0 * sigma) ** 0.5)
+    scale = np.array([1e-2, 1e-1]) * shrink
+    tol = NEWTON["tol"] if shrink >= 1.0 else 1e-9 / float(scale.max())
+    return {**NEWTON, "scale": scale, "tol": tol}
+
+
 def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], sigma_range: tuple[float, float],
-                       xtol: float) -> dict[str, Any]:
+                       xtol: float, relative: bool = False) -> dict[str, Any]:
     """ODE windows on the FMU for every period in ``guide`` (the map's windows).
 
     Newton shooting starts inside each map window from the map's own maximal orbit
     (:func:`mapcheck.compare.maximal_orbit_section_guess`: A~(sigma) variant, coefficients
     ``c``, the state at the FMU's section after the impact), and follows the orbit to both
-    edges (:func:`window_edges`).
+    edges (:func:`window_edges`).  ``relative``: ``xtol`` is relative to the map window's
+    lower edge and the marching is geometric (windows that accumulate at sigma -> 0, as in
+    Figure 1).
 
     Returns
     -------
@@ -236,8 +257,13 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
             return None if z is None else z - smap.offset(s)
 
         s0 = 0.5 * (lo + hi)
-        dp = min(0.02, (hi - lo) / 6.0)  # several steps inside even a narrow window
-        e_lo, e_hi = window_edges(smap, M, s0, guess(s0), guess, sigma_range, dp, xtol)
+        if relative:  # geometric: windows accumulating at sigma -> 0
+            s0 = math.sqrt(lo * hi)
+            # 6.3 steps to an edge: the march does not land on the map's edge itself
+            dp, tol = math.log(hi / lo) / 6.3, xtol * lo
+        else:
+            dp, tol = min(0.02, (hi - lo) / 6.0), xtol  # several steps inside even a narrow window
+        e_lo, e_hi = window_edges(smap, M, s0, guess(s0), guess, sigma_range, dp, tol, newton_for(s0), relative)
         out["windows"][M] = (e_lo.sigma, e_hi.sigma)
         out["kinds"][M] = (e_lo.kind, e_hi.kind)
         out["brackets"][M] = (e_lo.bracket, e_hi.bracket)
