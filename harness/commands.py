@@ -207,7 +207,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     print(f"{spec.param}: {len(spec.values)} values x {', '.join(spec.modes)}"
           + (f" x {spec.scan_param} ({len(spec.scan_values)} values)" if spec.scan_param else "")
           + f"; {stats.computed} tasks computed, {stats.resumed} resumed; "
-          f"wall time {stats.wall_time:.2f} s on {ds.attrs['backend']}")
+          f"wall time {stats.wall_time:.2f} s on {ds.attrs['backend']} "
+          f"(tasks used {ds.attrs['tasks_cpu_time_s']:.1f} CPU s)")
     grid = ds[spec.param].values
     if spec.scan_param is None:
         for direction in ds["direction"].values:

@@ -309,6 +309,8 @@ def run_sweep(
         **{f"model.{k}": v for k, v in base.items()},
         "tasks_computed": stats.computed,
         "tasks_resumed": stats.resumed,
+        # CPU seconds of the tasks computed in this run, summed over workers
+        "tasks_cpu_time_s": float(sum(float(results[k].get("cpu_s", 0.0)) for k in todo)),
     }
     attrs = provenance(record, model=model, backend=description, wall_time=stats.wall_time)
     return assemble(spec, tasks, results, sampling, attrs)

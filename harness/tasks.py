@@ -6,6 +6,7 @@ paid once per worker and per sweep.
 """
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
@@ -56,6 +57,7 @@ def execute(task: SweepTask, sim: Any, report: Callable[[str, int], None] | None
     ``report(key, points_done)`` is called after each point, so that a long continuation
     chain moves the progress bar while it runs.
     """
+    cpu_start = time.process_time()
     s = task.sampling
     k, n = len(task.values), s.n_samples
     out = {
@@ -83,6 +85,9 @@ def execute(task: SweepTask, sim: Any, report: Callable[[str, int], None] | None
         out["period"][i], out["orbit_impacts"][i] = orbit.period, orbit.impacts
         if report is not None and i + 1 < k:  # the last point arrives with the result
             report(task.key, i + 1)
+    # CPU seconds of this task on its worker: with the wall time this tells how much of
+    # the machine a sweep really got (shared machines, oversubscribed clusters)
+    out["cpu_s"] = np.array(time.process_time() - cpu_start)
     return out
 
 
