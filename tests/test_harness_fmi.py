@@ -180,3 +180,19 @@ def test_rejected_initialization_is_reported_and_the_instance_recovers(model: Fm
     fresh = strobe(FmuSimulator(model.source(), instance_name="other"), _params(model, wall=2, sigma=8.0),
                    (-1.0, 0.3), theta=0.37, n_transient=0, n_samples=5)
     np.testing.assert_array_equal(good.u, fresh.u)
+
+
+def test_one_reused_instance_per_worker_thread(model: FmuModel) -> None:
+    """Sweep tasks get this thread's instance (created once, then only reset); another
+    thread gets its own (an FMI instance must not be shared between threads)."""
+    import threading
+
+    from harness.simulator import simulator_for
+
+    first = simulator_for(model.source())
+    assert simulator_for(model.source()) is first
+    box: list = []
+    t = threading.Thread(target=lambda: box.append(simulator_for(model.source())))
+    t.start()
+    t.join()
+    assert box and box[0] is not first
