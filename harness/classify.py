@@ -97,6 +97,30 @@ def classify_orbit(
     return OrbitClass(NOT_PERIODIC, -1, best)
 
 
+def still_settling(u: np.ndarray, v: np.ndarray, period: int, tol: float = 1e-5) -> bool:
+    """True when an orbit classified with ``period`` is still converging to a shorter one.
+
+    Near a flip bifurcation a period-M orbit is approached with a multiplier close to -1:
+    the samples alternate with a slowly shrinking amplitude and look like period 2M.  For
+    each proper divisor d of ``period`` the d-shift differences |x_{k+d} - x_k| are
+    compared between the first and the last quarter of the samples; a decay by more than
+    10 % (from above the tolerance: a genuine period-2M orbit keeps its differences constant
+    up to integration noise far below it) means the transient is not over.
+    """
+    u = np.asarray(u, dtype=float)
+    v = np.asarray(v, dtype=float)
+    threshold = tol * (1.0 + max(np.ptp(u), np.ptp(v)))
+    for d in range(1, period):
+        if period % d:
+            continue
+        diffs = np.maximum(np.abs(u[d:] - u[:-d]), np.abs(v[d:] - v[:-d]))
+        q = max(1, diffs.size // 4)
+        early, late = float(diffs[:q].mean()), float(diffs[-q:].mean())
+        if early > threshold and late < 0.9 * early:
+            return True
+    return False
+
+
 def classify_samples(u: np.ndarray, v: np.ndarray, impacts: np.ndarray, tol: float = 1e-5,
                      max_period: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Classify many orbits at once: arrays ``(..., N)`` -> (period, impacts) arrays ``(...)``."""

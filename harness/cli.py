@@ -68,6 +68,9 @@ def sampling_parent() -> argparse.ArgumentParser:
     g.add_argument("--tol", dest="sampling__tol", type=float, metavar="TOL", help="periodicity tolerance, relative (default 1e-5)")
     g.add_argument("--max-period", dest="sampling__max_period", type=int, metavar="M",
                    help="largest period tried (default samples/2)")
+    g.add_argument("--extend", dest="sampling__extend", type=int, metavar="N",
+                   help="sweeps: up to N more periods for points not yet periodic (slow convergence "
+                   "near window edges; default 0)")
     return p
 
 

@@ -19,6 +19,7 @@ An experiment file holds every parameter of a run::
     transient = 300    # periods discarded
     samples = 40       # periods sampled
     tol = 1e-5         # periodicity tolerance (relative)
+    extend = 0         # extra periods for points not yet periodic (slow near window edges)
 
     [sweep]
     param = "sigma"
@@ -103,7 +104,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "initial": {"u0": None, "v0": None},
     # 300 transient periods: the slow free-flight mode decays like 0.98^n at Figure 9's
     # parameters, and orbits near window edges converge slowly.
-    "sampling": {"theta": 0.0, "transient": 300, "samples": 40, "tol": 1e-5, "max_period": None},
+    "sampling": {"theta": 0.0, "transient": 300, "samples": 40, "tol": 1e-5, "max_period": None, "extend": 0},
     # Default sweep: Figure 9 from period 1 (sigma > ~0.85) down through period 2 and 3.
     "sweep": {
         "param": "sigma",
@@ -147,6 +148,7 @@ CLI_FLAGS: dict[tuple[str, str], str] = {
     ("sampling", "samples"): "--samples",
     ("sampling", "tol"): "--tol",
     ("sampling", "max_period"): "--max-period",
+    ("sampling", "extend"): "--extend",
     ("sweep", "param"): "--param",
     ("sweep", "start"): "--start",
     ("sweep", "stop"): "--stop",
@@ -266,6 +268,9 @@ class SamplingSpec:
     n_samples: int = 40
     tol: float = 1e-5
     max_period: int | None = None
+    #: extra periods a point may run when its samples are not yet periodic (0: none);
+    #: sampled in windows of ``n_samples``, the last window is kept
+    extend: int = 0
 
     def __post_init__(self) -> None:
         from .sampling import check_count, check_theta
@@ -277,6 +282,7 @@ class SamplingSpec:
             raise HarnessInputError("tol", f"must be > 0, got {self.tol!r}")
         if self.max_period is not None:
             check_count(self.max_period, "max_period", minimum=1)
+        check_count(self.extend, "extend")
 
     @classmethod
     def from_layers(cls, layers: Layered) -> "SamplingSpec":
@@ -291,6 +297,7 @@ class SamplingSpec:
             n_samples=_count(layers, "sampling", "samples", minimum=2),
             tol=_number(layers, "sampling", "tol", positive=True),
             max_period=None if mp is None else _count(layers, "sampling", "max_period", minimum=1),
+            extend=_count(layers, "sampling", "extend"),
         )
 
 

@@ -304,6 +304,7 @@ def run_sweep(
         "sampling.samples": sampling.n_samples,
         "sampling.tol": sampling.tol,
         "sampling.max_period": sampling.max_period,
+        "sampling.extend": sampling.extend,
         "initial.u0": state0[0],
         "initial.v0": state0[1],
         **{f"model.{k}": v for k, v in base.items()},

@@ -79,3 +79,15 @@ def test_windows_groups_runs_of_maximal_orbits() -> None:
     impacts = np.array([-1, 1, 1, -1, 1, 2, 1])  # the P2 at 0.6 has 2 impacts: not maximal
     assert windows(sigma, period, impacts) == [(3, 0.2, 0.3), (2, 0.5, 0.5), (1, 0.7, 0.7)]
     assert windows(sigma, period) == [(3, 0.2, 0.3), (2, 0.5, 0.6), (1, 0.7, 0.7)]
+
+
+def test_still_settling_tells_a_converging_alternation_from_a_true_period_two() -> None:
+    from harness.classify import still_settling
+
+    k = np.arange(40)
+    converging = 0.5 + 1e-3 * (-0.97) ** k      # period 1 approached with multiplier -0.97
+    true_p2 = 0.5 + 1e-3 * (-1.0) ** k          # a genuine period-2 orbit
+    zeros = np.zeros(40)
+    assert still_settling(converging, zeros, period=2)
+    assert not still_settling(true_p2, zeros, period=2)
+    assert not still_settling(true_p2, zeros, period=1)  # no shorter period to settle to

@@ -240,3 +240,15 @@ def test_a_failing_task_is_named(backend: str) -> None:
     with pytest.raises(SweepTaskError, match=r"task fresh-p00001 failed .*ZeroDivisionError: model blew up"):
         run_sweep(MappingSimulator(_broken_map), spec, params={"a": 0.0}, backend=backend, workers=1,
                   sampling=SamplingSpec(n_transient=1, n_samples=2), progress=False)
+
+
+def test_extend_lets_slow_points_near_a_window_edge_converge(model: FmuModel) -> None:
+    """Just above the period-1 edge (rho = 1/4, eq (64)) the multiplier is close to -1; with
+    --extend the point runs on until it is periodic: period 1, one impact."""
+    p = model.defaults()
+    sigma = 1.02 * brentq(lambda s: rho_of_sigma(s, p["nu"], p["Omega"], p["r"]) - 0.25, 1e-6, 50.0)
+    spec = SweepSpec("sigma", np.array([sigma]), ("fresh",))
+    ds = run_sweep(model, spec, sampling=SamplingSpec(n_transient=100, n_samples=30, extend=3000),
+                   backend="serial", progress=False)
+    assert int(ds["period"].item()) == 1 and int(ds["orbit_impacts"].item()) == 1
+    assert ds["t"].values[0, 0, -1] > 100 + 30  # it did run on
