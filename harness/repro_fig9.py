@@ -213,6 +213,11 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
     return result, _report(ctx, result)
 
 
+def _span(values: list) -> str:
+    v = [x for x in values if x is not None]
+    return "none measured" if not v else f"{min(v):+.4f} to {max(v):+.4f}"
+
+
 def _report(ctx: Context, res: dict[str, Any]) -> str:
     labels = {"ode": f"ODE (FMU, Gamma = {GAMMA_WALL:g}, shooting)", **{k: v[1] for k, v in VARIANTS.items()}}
     table = markdown_window_table(res["windows"], labels)
@@ -256,14 +261,16 @@ def _report(ctx: Context, res: dict[str, Any]) -> str:
         lines.append(f"| {M} | [{w[0]:.4f}, {hi}] | {lo_s} | {hi_s} |")
     lines += [
         "",
-        f"Scan minus shooting, in sigma. A scan edge is a grid point ({res['scan_grid_step']:.3g} apart), so it lies up "
-        "to one step inside the true edge. Upper edges (an extra contact) are sharp: the scan sees them to a grid step "
-        "unless the jump in sigma knocks the orbit onto a coexisting attractor. Lower edges (flips) are seen late: "
-        "near a flip the multiplier is near -1, the decaying period-2M oscillation needs many periods to fall below the "
-        f"classification tolerance ({SCAN_TOL:g}), so the down scan loses period M some steps inside the window "
-        "(critical slowing down; the bias shrinks with a longer transient). The scans never see a stable maximal "
-        "orbit outside the shooting windows (beyond one grid step) if all differences are >= -step at lower edges "
-        "and <= +step at upper edges. A window narrower than the grid step (M = 4 on the quick grid) is not seen.",
+        f"Scan minus shooting, in sigma; grid step {res['scan_grid_step']:.3g}. Lower edges: "
+        f"{_span([cf['lower_minus_shooting'] for cf in res['scan_confirmation'].values()])}; upper edges: "
+        f"{_span([cf['upper_minus_shooting'] for cf in res['scan_confirmation'].values()])}. "
+        "A scan edge is a grid point, so it lies up to one step inside the true edge. Two effects move it further. "
+        "Near a flip the multiplier is near -1 and the decaying period-2M oscillation needs many periods to fall "
+        f"below the classification tolerance ({SCAN_TOL:g}), so the down scan loses period M some steps inside the "
+        "window (critical slowing down); just below a supercritical flip, the period-2M orbit born there is within "
+        "O(distance^(1/2)) of the period-M orbit and can be classified as period M (a point outside the window). "
+        "Near an upper edge the jump of one grid step can knock the orbit onto a coexisting attractor (M = 1 and "
+        "M = 2 overlap with hysteresis), so the up scan may leave the window early.",
         "",
         "## Where the maps and the ODE disagree",
         "",

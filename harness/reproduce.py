@@ -27,7 +27,7 @@ import math
 import platform
 import time
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -172,4 +172,3 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
     return 0
 
 
-Runner = Callable[[Context], tuple[dict[str, Any], str]]

@@ -183,15 +183,35 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
     for direction, limit in ((-1.0, sigma_range[0]), (+1.0, sigma_range[1])):
         s_good, o_good = sigma_in, orb
         s_bad, o_bad = None, None
+        # last two good (sigma, anchor) for a secant predictor: near a graze another periodic
+        # orbit (with the extra contact) lies ~1e-4 away, so plain continuation over a step
+        # of ~1e-4 in sigma can land on it; the secant's error is O(step^2)
+        history = [(s_good, _rotate_to_impact(o_good, M))]
+
+        def guesses(s: float) -> list:
+            anchor = _rotate_to_impact(o_good, M)
+            out = []
+            if len(history) >= 2:
+                (s1, z1), (s2, z2) = history[-2], history[-1]
+                if s2 != s1:
+                    out.append(z2 + (z2 - z1) * (s - s2) / (s2 - s1))
+            return out + [anchor, guess_of(s)]
+
+        def accept(s: float, o: PeriodicOrbit) -> None:
+            history.append((s, _rotate_to_impact(o, M)))
+            history.sort(key=lambda e: direction * e[0])  # the two nearest the edge last
+            del history[:-2]
+
         while s_bad is None:
             s = s_good * math.exp(direction * dp) if geometric else s_good + direction * dp
             if (s - limit) * direction > 0:
                 if s_good == limit:
                     break
                 s = limit  # test the end of the range itself before giving up
-            ok, o = good_orbit(smap, M, s, [_rotate_to_impact(o_good, M), guess_of(s)], newton)
+            ok, o = good_orbit(smap, M, s, guesses(s), newton)
             if ok:
                 s_good, o_good = s, o
+                accept(s, o)
             else:
                 s_bad, o_bad = s, o
         if s_bad is None:
@@ -199,9 +219,10 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
             continue
         while abs(s_bad - s_good) > xtol:
             s = 0.5 * (s_good + s_bad)
-            ok, o = good_orbit(smap, M, s, [_rotate_to_impact(o_good, M), guess_of(s)], newton)
+            ok, o = good_orbit(smap, M, s, guesses(s), newton)
             if ok:
                 s_good, o_good = s, o
+                accept(s, o)
             else:
                 s_bad, o_bad = s, o
         kind = _kind(o_bad) if o_bad is not None else "lost"
