@@ -5,12 +5,14 @@ comparison logic, so that it can be tested without the FMU:
 
 * coordinates: the FMU samples the real state at t = n + theta; the maps' state is the
   pre-impact ("virtual") state at t = n (FORMULAS.md section 3), related by the free
-  propagator (8).  :func:`virtual_to_phase`, :func:`phase_to_natural`.
-* Figure 9 windows: :func:`theory_windows` (the maps, from :mod:`mapcheck.fig9`),
-  :func:`sweep_windows` (runs of maximal period-M orbits in an up or down scan),
-  :func:`maximal_orbit_guess` (the A~(sigma) map's orbit as a starting guess for shooting),
-  :func:`window_differences`, :func:`best_variant`, :func:`markdown_window_table`.
-* fits: :func:`loglog_slope` (Jacobian slopes, orders of errors).
+  propagator (8).  :func:`free_flight`, :func:`virtual_to_phase`, :func:`phase_to_natural`.
+* windows: :func:`theory_windows` (Figure 9's three map variants, from :mod:`mapcheck.fig9`),
+  :func:`map_windows` (any coefficients), :func:`sweep_windows` (runs of maximal period-M
+  orbits in an up or down scan), :func:`scan_confirmation`, :func:`window_differences`,
+  :func:`best_variant`, :func:`markdown_window_table`; starting guesses for shooting on the
+  FMU from the map's orbits: :func:`maximal_orbit_section_guess` (:func:`maximal_orbit_guess`).
+* direct comparison: :func:`scaled_state`, :func:`map_one_step_error`, :func:`natural_distance`.
+* fits: :func:`loglog_slope` (Jacobian slopes, orders of errors), :func:`power_law_with_offset`.
 """
 from __future__ import annotations
 
@@ -43,6 +45,7 @@ __all__ = [
     "scaled_state",
     "map_one_step_error",
     "natural_distance",
+    "power_law_with_offset",
 ]
 
 TWO_PI = 2.0 * math.pi
