@@ -33,9 +33,11 @@ GAMMAS = (10.0, 1e2, 1e3, 1e4)
 GAMMAS_EXTRA = (1e5, 1e6)
 R_OF = {"fig6": 1.0, "fig7": 0.9}
 SOFT_BETA, HARD_BETA = 0.1, 5.0
-#: x >= 1e-6: the difference steps must be far below x (~1e-8 is the smallest the FMU's
-#: ~3e-11 error allows), else the stencil straddles grazing.
-X_RANGE = (1e-6, 1e-1)
+#: x >= 1e-5: the difference steps must stay below x (else the stencil straddles grazing),
+#: and near grazing the FMU's own error is ~1e-9 in u (measured by `reproduce direct`), so
+#: below x ~ 1e-5 the differences are noise at the percent level and, at r < 1, outliers
+#: appear that the Jacobian's own error estimate does not flag.
+X_RANGE = (1e-5, 1e-1)
 #: A fit needs >= 3 points over >= 1 decade of x.
 MIN_POINTS, MIN_DECADES = 3, 1.0
 #: sigma ranges of the bifurcation diagrams.  At r = 0.9 and Gamma = 10 (low velocity,
@@ -44,8 +46,8 @@ MIN_POINTS, MIN_DECADES = 3, 1.0
 SIGMA_RANGE = {(1.0, 10.0): (-0.1, 0.2), (1.0, 1e3): (-0.1, 0.2),
                (0.9, 10.0): (-0.002, 0.004), (0.9, 1e3): (-0.1, 0.2)}
 SETTINGS = {
-    True: {"x_num": 16, "sigma_num": 31, "transient": 200, "samples": 24},
-    False: {"x_num": 41, "sigma_num": 121, "transient": 400, "samples": 48},
+    True: {"x_num": 13, "sigma_num": 31, "transient": 200, "samples": 24},
+    False: {"x_num": 33, "sigma_num": 121, "transient": 400, "samples": 48},
 }
 
 
@@ -256,6 +258,8 @@ def _report(ctx: Context, res: dict[str, Any]) -> str:
             + f"{_fmt(h and h['slope'])} | {_fmt(h and h['slope_offset_removed'])} | "
             + ("-" if not h else f"{h['beta_range'][0]:.2g}-{h['beta_range'][1]:.2g}") + " |")
     hard = {G: f["hard"]["slope"] for G, f in res["slopes"].items() if f["hard"]}
+    h4 = res["slopes"].get(1e4, {}).get("hard")
+    b4 = h4["beta_range"][1] if h4 else float("nan")
     lines += [
         "",
         "'-': the regime covers less than a decade of reliable x at this stiffness.",
@@ -279,9 +283,9 @@ def _report(ctx: Context, res: dict[str, Any]) -> str:
         "",
         f"Soft regime: {res['verdict'].split('; hard')[0]}. Hard regime: the FMU's exponent approaches -1/2 only "
         "as the wall stiffens: " + ", ".join(f"Gamma = {G:g}: {s:+.3f}" for G, s in hard.items())
-        + ". At the paper's stiffest wall (1e4, beta up to ~30 here) the local slope is steady near -0.45 over two "
-        "decades of x, so the difference from -1/2 is a finite-stiffness effect, not an O(1) offset (removing one "
-        "changes it little); it shrinks as Gamma grows.",
+        + f". At the paper's stiffest wall (1e4, beta up to {b4:.0f} in the fit) the slope is about "
+        f"{_fmt(hard.get(1e4))}, also with the regular O(1) part removed, so the difference from -1/2 is a "
+        "finite-stiffness effect, not an offset; it shrinks as Gamma grows (the walls beyond the paper).",
         "",
         f"Figures: `{fig}_jacobian.png` (|J11 - P11| against x, fitted ranges shaded, slopes annotated), "
         f"`{fig}_bifurcation.png` (FMU up/down scans at Gamma = 10 and 1000).",

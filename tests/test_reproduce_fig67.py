@@ -33,13 +33,15 @@ def test_outputs(fig) -> None:
 
 
 def test_soft_slopes(fig) -> None:
-    """Soft regime (beta <= 0.1) at Gamma = 10 and 100, where it covers over a decade of x."""
+    """Soft regime (beta <= 0.1) at Gamma = 10, the only paper stiffness where it covers over
+    a decade of reliable x (x >= 1e-5: below, the FMU's own error near grazing enters the
+    differences); there it must hold, and the stiffer walls have no soft range that wide."""
     name, _, res = fig
     expected = 0.5 if name == "fig6" else -0.5
-    for G in ("10.0", "100.0"):
-        soft = res["slopes"][G]["soft"]
-        assert soft is not None, G
-        assert soft["slope"] == pytest.approx(expected, abs=TOL), (G, soft)
+    soft = res["slopes"]["10.0"]["soft"]
+    assert soft is not None
+    assert soft["slope"] == pytest.approx(expected, abs=TOL), soft
+    assert soft["x_range"][1] / soft["x_range"][0] >= 10
 
 
 def test_hard_slopes_approach_minus_one_half(fig) -> None:
