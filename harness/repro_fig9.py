@@ -143,8 +143,10 @@ def plot_diagrams(ctx: Context, ds, windows: dict[str, Any], map_grid: int) -> l
     ax.set_yticks(range(len(names)), [labels[n] for n in names], fontsize=8)
     ax.set_xlabel("sigma")
     ax.set_xlim(0.08, 1.0)
+    ax.set_ylim(-0.6, len(names) - 0.4)
     ax.set_title("Stable maximal period-M windows (M = 1 extends beyond the plot)", fontsize=10)
-    ax.legend(loc="lower right", fontsize=8, ncol=4)
+    # outside the axes: inside, it would cover a row of windows
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), fontsize=8, ncol=4, frameon=False)
     fig.tight_layout()
     files.append(_save(fig, ctx.out / "fig9_windows.png"))
     return files
