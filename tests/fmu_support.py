@@ -49,8 +49,9 @@ class LoggedSlave:
                                modelIdentifier=self.md.coSimulation.modelIdentifier,
                                instanceName=self.name)
 
-        def log(env, instance, status, category, message):  # noqa: ANN001
-            self.messages.append((status, category.decode(), message.decode()))
+        def log(env, instance, status, category, message):  # noqa: ANN001 (ctypes callback)
+            # pythonfmu passes a NULL category with its own fatal message
+            self.messages.append((status, (category or b"").decode(), (message or b"").decode()))
 
         cb = fmi2CallbackFunctions()
         cb.logger = fmi2CallbackLoggerTYPE(log)
@@ -71,10 +72,10 @@ class LoggedSlave:
             else:
                 self.slave.setReal([self.vr[k]], [float(x)])
 
-    def start(self, t0: float = 0.0, **params: float) -> None:
-        """Reset, set the parameters, initialise at t0."""
+    def start(self, t0: float = 0.0, tolerance: float | None = None, **params: float) -> None:
+        """Reset, set the parameters, initialise at t0 (with the importer's tolerance, if any)."""
         self.slave.reset()
-        self.slave.setupExperiment(startTime=t0)
+        self.slave.setupExperiment(startTime=t0, tolerance=tolerance)
         self.slave.enterInitializationMode()
         self.set(**params)
         self.slave.exitInitializationMode()
@@ -102,6 +103,16 @@ class LoggedSlave:
 
     def close(self) -> None:
         self.slave.freeInstance()
+
+
+def harness_params(model, **overrides: float) -> dict:  # noqa: ANN001 (harness.FmuModel)
+    """The FMU's default parameters for the harness, without the start state (u0, v0), which
+    the harness passes separately, updated with `overrides`."""
+    p = model.defaults()
+    for k in ("u0", "v0"):
+        p.pop(k)
+    p.update(overrides)
+    return p
 
 
 def on_orbit(sigma: float, t0: float) -> dict[str, float]:

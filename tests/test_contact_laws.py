@@ -85,7 +85,7 @@ def test_hunt_crossley_first_contact_restitution(fmu):
     rs = []
     for alpha in (0.0, 0.01, 0.05):
         fmu.start(t0=0.0, contact=2, alpha_hc=alpha, **FREE)
-        t, inside, seen = 0.0, False, False
+        t, seen = 0.0, False
         while t < 3.0:  # first contact is near t = 0.6 (quarter period + path to u = 0)
             t += 0.002
             fmu.step_to(t)

@@ -12,12 +12,6 @@ from harness.config import Layered, parameter_values, parse_modes
 FMU = Path(__file__).resolve().parents[1] / "build" / "fmu" / "ImpactOscillator.fmu"
 
 
-@pytest.fixture(scope="module")
-def model() -> FmuModel:
-    assert FMU.is_file(), f"build the FMU first ({FMU} missing)"
-    return FmuModel(FMU)
-
-
 def _toml(tmp_path: Path, text: str) -> Path:
     path = tmp_path / "exp.toml"
     path.write_text(text)

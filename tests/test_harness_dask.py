@@ -32,12 +32,6 @@ SAMPLING = SamplingSpec(n_transient=300, n_samples=10)
 
 
 @pytest.fixture(scope="module")
-def model() -> FmuModel:
-    assert FMU.is_file(), f"build the FMU first ({FMU} missing)"
-    return FmuModel(FMU)
-
-
-@pytest.fixture(scope="module")
 def cluster(tmp_path_factory: pytest.TempPathFactory):
     """Scheduler + 2 single-threaded worker processes on 127.0.0.1; yields (client, workers).
 

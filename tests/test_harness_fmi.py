@@ -10,22 +10,9 @@ import pytest
 from harness import FmuModel, FmuSimulator, HarnessInputError, MappingSimulator, strobe
 from harness.sampling import sample_periods
 from mapcheck.exact import ExactOscillator
+from tests.fmu_support import harness_params as _params
 
 FMU = Path(__file__).resolve().parents[1] / "build" / "fmu" / "ImpactOscillator.fmu"
-
-
-@pytest.fixture(scope="module")
-def model() -> FmuModel:
-    assert FMU.is_file(), f"build the FMU first ({FMU} missing)"
-    return FmuModel(FMU)
-
-
-def _params(model: FmuModel, **kw) -> dict:
-    p = model.defaults()
-    for k in ("u0", "v0"):
-        p.pop(k)
-    p.update(kw)
-    return p
 
 
 def _rewritten_fmu(tmp_path: Path, edit) -> Path:

@@ -12,29 +12,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness import FmuModel, FmuSimulator, HarnessInputError, jacobian_vs_x, map_jacobian
+from harness import HarnessInputError, jacobian_vs_x, map_jacobian
 from mapcheck.linear import propagator
+from tests.fmu_support import harness_params as _params
 
 FMU = Path(__file__).resolve().parents[1] / "build" / "fmu" / "ImpactOscillator.fmu"
-
-
-@pytest.fixture(scope="module")
-def model() -> FmuModel:
-    assert FMU.is_file(), f"build the FMU first ({FMU} missing)"
-    return FmuModel(FMU)
-
-
-@pytest.fixture(scope="module")
-def sim(model: FmuModel) -> FmuSimulator:
-    return FmuSimulator(model.source())
-
-
-def _params(model: FmuModel, **kw) -> dict:
-    p = model.defaults()
-    for k in ("u0", "v0"):
-        p.pop(k)
-    p.update(kw)
-    return p
 
 
 @pytest.mark.parametrize("nu, Omega", [(4.605170185988091, 0.3059238689620112), (0.196, 7.368)])

@@ -10,32 +10,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness import FmuModel, FmuSimulator, strobe
+from harness import strobe
 from harness.sampling import sample_periods
 from mapcheck.exact import ExactOscillator
+from tests.fmu_support import harness_params as _params
 
 FMU = Path(__file__).resolve().parents[1] / "build" / "fmu" / "ImpactOscillator.fmu"
 WALL_NAMES = {0: "none", 1: "compliant", 2: "rigid"}
 FIG7 = dict(nu=0.196, Omega=7.368)  # underdamped case of figures 6 and 7
-
-
-@pytest.fixture(scope="module")
-def model() -> FmuModel:
-    assert FMU.is_file(), f"build the FMU first ({FMU} missing)"
-    return FmuModel(FMU)
-
-
-@pytest.fixture(scope="module")
-def sim(model: FmuModel) -> FmuSimulator:
-    return FmuSimulator(model.source())
-
-
-def _params(model: FmuModel, **kw) -> dict:
-    p = model.defaults()
-    for k in ("u0", "v0"):
-        p.pop(k)
-    p.update(kw)
-    return p
 
 
 def _oracle(p: dict) -> ExactOscillator:

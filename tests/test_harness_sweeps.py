@@ -27,12 +27,6 @@ FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
 DATA_VARS = ("u", "v", "impacts", "t", "period", "orbit_impacts")
 
 
-@pytest.fixture(scope="module")
-def model() -> FmuModel:
-    assert FMU.is_file(), f"build the FMU first ({FMU} missing)"
-    return FmuModel(FMU)
-
-
 def rho_of_sigma(sigma: float, nu: float, Omega: float, r: float) -> float:
     """Strongly damped 1D map parameter, eq (56) with |A~(sigma)| (FORMULAS.md 7.3)."""
     A_tilde = (1 + sigma) * 4 * math.pi**2 - sigma * Omega**2

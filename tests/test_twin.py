@@ -14,7 +14,6 @@
 """
 from __future__ import annotations
 
-import ctypes
 import importlib.util
 import math
 import subprocess
@@ -29,19 +28,12 @@ import numpy as np
 import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import (
-    FMU2Slave,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-)
-from fmpy.logging import addLoggerProxy
 from fmpy.validation import validate_fmu
 
 from harness.fmi import FmuModel
 from harness.simulator import FmuSimulator
 from mapcheck.exact import ExactOscillator
+from tests.fmu_support import WALLS, LoggedSlave
 
 ROOT = Path(__file__).resolve().parents[1]
 TWIN_SRC = ROOT / "fmu_src" / "pytwin"
@@ -50,13 +42,8 @@ C_FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)  # overdamped, the paper's Fig. 9
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)
-WALLS = {"none": 0, "compliant": 1, "rigid": 2}
 THETA = 0.5  # strobe half a period away from the grazing phase t = n
 
-_libc = ctypes.CDLL(None)
-_libc.calloc.restype = ctypes.c_void_p
-_libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
-_libc.free.argtypes = [ctypes.c_void_p]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -81,66 +68,13 @@ def c_fmu() -> Path:
     return C_FMU
 
 
-class Slave:
-    """fmpy's FMU2Slave on one FMU, collecting log messages as (status, category, text).
+def Slave(path: Path, logging: bool = False) -> LoggedSlave:
+    """fmpy's FMU2Slave on one FMU, collecting log messages (status, category, text).
 
     The tests of the twin alone use this (not the harness) so that they also see the FMI
     status codes and the log; the cross-check uses the harness.
     """
-
-    def __init__(self, path: Path, logging: bool = False) -> None:
-        self.md = read_model_description(str(path))
-        self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
-        self.types = {v.name: v.type for v in self.md.modelVariables}
-        self.messages: list[tuple[int, str, str]] = []
-        self.fmu = FMU2Slave(guid=self.md.guid, unzipDirectory=extract(str(path)),
-                             modelIdentifier=self.md.coSimulation.modelIdentifier,
-                             instanceName="twin-test")
-
-        def log(env, instance, status, category, message):  # noqa: ANN001 (ctypes callback)
-            # pythonfmu passes a NULL category with its own fatal message
-            self.messages.append((status, (category or b"").decode(), (message or b"").decode()))
-
-        cb = fmi2CallbackFunctions()
-        cb.logger = fmi2CallbackLoggerTYPE(log)
-        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
-        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
-        addLoggerProxy(ctypes.byref(cb))  # formats printf-style messages (the C FMU's)
-        self._keep = (cb, log)  # the callbacks must outlive the instance
-        self.fmu.instantiate(callbacks=cb, loggingOn=logging)
-        self.t = 0.0
-
-    def set(self, **values: float) -> None:
-        for k, x in values.items():
-            if self.types[k] == "Integer":
-                self.fmu.setInteger([self.vr[k]], [int(WALLS.get(x, x) if isinstance(x, str) else x)])
-            else:
-                self.fmu.setReal([self.vr[k]], [float(x)])
-
-    def start(self, t0: float = 0.0, tolerance: float | None = None, **params: float) -> None:
-        """Reset, set the parameters, initialise at t0 (with the importer's tolerance)."""
-        self.fmu.reset()
-        self.fmu.setupExperiment(startTime=t0, tolerance=tolerance)
-        self.fmu.enterInitializationMode()
-        self.set(**params)
-        self.fmu.exitInitializationMode()
-        self.t = t0
-
-    def step_to(self, t: float) -> None:
-        self.fmu.doStep(self.t, t - self.t)
-        self.t = t
-
-    def state(self) -> np.ndarray:
-        return np.array(self.fmu.getReal([self.vr["u"], self.vr["v"]]))
-
-    def impacts(self) -> int:
-        return int(self.fmu.getInteger([self.vr["impacts"]])[0])
-
-    def in_contact(self) -> bool:
-        return bool(self.fmu.getBoolean([self.vr["in_contact"]])[0])
-
-    def close(self) -> None:
-        self.fmu.freeInstance()
+    return LoggedSlave(path=path, name="twin-test", logging=logging)
 
 
 @pytest.fixture(scope="module")
@@ -351,22 +285,22 @@ def test_fmu_state_save_restore_serialize(twin_fmu, c_fmu) -> None:
             u0, v0 = on_orbit(THETA, 0.2)
             a.start(t0=THETA, sigma=0.2, u0=u0, v0=v0, **FIG9)
             a.step_to(THETA + 3)
-            saved = a.fmu.getFMUstate()
-            blob = a.fmu.serializeFMUstate(saved)
+            saved = a.slave.getFMUstate()
+            blob = a.slave.serializeFMUstate(saved)
             a.step_to(THETA + 8)
             first = (a.state(), a.impacts())
-            a.fmu.setFMUstate(saved)
+            a.slave.setFMUstate(saved)
             a.t = THETA + 3
             a.step_to(THETA + 8)
             again = (a.state(), a.impacts())
-            a.fmu.freeFMUstate(saved)
+            a.slave.freeFMUstate(saved)
             b.start(t0=0.0)  # another run entirely, then the serialised state
-            restored = b.fmu.deSerializeFMUstate(blob)
-            b.fmu.setFMUstate(restored)
+            restored = b.slave.deSerializeFMUstate(blob)
+            b.slave.setFMUstate(restored)
             b.t = THETA + 3
             b.step_to(THETA + 8)
             other = (b.state(), b.impacts())
-            b.fmu.freeFMUstate(restored)
+            b.slave.freeFMUstate(restored)
         finally:
             a.close()
             b.close()
