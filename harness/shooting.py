@@ -26,7 +26,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from mapcheck.orbits import PeriodicOrbit, solve_periodic_orbit
+from mapcheck.orbits import PeriodicOrbit, edge_kind, solve_periodic_orbit
 
 from .simulator import Simulator
 
@@ -112,19 +112,6 @@ class Edge:
     kind: str
     bracket: float
     multipliers: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
-
-
-def _kind(orb: PeriodicOrbit) -> str:
-    if not orb.converged:
-        return "lost"
-    if np.count_nonzero(orb.contacts) > 1 or orb.contacts.max() > 1:
-        return "graze"
-    if np.count_nonzero(orb.contacts) == 0:
-        return "no-impact"
-    m = orb.multipliers[np.argmax(np.abs(orb.multipliers))]
-    if abs(m.imag) > 1e-9:
-        return "torus"
-    return "flip" if m.real < 0 else "fold"
 
 
 def _rotate_to_impact(orb: PeriodicOrbit, M: int) -> np.ndarray:
@@ -225,7 +212,7 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
                 accept(s, o)
             else:
                 s_bad, o_bad = s, o
-        kind = _kind(o_bad) if o_bad is not None else "lost"
+        kind = edge_kind(o_bad) if o_bad is not None else "lost"
         if kind == "lost":
             # Newton found no orbit beyond the edge: iterate the last good orbit there and
             # look at its contacts (an extra one in a non-impacting period: a graze)

@@ -144,7 +144,13 @@ def solve_periodic_orbit(step: Step, z0, M: int, *, tol: float = 1e-12, max_iter
     return PeriodicOrbit(pts[:-1], cont, mult.astype(complex), converged, res)
 
 
-def _kind(orb: PeriodicOrbit, M: int) -> str:
+def edge_kind(orb: PeriodicOrbit) -> str:
+    """Why a periodic orbit stopped being a stable maximal one, at the far side of an edge.
+
+    Returns "lost" (no convergence), "graze" (an extra or double contact), "no-impact",
+    "torus" (complex multipliers leave the unit circle), "flip" (a multiplier through -1)
+    or "fold" (through +1).
+    """
     if not orb.converged:
         return "lost"
     if np.count_nonzero(orb.contacts) > 1 or orb.contacts.max() > 1:
@@ -197,7 +203,7 @@ def window_edge(step_of: Callable[[float], Step], M: int, p_in: float, z_in, dir
             z_good = orb.z[int(np.argmax(orb.contacts > 0) + 1) % M]
         else:
             p_bad, orb_bad = pm, o2
-    kind = _kind(orb_bad, M)
+    kind = edge_kind(orb_bad)
     if kind == "lost":
         # Newton found nothing beyond the edge: look at the edge orbit's contacts there
         for cont in (_orbit(step_of(p_bad), orb.z[0], M)[1], orb_bad.contacts):
