@@ -55,7 +55,7 @@ def test_accuracy_columns_are_sane(quick_run):
             assert m["contacts_exact"] >= 1, key  # both cases have contacts every few periods
             assert 0 <= m["map_error"] < 1e-6, (case["key"], key, m["map_error"])
             assert m["missed"] == 0 and m["invented"] == 0, (case["key"], key)
-        assert case["methods"]["exact"]["map_error"] < 1e-12  # restart vs continue of the closed form
+        assert case["methods"]["exact"]["map_error"] < 1e-10  # restart vs continue of the closed form
 
 
 def test_other_sections(quick_run):
