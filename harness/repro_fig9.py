@@ -54,7 +54,8 @@ def ode_windows_shooting(ctx: Context, xtol: float, sigma_range: tuple[float, fl
     """ODE windows on the FMU by Newton shooting, started from the A~(sigma) map's orbits."""
     _, _, c = _fig9_coefficients()
     smap = StroboscopicMap(ctx.simulator(), ctx.params(Gamma=GAMMA_WALL, r=R, wall=1), THETA)
-    return map_guided_windows(smap, c, theory_windows(M_MAX)["map_A_tilde"], sigma_range, xtol)
+    return map_guided_windows(smap, c, theory_windows(M_MAX)["map_A_tilde"], sigma_range, xtol,
+                              workers=ctx.workers or min(2, _cores()))
 
 
 def ode_scans(ctx: Context, grid: np.ndarray, transient: int, samples: int):
@@ -164,8 +165,8 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
     cfg = SETTINGS[ctx.quick]
     grid = np.linspace(*cfg["grid"])
     step = float(grid[1] - grid[0])
-    # scans in a worker pool (the up and down chains in parallel), then shooting here
-    # (one after the other: a sweep thread beside the shooting slowed it fivefold)
+    # scans in a worker pool (the up and down chains in parallel), then the windows' shooting
+    # in a pool too (one after the other: on 2 cores a sweep beside the shooting slowed both)
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
     ds = ode_scans(ctx, grid, cfg["transient"], cfg["samples"])

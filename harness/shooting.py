@@ -234,8 +234,41 @@ def newton_for(sigma: float) -> dict[str, Any]:
     return {**NEWTON, "scale": scale, "tol": tol}
 
 
+def _shoot_window(smap: StroboscopicMap, c: Any, M: int, w: tuple[float, float | None],
+                  sigma_range: tuple[float, float], xtol: float, relative: bool) -> tuple[Edge, Edge]:
+    """Both edges of the FMU's period-M window, started inside the map's window ``w``."""
+    from mapcheck.compare import maximal_orbit_section_guess
+
+    lo, hi = w
+    hi = hi if hi is not None else 2.0 * lo  # no upper edge: start well above the flip
+
+    def guess(s: float) -> np.ndarray | None:
+        z = maximal_orbit_section_guess(c, M, s, smap.theta, "tilde")
+        return None if z is None else z - smap.offset(s)
+
+    s0 = 0.5 * (lo + hi)
+    if relative:  # geometric: windows accumulating at sigma -> 0
+        s0 = math.sqrt(lo * hi)
+        # 6.3 steps to an edge: the march does not land on the map's edge itself
+        dp, tol = math.log(hi / lo) / 6.3, xtol * lo
+    else:
+        dp, tol = min(0.02, (hi - lo) / 6.0), xtol  # several steps inside even a narrow window
+    return window_edges(smap, M, s0, guess(s0), guess, sigma_range, dp, tol, newton_for(s0), relative)
+
+
+def _shoot_window_task(source: Any, params: Mapping[str, Any], theta: float, c: Any, M: int,
+                       w: tuple[float, float | None], sigma_range: tuple[float, float], xtol: float,
+                       relative: bool) -> tuple[int, Edge, Edge, int]:
+    """:func:`_shoot_window` in a worker process, on an FMU instance of its own."""
+    from .simulator import FmuSimulator
+
+    smap = StroboscopicMap(FmuSimulator(source, instance_name=f"shoot-M{M}"), params, theta)
+    e_lo, e_hi = _shoot_window(smap, c, M, w, sigma_range, xtol, relative)
+    return M, e_lo, e_hi, smap.evaluations
+
+
 def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], sigma_range: tuple[float, float],
-                       xtol: float, relative: bool = False) -> dict[str, Any]:
+                       xtol: float, relative: bool = False, workers: int = 1) -> dict[str, Any]:
     """ODE windows on the FMU for every period in ``guide`` (the map's windows).
 
     Newton shooting starts inside each map window from the map's own maximal orbit
@@ -243,7 +276,8 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
     ``c``, the state at the FMU's section after the impact), and follows the orbit to both
     edges (:func:`window_edges`).  ``relative``: ``xtol`` is relative to the map window's
     lower edge and the marching is geometric (windows that accumulate at sigma -> 0, as in
-    Figure 1).
+    Figure 1).  ``workers`` > 1 shoots the windows in that many processes (the windows are
+    independent; each process opens the FMU of ``smap``'s simulator).
 
     Returns
     -------
@@ -251,30 +285,34 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
         ``windows`` {M: (lo, hi or None)}, ``kinds`` {M: (kind_lo, kind_hi)}, ``brackets``,
         ``multipliers_at_lower_edge``, ``fmu_periods`` (one-period FMU runs used).
     """
-    from mapcheck.compare import maximal_orbit_section_guess
     out: dict[str, Any] = {"windows": {}, "kinds": {}, "brackets": {}, "multipliers_at_lower_edge": {}}
+    todo = {M: w for M, w in guide.items() if w is not None}
+    results: dict[int, tuple[Edge, Edge]] = {}
+    evaluations = 0
+    if workers > 1 and len(todo) > 1:
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        # spawn, as the sweep pool does: the parent holds a loaded FMU library
+        ctx = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx) as pool:
+            futures = [pool.submit(_shoot_window_task, smap.sim.source, smap.params, smap.theta, c, M, w,
+                                   sigma_range, xtol, relative) for M, w in todo.items()]
+            for f in futures:
+                M, e_lo, e_hi, n = f.result()
+                results[M] = (e_lo, e_hi)
+                evaluations += n
+    else:
+        for M, w in todo.items():
+            results[M] = _shoot_window(smap, c, M, w, sigma_range, xtol, relative)
     for M, w in guide.items():
         if w is None:
             out["windows"][M] = None
             continue
-        lo, hi = w
-        hi = hi if hi is not None else 2.0 * lo  # no upper edge: start well above the flip
-
-        def guess(s: float, M: int = M) -> np.ndarray | None:
-            z = maximal_orbit_section_guess(c, M, s, smap.theta, "tilde")
-            return None if z is None else z - smap.offset(s)
-
-        s0 = 0.5 * (lo + hi)
-        if relative:  # geometric: windows accumulating at sigma -> 0
-            s0 = math.sqrt(lo * hi)
-            # 6.3 steps to an edge: the march does not land on the map's edge itself
-            dp, tol = math.log(hi / lo) / 6.3, xtol * lo
-        else:
-            dp, tol = min(0.02, (hi - lo) / 6.0), xtol  # several steps inside even a narrow window
-        e_lo, e_hi = window_edges(smap, M, s0, guess(s0), guess, sigma_range, dp, tol, newton_for(s0), relative)
+        e_lo, e_hi = results[M]
         out["windows"][M] = (e_lo.sigma, e_hi.sigma)
         out["kinds"][M] = (e_lo.kind, e_hi.kind)
         out["brackets"][M] = (e_lo.bracket, e_hi.bracket)
         out["multipliers_at_lower_edge"][M] = e_lo.multipliers
-    out["fmu_periods"] = smap.evaluations
+    out["fmu_periods"] = smap.evaluations + evaluations
     return out
