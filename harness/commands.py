@@ -168,7 +168,6 @@ def _scan_option(text: str | None) -> dict[str, Any]:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``sweep``: 1D/2D sweep on the chosen backend, resumable; NetCDF + diagram."""
-    from .plots import bifurcation_diagram, period_map
     from .results import write_netcdf
     from .sweeps import SweepStats, run_sweep
 
@@ -218,6 +217,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             print(f"  {direction}: windows of maximal orbits (1 impact per period): {text}")
     print(f"wrote {out}")
     if plot:
+        # matplotlib only now: its 0.8 s import would sit on the serial path of every sweep
+        from .plots import bifurcation_diagram, period_map
+
         drawn = period_map(ds, plot) if spec.scan_param else bifurcation_diagram(ds, plot)
         print(f"plot: {drawn}")
     return 0
