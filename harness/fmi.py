@@ -419,13 +419,20 @@ class Fmi3Slave(_LogMixin):
     """One FMI 3.0 Co-Simulation instance (fmpy's ``FMU3Slave``), same interface as
     :class:`Fmi2Slave`.
 
-    Instantiated without event mode and without early return, so ``doStep`` integrates the
-    whole communication step and handles wall events inside it, as the FMI 2 build does.
+    By default instantiated without event mode and without early return, so ``doStep``
+    integrates the whole communication step and handles wall events inside it, as the FMI 2
+    build does. With ``record_events`` it asks for event mode and early return: ``doStep``
+    then stops at every wall event the FMU locates, the time it reports
+    (``lastSuccessfulTime``) is appended to :attr:`event_times`, the jump is applied in event
+    mode, and the step goes on to its end.
     """
 
-    def __init__(self, model: FmuModel, unzipdir: str, instance_name: str) -> None:
+    def __init__(self, model: FmuModel, unzipdir: str, instance_name: str,
+                 record_events: bool = False) -> None:
         from fmpy.fmi3 import FMU3Slave
 
+        self.record_events = bool(record_events)
+        self.event_times: list[float] = []
         self.messages = collections.deque(maxlen=50)
         self._fmu = FMU3Slave(
             guid=model.guid,
@@ -437,8 +444,8 @@ class Fmi3Slave(_LogMixin):
         def log_message(env: Any, status: int, category: bytes, message: bytes) -> None:
             self._log(status, category, message)
 
-        self._fmu.instantiate(loggingOn=False, eventModeUsed=False, earlyReturnAllowed=False,
-                              logMessage=log_message)
+        self._fmu.instantiate(loggingOn=False, eventModeUsed=self.record_events,
+                              earlyReturnAllowed=self.record_events, logMessage=log_message)
         self._log_message = log_message  # keep the callback alive
         self._needs_reset = False
 
@@ -447,6 +454,19 @@ class Fmi3Slave(_LogMixin):
         self._fmu.enterInitializationMode(startTime=t0)
         self.set(values)
         self._fmu.exitInitializationMode()
+        self.event_times = []
+        if self.record_events:  # with eventModeUsed the FMU leaves initialization in event mode
+            self._settle_events()
+
+    def _settle_events(self) -> None:
+        """Event mode: let the FMU apply its jumps until it needs no more, then step mode."""
+        for _ in range(1000):
+            need_update, terminate, *_ = self._fmu.updateDiscreteStates()
+            if terminate:
+                raise FmuError("the FMU asked to terminate in event mode")
+            if not need_update:
+                break
+        self._fmu.enterStepMode()
 
     _SETTERS = {"Float64": "setFloat64", "Float32": "setFloat32", "Int8": "setInt8", "Int16": "setInt16",
                 "Int32": "setInt32", "Int64": "setInt64", "UInt8": "setUInt8", "UInt16": "setUInt16",
@@ -473,12 +493,17 @@ class Fmi3Slave(_LogMixin):
     def do_step(self, t: float, h: float) -> None:
         target = t + h
         while True:
-            _, terminate, early, reached = self._fmu.doStep(currentCommunicationPoint=t, communicationStepSize=target - t)
+            need, terminate, early, reached = self._fmu.doStep(currentCommunicationPoint=t, communicationStepSize=target - t)
             if terminate:
                 raise FmuError(f"the FMU asked to terminate at t={reached}")
+            if self.record_events and (need or early):
+                if early:
+                    self.event_times.append(float(reached))
+                self._fmu.enterEventMode()
+                self._settle_events()
             if not early or reached >= target:
                 return
-            t = reached  # early return despite earlyReturnAllowed=False: continue the step
+            t = reached  # continue the step after the event
 
     def getter(self, variables: list[VariableInfo]) -> Callable[[], list]:
         vrs = [v.value_reference for v in variables]
@@ -504,12 +529,22 @@ SLAVE_CLASSES: dict[str, type] = {"2": Fmi2Slave, "3": Fmi3Slave}
 _INSTANTIATE_LOCK = threading.Lock()
 
 
-def make_slave(model: FmuModel, unzipdir: str, instance_name: str) -> Fmi2Slave | Fmi3Slave:
+def make_slave(model: FmuModel, unzipdir: str, instance_name: str,
+               record_events: bool = False) -> Fmi2Slave | Fmi3Slave:
     """Instantiate the slave class matching the FMU's ``fmiVersion``.
+
+    ``record_events`` (FMI 3.0 only: event mode and early return) records the time of every
+    wall event the FMU reports.
 
     Serialized: fmpy changes the process's working directory while it loads the library,
     which is not safe with several threads (a Dask worker with ``--nthreads > 1``).
     """
     cls = SLAVE_CLASSES[model.fmi_version.split(".")[0]]
+    if record_events and cls is not Fmi3Slave:
+        raise HarnessInputError(
+            "--fmu", f"recording wall-event times needs an FMI 3.0 FMU with event mode and early "
+            f"return; {model.path} is FMI {model.fmi_version}")
     with _INSTANTIATE_LOCK:
+        if record_events:
+            return cls(model, unzipdir, instance_name, record_events=True)
         return cls(model, unzipdir, instance_name)

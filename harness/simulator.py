@@ -60,13 +60,17 @@ class FmuSimulator:
     max_step : float
         Longest communication step; a period is done in one ``doStep`` by default because
         the FMU handles its events inside a step (``canHandleVariableCommunicationStepSize``).
+    record_events : bool
+        FMI 3.0 FMUs only: run with event mode and early return, and record the time of every
+        wall event in :attr:`event_times` (since the last :meth:`start`).
     """
 
-    def __init__(self, source: FmuSource, instance_name: str = "harness", max_step: float = 1.0) -> None:
+    def __init__(self, source: FmuSource, instance_name: str = "harness", max_step: float = 1.0,
+                 record_events: bool = False) -> None:
         unzipdir, model = open_source(source)
         self.model: FmuModel = model
         self.source = source
-        self._slave = make_slave(model, unzipdir, instance_name)
+        self._slave = make_slave(model, unzipdir, instance_name, record_events)
         self._max_step = float(max_step)
         v = model.variables
         self._get_state = self._slave.getter([v[n] for n in STATE_OUTPUTS])
@@ -131,6 +135,11 @@ class FmuSimulator:
         u, v = self._get_state()
         (n,) = self._get_impacts()
         return float(u), float(v), int(n) + self._impact_offset
+
+    @property
+    def event_times(self) -> list[float]:
+        """Times of the wall events since :meth:`start` (with ``record_events``; else empty)."""
+        return list(getattr(self._slave, "event_times", []))
 
     @property
     def messages(self) -> list[tuple[int, str, str]]:
