@@ -319,6 +319,16 @@ class _LogMixin:
         return ""
 
 
+def _group_by_type(values: Mapping[VariableInfo, Any]) -> dict[str, tuple[list[int], list[Any]]]:
+    """Value references and values per FMI type, so that each type is set in one call."""
+    by_type: dict[str, tuple[list[int], list[Any]]] = {}
+    for var, value in values.items():
+        vrs, vals = by_type.setdefault(var.type, ([], []))
+        vrs.append(var.value_reference)
+        vals.append(value)
+    return by_type
+
+
 class Fmi2Slave(_LogMixin):
     """One FMI 2.0 Co-Simulation instance (fmpy's low-level ``FMU2Slave``).
 
@@ -370,12 +380,7 @@ class Fmi2Slave(_LogMixin):
 
     def set(self, values: Mapping[VariableInfo, Any]) -> None:
         """Set variables grouped by type (one FMI call per type)."""
-        by_type: dict[str, tuple[list[int], list[Any]]] = {}
-        for var, value in values.items():
-            vrs, vals = by_type.setdefault(var.type, ([], []))
-            vrs.append(var.value_reference)
-            vals.append(value)
-        for typ, (vrs, vals) in by_type.items():
+        for typ, (vrs, vals) in _group_by_type(values).items():
             if typ in REAL_TYPES:
                 self._fmu.setReal(vrs, [float(x) for x in vals])
             elif typ in INTEGER_TYPES:
@@ -473,12 +478,7 @@ class Fmi3Slave(_LogMixin):
                 "UInt32": "setUInt32", "UInt64": "setUInt64", "Boolean": "setBoolean", "Enumeration": "setInt64"}
 
     def set(self, values: Mapping[VariableInfo, Any]) -> None:
-        by_type: dict[str, tuple[list[int], list[Any]]] = {}
-        for var, value in values.items():
-            vrs, vals = by_type.setdefault(var.type, ([], []))
-            vrs.append(var.value_reference)
-            vals.append(value)
-        for typ, (vrs, vals) in by_type.items():
+        for typ, (vrs, vals) in _group_by_type(values).items():
             setter = self._SETTERS.get(typ)
             if setter is None:  # pragma: no cover - rejected earlier by coerce_value
                 raise FmuError(f"cannot set variables of type {typ}")
