@@ -319,6 +319,22 @@ class _LogMixin:
         return ""
 
 
+class _SlaveBase(_LogMixin):
+    """What the FMI 2 and FMI 3 slaves share: ``self._fmu`` (fmpy's slave) and its release."""
+
+    _fmu: Any
+    _needs_reset: bool
+
+    def close(self) -> None:
+        try:
+            if self._needs_reset:
+                self._fmu.terminate()
+        except Exception:  # an instance in Error state cannot terminate; free it anyway
+            pass
+        finally:
+            self._fmu.freeInstance()
+
+
 def _group_by_type(values: Mapping[VariableInfo, Any]) -> dict[str, tuple[list[int], list[Any]]]:
     """Value references and values per FMI type, so that each type is set in one call."""
     by_type: dict[str, tuple[list[int], list[Any]]] = {}
@@ -329,7 +345,7 @@ def _group_by_type(values: Mapping[VariableInfo, Any]) -> dict[str, tuple[list[i
     return by_type
 
 
-class Fmi2Slave(_LogMixin):
+class Fmi2Slave(_SlaveBase):
     """One FMI 2.0 Co-Simulation instance (fmpy's low-level ``FMU2Slave``).
 
     The interface (``initialize``, ``reset``, ``set``, ``do_step``, ``getter``,
@@ -410,17 +426,9 @@ class Fmi2Slave(_LogMixin):
             return lambda: self._fmu.getInteger(vrs)
         return lambda: self._fmu.getBoolean(vrs)
 
-    def close(self) -> None:
-        try:
-            if self._needs_reset:
-                self._fmu.terminate()
-        except Exception:  # an instance in Error state cannot terminate; free it anyway
-            pass
-        finally:
-            self._fmu.freeInstance()
 
 
-class Fmi3Slave(_LogMixin):
+class Fmi3Slave(_SlaveBase):
     """One FMI 3.0 Co-Simulation instance (fmpy's ``FMU3Slave``), same interface as
     :class:`Fmi2Slave`.
 
@@ -512,14 +520,6 @@ class Fmi3Slave(_LogMixin):
         get = getattr(self._fmu, name)
         return lambda: get(vrs)
 
-    def close(self) -> None:
-        try:
-            if self._needs_reset:
-                self._fmu.terminate()
-        except Exception:  # an instance in Error state cannot terminate; free it anyway
-            pass
-        finally:
-            self._fmu.freeInstance()
 
 
 #: Slave class per FMI major version.
