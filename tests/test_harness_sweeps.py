@@ -161,8 +161,11 @@ def test_checkpoint_of_another_run_is_refused(tmp_path: Path, model: FmuModel) -
 
 
 def test_process_pool_loses_no_point_when_a_worker_dies(model: FmuModel) -> None:
-    spec = SweepSpec("sigma", np.linspace(0.3, 0.9, 8), ("fresh",))
-    sampling = SamplingSpec(n_transient=600, n_samples=10)
+    # ~4 s of work on 2 workers (12 points x ~0.7 s): the sweep must still be running when the
+    # killer strikes (~1.5 s after the pool starts), or no worker dies with work to redo; with
+    # 8 points x 0.17 s an idle machine finished first and the test failed by timing alone
+    spec = SweepSpec("sigma", np.linspace(0.3, 0.9, 12), ("fresh",))
+    sampling = SamplingSpec(n_transient=2500, n_samples=10)
     backend = ProcessBackend(2)
     killed: list[int] = []
 
@@ -173,7 +176,7 @@ def test_process_pool_loses_no_point_when_a_worker_dies(model: FmuModel) -> None
             pool = backend._pool
             procs = [p for p in (getattr(pool, "_processes", None) or {}).values() if p.pid and p.is_alive()]
             if len(procs) >= 2:
-                time.sleep(1.0)  # let both start on their tasks (~0.2 s each)
+                time.sleep(0.5)  # let both start on their tasks (~0.7 s each)
                 os.kill(procs[0].pid, signal.SIGKILL)
                 killed.append(procs[0].pid)
             time.sleep(0.05)
