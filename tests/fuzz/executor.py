@@ -12,6 +12,10 @@ parent process, runner.py), and in this process
 * ``fatal``: no call answers fmi2Fatal/fmi3Fatal;
 * ``bricked``: at the end of every sequence, whatever happened, reset + a fresh initialisation +
   one step work and give finite values.
+
+Hand-written regression sequences (tests/fuzz_corpus/) may add expectations: ``"must_pass"`` on
+an action (``refused-valid``: a valid call, e.g. a tiny step or valid physics, must not fail) and
+``"expect_error"`` on the sequence (``accepted-extreme``: some call must refuse the input).
 """
 from __future__ import annotations
 
@@ -40,12 +44,13 @@ def _same(a: list, b: list) -> bool:
         for x, y in zip(a, b))
 
 
-def corrupt(data: bytes, how: str, pos: float, bit: int) -> bytes:
-    """`data` damaged in one of the ways of sequences.CORRUPTIONS (deterministic)."""
+def corrupt(data: bytes, how: str, pos: float, bit: int, offset: int | None = None) -> bytes:
+    """`data` damaged in one of the ways of sequences.CORRUPTIONS (deterministic) at the relative
+    position `pos`, or at byte `offset` where given."""
     if not data or how == "none":
         return data
     b = bytearray(data)
-    i = min(len(b) - 1, int(pos * len(b)))
+    i = min(len(b) - 1, int(pos * len(b)) if offset is None else offset)
     i8 = min(max(0, len(b) - 8), i - i % 8)
     if how == "bitflip":
         b[i] ^= 1 << bit
@@ -83,6 +88,7 @@ class Executor:
         self.me_time = 0.0
         self.start = 0.0
         self.slowest = (0.0, "")
+        self.errors: list[str] = []  # every refused call with the FMU's message, in order
         desc = lib.desc
         self.reals = [v.vr for v in desc.of_kind("real")]
         self.ints = [v.vr for v in desc.of_kind("int")]
@@ -103,6 +109,8 @@ class Executor:
             raise Violation("fatal", f"{fn} returned Fatal: {self.last_message()}")
         if status not in (OK, WARNING, DISCARD, ERROR):
             raise Violation("fatal", f"{fn} returned status {status}")
+        if status >= DISCARD:
+            self.errors.append(f"{fn}: {self.last_message()}")
         return status
 
     def last_message(self) -> str:
@@ -137,7 +145,7 @@ class Executor:
         return t if st in PASSED else 0.0
 
     # -- actions --------------------------------------------------------------------------
-    def run(self, actions: list[dict[str, Any]]) -> None:
+    def run(self, actions: list[dict[str, Any]], expect_error: bool = False) -> None:
         """Instantiate, run every action, probe that the instance still works, free it."""
         try:
             if not self._instantiate():
@@ -148,6 +156,9 @@ class Executor:
                 dt = time.perf_counter() - t0
                 if dt > self.slowest[0]:
                     self.slowest = (dt, repr(a))
+            self.final = self.snapshot_quiet()
+            if expect_error and not self.errors:
+                raise Violation("accepted-extreme", "every call of the sequence returned OK")
             self.probe()
         finally:
             for i, s in enumerate(self.slots):
@@ -157,6 +168,13 @@ class Executor:
             self.lib.free()
 
     def act(self, a: dict[str, Any]) -> None:
+        n_err = len(self.errors)
+        for _ in range(int(a.get("repeat", 1))):
+            self._act(a)
+        if a.get("must_pass") and len(self.errors) > n_err:
+            raise Violation("refused-valid", f"{a['op']} refused: {self.errors[n_err]}")
+
+    def _act(self, a: dict[str, Any]) -> None:
         op = a["op"]
         L = self.lib
         if op == "instantiate_bad_token":
@@ -361,7 +379,7 @@ class Executor:
                 return
         if not data:
             return
-        data = corrupt(data, a["corrupt"], a["pos"], a["bit"])
+        data = corrupt(data, a["corrupt"], a.get("pos", 0.0), a.get("bit", 0), a.get("offset"))
         st, p = self.lib.deserialize(data, self.slots[a["slot"]])
         if self._check("deserialize", st) in PASSED:
             self.slots[a["slot"]] = p

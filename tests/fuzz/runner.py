@@ -79,8 +79,11 @@ class Child:
         self.libs = {2: Fmi2(describe(build, 2)), 3: Fmi3(describe(build, 3))}
         self.gens = {v: Generator(lib.desc) for v, lib in self.libs.items()}
 
-    def execute(self, seq: dict[str, Any]) -> tuple[int, str | None, str]:
-        """Runs `seq`; returns (calls, violated rule or None, message)."""
+    def execute(self, seq: dict[str, Any], detail: dict | None = None) -> tuple[int, str | None, str]:
+        """Runs `seq`; returns (calls, violated rule or None, message).
+
+        `detail`, if given, receives the FMU's refusals ("errors") and the variables after the
+        last action ("final")."""
         from tests.fuzz.executor import Executor, Violation
         from tests.fuzz.sequences import version_of
 
@@ -88,9 +91,13 @@ class Child:
         lib.messages.clear()
         ex = Executor(lib, seq["interface"])
         try:
-            ex.run(seq["actions"])
+            ex.run(seq["actions"], expect_error=bool(seq.get("expect_error")))
         except Violation as v:
             return ex.calls, v.kind, f"{v} (FMU said: {ex.last_message()})"
+        finally:
+            if detail is not None:
+                detail["errors"] = ex.errors
+                detail["final"] = getattr(ex, "final", None)
         return ex.calls, None, ""
 
 
@@ -156,11 +163,14 @@ def child_replay(args: argparse.Namespace) -> None:
         data = json.loads(Path(path).read_text())
         seq = data.get("sequence", data)
         print(f"BEGIN {path}", flush=True)
-        faulthandler.dump_traceback_later(args.timeout, exit=True)
-        n, kind, msg = child.execute(seq)
+        faulthandler.dump_traceback_later(float(data.get("timeout", args.timeout)), exit=True)
+        detail: dict = {}
+        t0 = time.perf_counter()
+        n, kind, msg = child.execute(seq, detail)
         faulthandler.cancel_dump_traceback_later()
         print("RESULT " + json.dumps({"file": str(path), "calls": n, "kind": kind,
-                                      "message": msg}), flush=True)
+                                      "message": msg, "seconds": time.perf_counter() - t0,
+                                      **detail}), flush=True)
 
 
 # ------------------------------------------------------------------------------------------
@@ -300,6 +310,11 @@ def main(argv: list[str] | None = None) -> int:
     sub.choices["replay"].add_argument("files", nargs="+")
     args = p.parse_args(argv)
     if args.cmd == "replay":
+        build = Path(args.build)
+        if is_sanitized(build) and "libasan" not in os.environ.get("LD_PRELOAD", ""):
+            # run by hand: restart with the sanitizer runtime preloaded
+            os.execve(sys.executable, [sys.executable, "-m", "tests.fuzz.runner", *sys.argv[1:]],
+                      child_env(build))
         child_replay(args)
         return 0
     if args.start is not None:
