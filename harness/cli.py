@@ -2,7 +2,7 @@
 
 Subcommands are registered by modules: :mod:`harness.commands` provides simulate, strobe,
 sweep and jacobian; further modules listed in :data:`OPTIONAL_COMMAND_MODULES` (e.g. a
-later ``harness/reproduce.py``) are picked up when they exist.  A command module exposes
+later ``harness/reproduce/``) are picked up when they exist.  A command module exposes
 ``register(subparsers, parents)``, which adds its parser(s) with ``set_defaults(func=...)``;
 ``func(args)`` returns the exit status.
 
