@@ -171,7 +171,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:
-        # stdout closed early (e.g. piped into `head`): the results are written; stay quiet
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
+    except MemoryError:
+        print(f"{prog}: error: out of memory (lower the grid, samples or --dt, or --max-memory)", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        if isinstance(exc, BrokenPipeError):
+            # stdout closed early (e.g. piped into `head`): the results are written; stay quiet
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 0
+        # files the user named (unreadable, unwritable, vanished): one line, not a traceback
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2

@@ -18,7 +18,8 @@ import numpy as np
 from .classify import classify_orbit, windows
 from .cli import overrides_from_args
 from .config import Experiment, parameter_values
-from .errors import HarnessInputError
+from .errors import FmuRejectedInput, HarnessInputError
+from .outputs import check_output, check_plot
 from .progress import progress_bar
 
 
@@ -88,10 +89,13 @@ def _experiment(args: argparse.Namespace, extra: dict[str, dict[str, Any]] | Non
 
 
 def _outputs(args: argparse.Namespace, exp: Experiment, default_stem: str) -> tuple[Path, Path | None]:
-    out = Path(exp.run.out or f"results/{default_stem}.nc")
+    """The result and plot files, checked writable before any work is done."""
+    out = check_output(exp.run.out or f"results/{default_stem}.nc", exp.layers.arg("run", "out"))
     if args.no_plot:
         return out, None
-    return out, Path(exp.run.plot) if exp.run.plot else out.with_suffix(".png")
+    if exp.run.plot:
+        return out, check_plot(exp.run.plot, exp.layers.arg("run", "plot"))
+    return out, check_plot(out.with_suffix(".png"), "--out")  # OUT.png may be a directory
 
 
 def _command_line(args: argparse.Namespace | None = None) -> str:
@@ -178,6 +182,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     ckpt = Path(exp.run.checkpoint) if explicit else out.with_name(out.name + ".partial")
     if args.no_resume and ckpt.exists():
         shutil.rmtree(ckpt)
+    ckpt_is_new = not ckpt.exists()
     stats = SweepStats()
 
     def sweep() -> Any:
@@ -200,6 +205,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             ds = sweep()
     except KeyboardInterrupt:
         print(f"interrupted: finished points are kept in {ckpt}; rerun the same command to resume", file=sys.stderr)
+        raise
+    except (HarnessInputError, FmuRejectedInput):
+        # Rejected input: a rerun needs other settings, which could not resume this
+        # checkpoint anyway; one made by this run goes (else the next run notes discarding it).
+        if ckpt_is_new:
+            shutil.rmtree(ckpt, ignore_errors=True)
         raise
     write_netcdf(ds, out)
     shutil.rmtree(ckpt, ignore_errors=True)  # the NetCDF file now holds everything

@@ -216,7 +216,7 @@ def scan_confirmation(shooting: Windows, up: Mapping[int, tuple[float, float]],
         hi_scan = up.get(M, (None, None))[1] if w[1] is not None else None
         out[M] = {
             "scan_lower": lo_scan, "scan_upper": hi_scan,
-            "lower_minus_shooting": None if lo_scan is None else lo_scan - w[0],
+            "lower_minus_shooting": None if (lo_scan is None or w[0] is None) else lo_scan - w[0],
             "upper_minus_shooting": None if (hi_scan is None or w[1] is None) else hi_scan - w[1],
         }
     return out
@@ -224,14 +224,14 @@ def scan_confirmation(shooting: Windows, up: Mapping[int, tuple[float, float]],
 
 def window_differences(reference: Windows, other: Windows) -> dict[int, tuple[float | None, float | None]]:
     """Per period, (other - reference) at the lower and upper edges (None where either is
-    missing or unbounded)."""
+    missing, unresolved or unbounded)."""
     out: dict[int, tuple[float | None, float | None]] = {}
     for M, ref in reference.items():
         w = other.get(M)
         if ref is None or w is None:
             out[M] = (None, None)
             continue
-        dlo = w[0] - ref[0]
+        dlo = None if (ref[0] is None or w[0] is None) else w[0] - ref[0]
         dhi = None if (ref[1] is None or w[1] is None) else w[1] - ref[1]
         out[M] = (dlo, dhi)
     return out
@@ -251,8 +251,10 @@ def best_variant(ode: Windows, variants: Mapping[str, Windows]) -> tuple[str, di
 def _fmt_window(w: Any, digits: int = 4) -> str:
     if w is None:
         return "none"
+    # an edge that is None: no upper edge (maps, M = 1) or not bracketed inside the range
+    lo = "unresolved" if w[0] is None else f"{w[0]:.{digits}f}"
     hi = "none (no upper edge)" if w[1] is None else f"{w[1]:.{digits}f}"
-    return f"[{w[0]:.{digits}f}, {hi}]"
+    return f"[{lo}, {hi}]"
 
 
 def markdown_window_table(rows: Mapping[str, Windows], labels: Mapping[str, str] | None = None,

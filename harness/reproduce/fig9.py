@@ -195,6 +195,8 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
         "windows": windows,
         "edge_kinds": {"ode": shoot["kinds"]},
         "ode_edge_brackets": shoot["brackets"],
+        "ode_edge_intervals": shoot["intervals"],
+        "ode_unresolved": shoot["unresolved"],
         "ode_multipliers_at_lower_edge": shoot["multipliers_at_lower_edge"],
         "scan_windows": scan,
         "scan_confirmation": confirm,
@@ -256,11 +258,14 @@ def _report(ctx: Context, res: dict[str, Any]) -> str:
     ]
     for M, cf in res["scan_confirmation"].items():
         w = res["windows"]["ode"][M]
+        if w is None:
+            continue
         hi = "none" if w[1] is None else f"{w[1]:.4f}"
         lo_s = "not seen" if cf["scan_lower"] is None else f"{cf['scan_lower']:.4f} ({cf['lower_minus_shooting']:+.4f})"
         hi_s = "-" if w[1] is None else ("not seen" if cf["scan_upper"] is None else
                                          f"{cf['scan_upper']:.4f} ({cf['upper_minus_shooting']:+.4f})")
-        lines.append(f"| {M} | [{w[0]:.4f}, {hi}] | {lo_s} | {hi_s} |")
+        lo = "unresolved" if w[0] is None else f"{w[0]:.4f}"
+        lines.append(f"| {M} | [{lo}, {hi}] | {lo_s} | {hi_s} |")
     lines += [
         "",
         f"Scan minus shooting, in sigma; grid step {res['scan_grid_step']:.3g}. Lower edges: "

@@ -104,7 +104,7 @@ def _newton_windows(step_of, guess_variant: str, M_max: int, xtol: float, sigma_
         w = ws[0]
         hi = w.hi if w.kind_hi != "range" else 1.25 * w.lo
         s0 = 0.5 * (w.lo + hi)
-        dp = min(0.02, (hi - w.lo) / 6.0)
+        dp = min(0.02, (hi - w.lo) / 6.3)  # not a half-integer: the march never lands on the guide edge
         orb = maximal_orbits(p, M, rho_of(np.array([s0])))
         k = int(np.argmax(orb.stable[:, 0]))
         u0, v0 = from_natural(orb.x[k, 0, 0], orb.y[k, 0, 0], s0, c, guess_variant)
