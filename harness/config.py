@@ -228,8 +228,14 @@ def load_toml(path: str | os.PathLike, argument: str = "--config") -> dict[str, 
             return tomllib.load(fh)
     except FileNotFoundError:
         raise HarnessInputError(argument, f"no such file: {str(path)!r}") from None
+    except IsADirectoryError:
+        raise HarnessInputError(argument, f"{str(path)!r} is a directory, not an experiment file") from None
+    except UnicodeDecodeError as exc:  # TOML is UTF-8 by definition
+        raise HarnessInputError(argument, f"{path} is not UTF-8 text (byte {exc.start}: {exc.reason})") from None
     except tomllib.TOMLDecodeError as exc:
         raise HarnessInputError(argument, f"{path} is not valid TOML: {exc}") from None
+    except OSError as exc:  # permission denied, I/O errors
+        raise HarnessInputError(argument, f"cannot read {str(path)!r}: {exc.strerror or exc}") from None
 
 
 # ----------------------------------------------------------------------------------------
