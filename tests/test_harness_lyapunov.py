@@ -121,3 +121,57 @@ def test_classification_rules() -> None:
     assert classify_dynamics(0, False, 0.3, 0.03) == CHAOTIC
     assert classify_dynamics(0, False, 0.02, 0.01) == NOT_CONVERGED  # zero within 3 sigma, but too wide to tell
     assert classify_dynamics(0, False, math.nan, math.nan) == UNCLASSIFIED
+
+
+# -- the sweep output and the CLI ---------------------------------------------------------
+def _run_main(argv: list[str], capsys) -> tuple[int, str, str]:
+    from harness.cli import main
+
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's own errors
+        code = exc.code
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def test_sweep_writes_exponents_and_dynamics(tmp_path, capsys) -> None:
+    """``sweep --lyapunov N``: NetCDF variables lyapunov, lyapunov_err (exponent = 1, 2) and
+    dynamics with CF flag attributes; periodic at sigma = 0.5, chaotic at 0.03."""
+    from harness import read_netcdf
+    from harness.classify import DYNAMICS_NAMES
+
+    out = tmp_path / "ly.nc"
+    code, stdout, err = _run_main(["sweep", "--values", "0.03,0.5", "--mode", "fresh", "--theta", "0.5",
+                                   "--transient", "200", "--samples", "12", "--lyapunov", "150", "--backend",
+                                   "serial", "--out", str(out), "--no-plot", "--no-progress"], capsys)
+    assert code == 0, err
+    assert "chaotic 1" in stdout and "periodic 1" in stdout
+    ds = read_netcdf(out)
+    lam = ds["lyapunov"].sel(direction="fresh")
+    assert lam.dims == ("sigma", "exponent")
+    d = ds["dynamics"].sel(direction="fresh").values
+    assert [DYNAMICS_NAMES[int(c)] for c in d] == ["chaotic", "periodic"]
+    l1, e1 = float(lam.values[0, 0]), float(ds["lyapunov_err"].sel(direction="fresh").values[0, 0])
+    assert l1 > 3 * e1 > 0
+    assert float(lam.values[1, 0]) == pytest.approx(-0.5007, abs=1e-3)
+    assert ds.attrs["sampling.lyapunov"] == 150
+    assert "flag_meanings" in ds["dynamics"].attrs
+
+
+def test_solver_flag(model, tmp_path, capsys) -> None:
+    """``--solver cvode`` is accepted by every FMU (one without the parameter has CVODE only);
+    ``--solver closed-form`` selects solver = 1, or is refused in one line without it."""
+    base = ["strobe", "--set", "sigma=0.5", "--transient", "20", "--samples", "4", "--no-plot", "--no-progress"]
+    code, _, err = _run_main([*base, "--solver", "cvode", "--out", str(tmp_path / "a.nc")], capsys)
+    assert code == 0, err
+    code, out, err = _run_main([*base, "--solver", "closed-form", "--out", str(tmp_path / "b.nc")], capsys)
+    if "solver" in model.variables:
+        assert code == 0, err
+        from harness import read_netcdf
+
+        assert int(read_netcdf(tmp_path / "b.nc").attrs["model.solver"]) == 1
+    else:
+        assert code == 2 and "--solver" in err and "no closed-form solver" in err
+    code, _, err = _run_main([*base, "--solver", "euler"], capsys)
+    assert code == 2 and "invalid choice" in err
