@@ -56,6 +56,15 @@ typedef enum {
     VR_T_IMPACT = 27,      /* output: time of the last wall entry */
     VR_MAX_EVENTS = 28,    /* parameter: wall events allowed per unit of time */
     VR_MAX_STEPS = 29,     /* parameter: CVODE steps allowed per unit of time */
+    /* issue 11: sensitivities and the closed-form solver (23..29: ports and limits, fmu_core) */
+    VR_SENSITIVITIES = 30, /* Boolean parameter */
+    VR_SOLVER = 31,        /* Integer parameter: 0 CVODE, 1 closed form */
+    VR_J_UU = 32,          /* outputs: d(u, v)(end of doStep)/d(u, v)(its start) */
+    VR_J_UV = 33,
+    VR_J_VU = 34,
+    VR_J_VV = 35,
+    VR_S_U = 36,           /* outputs: d(u, v)(end of doStep)/d sigma */
+    VR_S_V = 37,
     VR_COUNT
 } ValueReference;
 
@@ -98,7 +107,15 @@ typedef struct {
     double origin;
     /* Bounds on the work per unit of time (issue 13.3), used by the solver. */
     double max_events_per_time, max_steps_per_time;
+    /* Sensitivities (sens.h) and the solver (closed_form.h), issue 11: parameters, and the
+     * derivatives of the state w.r.t. the state at the start of the current doStep (sJ) and
+     * w.r.t. sigma (sS). Part of the FMU state. */
+    int sensitivities; /* Boolean: integrate sJ, sS */
+    int solver;        /* SOLVER_CVODE or SOLVER_CLOSED_FORM */
+    double sJ[2][2], sS[2];
 } ModelData;
+
+typedef enum { SOLVER_CVODE = 0, SOLVER_CLOSED_FORM = 1 } SolverKind;
 
 /* What an event did, so that the solver knows whether to re-initialise. */
 typedef enum { EVENT_NONE = 0, EVENT_JUMP = 1 } EventResult;

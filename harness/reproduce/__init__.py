@@ -5,7 +5,7 @@ maps through :mod:`mapcheck`, compares them with :mod:`mapcheck.compare`, and wr
 DIR only: PNG figures, ``FIG.json`` (the numbers) and ``report.md`` (what was compared,
 the table, the verdict, the parameters).
 
-Targets (one module each, ``harness/repro_*.py``):
+Targets (one module each, ``harness/reproduce/*.py``):
 
 * ``fig9``  -- windows of maximal period-M orbits: (64), the 2D map, the 2D map with
   A~(sigma), and the ODE (FMU, Newton shooting + up/down scans); bifurcation diagrams.
@@ -31,18 +31,18 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .errors import HarnessInputError
+from ..errors import HarnessInputError
 
 __all__ = ["TARGETS", "register", "cmd_reproduce", "run_target", "to_jsonable", "Context"]
 
 #: target -> module defining ``run(ctx) -> dict``.
 TARGETS: dict[str, str] = {
-    "fig9": "harness.repro_fig9",
-    "fig6": "harness.repro_fig67",
-    "fig7": "harness.repro_fig67",
-    "fig1": "harness.repro_fig1",
-    "rescaling": "harness.repro_rescaling",
-    "direct": "harness.repro_direct",
+    "fig9": "harness.reproduce.fig9",
+    "fig6": "harness.reproduce.fig67",
+    "fig7": "harness.reproduce.fig67",
+    "fig1": "harness.reproduce.fig1",
+    "rescaling": "harness.reproduce.rescaling",
+    "direct": "harness.reproduce.direct",
 }
 
 
@@ -62,8 +62,8 @@ class Context:
 
     def __init__(self, target: str, out: str | Path, quick: bool = False, workers: int | None = None,
                  progress: bool = False, fmu_path: str | None = None) -> None:
-        from .config import default_fmu_path
-        from .fmi import FmuModel
+        from ..config import default_fmu_path
+        from ..fmi import FmuModel
 
         self.target = target
         self.out = Path(out)
@@ -76,7 +76,7 @@ class Context:
 
     def simulator(self):
         """A fresh in-process FMU simulator (for shooting and Jacobians)."""
-        from .simulator import FmuSimulator
+        from ..simulator import FmuSimulator
 
         return FmuSimulator(self.fmu.source(), instance_name=f"reproduce-{self.target}")
 
@@ -112,7 +112,7 @@ def to_jsonable(obj: Any) -> Any:
 
 def write_outputs(ctx: Context, result: Mapping[str, Any], report: str) -> tuple[Path, Path]:
     """Write ``FIG.json`` and ``report.md`` into the output directory."""
-    from . import __version__
+    from .. import __version__
 
     data = dict(result)
     data.setdefault("run", {})

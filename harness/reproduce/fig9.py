@@ -26,15 +26,14 @@ from mapcheck.compare import (
     phase_to_natural,
     scan_confirmation,
     sweep_windows,
-    theory_windows,
     window_differences,
 )
-from mapcheck.fig9 import ALPHA, GAMMA, R, _fig9_coefficients
 from mapcheck.windows import MapParams, window_1d
 
-from .config import SamplingSpec, SweepSpec
-from .reproduce import Context
-from .shooting import StroboscopicMap, map_guided_windows
+from ..config import SamplingSpec, SweepSpec
+from ..shooting import StroboscopicMap, map_guided_windows
+from . import Context
+from .fig9_maps import ALPHA, GAMMA, R, _fig9_coefficients, theory_windows
 
 GAMMA_WALL = 10.0
 M_MAX = 4
@@ -60,7 +59,7 @@ def ode_windows_shooting(ctx: Context, xtol: float, sigma_range: tuple[float, fl
 
 def ode_scans(ctx: Context, grid: np.ndarray, transient: int, samples: int):
     """Quasi-static up and down scans of the FMU over sigma (the harness's sweeps)."""
-    from .sweeps import run_sweep
+    from ..sweeps import run_sweep
 
     spec = SweepSpec("sigma", grid, ("up", "down"))
     # tol 1e-4 (relative to the orbit's size ~3): distinct points of a period-M orbit at
@@ -77,14 +76,14 @@ def ode_scans(ctx: Context, grid: np.ndarray, transient: int, samples: int):
 
 
 def _cores() -> int:
-    from .config import default_workers
+    from ..config import default_workers
 
     return default_workers()
 
 
 def plot_diagrams(ctx: Context, ds, windows: dict[str, Any], map_grid: int) -> list[str]:
     """fig9_map.png (map, linear rho and A~), fig9_ode.png (FMU up/down), fig9_windows.png."""
-    from . import plots  # noqa: F401  (selects the Agg backend)
+    from .. import plots  # noqa: F401  (selects the Agg backend)
     import matplotlib.pyplot as plt
 
     nu, Om, c = _fig9_coefficients()
@@ -184,7 +183,7 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
     files = plot_diagrams(ctx, ds, windows, cfg["map_grid"])
     timings["map_diagrams_and_plots"] = time.perf_counter() - t1
     ds.attrs["reproduce.target"] = "fig9"
-    from .results import write_netcdf
+    from ..results import write_netcdf
 
     write_netcdf(ds, ctx.out / "fig9_ode_scans.nc")
     files.append("fig9_ode_scans.nc")
@@ -196,6 +195,8 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
         "windows": windows,
         "edge_kinds": {"ode": shoot["kinds"]},
         "ode_edge_brackets": shoot["brackets"],
+        "ode_edge_intervals": shoot["intervals"],
+        "ode_unresolved": shoot["unresolved"],
         "ode_multipliers_at_lower_edge": shoot["multipliers_at_lower_edge"],
         "scan_windows": scan,
         "scan_confirmation": confirm,
@@ -257,11 +258,14 @@ def _report(ctx: Context, res: dict[str, Any]) -> str:
     ]
     for M, cf in res["scan_confirmation"].items():
         w = res["windows"]["ode"][M]
+        if w is None:
+            continue
         hi = "none" if w[1] is None else f"{w[1]:.4f}"
         lo_s = "not seen" if cf["scan_lower"] is None else f"{cf['scan_lower']:.4f} ({cf['lower_minus_shooting']:+.4f})"
         hi_s = "-" if w[1] is None else ("not seen" if cf["scan_upper"] is None else
                                          f"{cf['scan_upper']:.4f} ({cf['upper_minus_shooting']:+.4f})")
-        lines.append(f"| {M} | [{w[0]:.4f}, {hi}] | {lo_s} | {hi_s} |")
+        lo = "unresolved" if w[0] is None else f"{w[0]:.4f}"
+        lines.append(f"| {M} | [{lo}, {hi}] | {lo_s} | {hi_s} |")
     lines += [
         "",
         f"Scan minus shooting, in sigma; grid step {res['scan_grid_step']:.3g}. Lower edges: "
