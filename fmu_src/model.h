@@ -48,6 +48,15 @@ typedef enum {
     VR_DER_V = 20,         /* der(v) (Model Exchange) */
     VR_WALL_INDICATOR = 21, /* the event indicator g0 (FMI 3.0 Model Exchange) */
     VR_TIME = 22,          /* FMI 3.0 independent variable (handled by the FMI glue) */
+    /* issue 11: sensitivities and the closed-form solver (23..29: ports and limits, fmu_core) */
+    VR_SENSITIVITIES = 30, /* Boolean parameter */
+    VR_SOLVER = 31,        /* Integer parameter: 0 CVODE, 1 closed form */
+    VR_J_UU = 32,          /* outputs: d(u, v)(end of doStep)/d(u, v)(its start) */
+    VR_J_UV = 33,
+    VR_J_VU = 34,
+    VR_J_VV = 35,
+    VR_S_U = 36,           /* outputs: d(u, v)(end of doStep)/d sigma */
+    VR_S_V = 37,
     VR_COUNT
 } ValueReference;
 
@@ -80,7 +89,15 @@ typedef struct {
     /* discrete state */
     int mode;
     int impacts;
+    /* Sensitivities (sens.h) and the solver (closed_form.h), issue 11: parameters, and the
+     * derivatives of the state w.r.t. the state at the start of the current doStep (sJ) and
+     * w.r.t. sigma (sS). Part of the FMU state. */
+    int sensitivities; /* Boolean: integrate sJ, sS */
+    int solver;        /* SOLVER_CVODE or SOLVER_CLOSED_FORM */
+    double sJ[2][2], sS[2];
 } ModelData;
+
+typedef enum { SOLVER_CVODE = 0, SOLVER_CLOSED_FORM = 1 } SolverKind;
 
 /* What an event did, so that the solver knows whether to re-initialise. */
 typedef enum { EVENT_NONE = 0, EVENT_JUMP = 1 } EventResult;

@@ -41,6 +41,17 @@ REQUIRED_VARIABLES = (*STATE_OUTPUTS, IMPACT_COUNTER, *INITIAL_STATE)
 #: Symbolic values accepted for the Integer parameter ``wall``.
 WALL_NAMES = {"none": 0, "compliant": 1, "rigid": 2}
 
+#: The FMU's derivatives of its last ``doStep`` (issue 11): a Boolean parameter switches the
+#: variational equations on, six outputs give d(u, v)_end/d(u, v)_start (J_uv = du/dv_start)
+#: and d(u, v)_end/d sigma.  An FMU that has all of them gets exact map Jacobians; one
+#: without falls back to finite differences (feature detection by name, no version check).
+SENSITIVITY_SWITCH = "sensitivities"
+SENSITIVITY_OUTPUTS = ("J_uu", "J_uv", "J_vu", "J_vv", "S_u", "S_v")
+
+#: Integer parameter choosing the FMU's integrator, and the names the CLI accepts for it.
+SOLVER_PARAMETER = "solver"
+SOLVER_NAMES = {"cvode": 0, "closed-form": 1}
+
 _SETTABLE_CAUSALITIES = {"parameter", "input"}
 
 #: FMI 2 and FMI 3 type names, by family.
@@ -165,6 +176,11 @@ class FmuModel:
             )
         self._sha256: str | None = None
 
+    @property
+    def has_sensitivities(self) -> bool:
+        """True when the FMU can report the derivatives of its map (:data:`SENSITIVITY_OUTPUTS`)."""
+        return all(n in self.variables for n in (SENSITIVITY_SWITCH, *SENSITIVITY_OUTPUTS))
+
     # -- identity ------------------------------------------------------------------------
     @property
     def sha256(self) -> str:
@@ -230,6 +246,8 @@ def coerce_value(var: VariableInfo, value: Any, argument: str) -> float | int | 
         if var.type in INTEGER_TYPES:
             if var.name == "wall" and isinstance(value, str) and value.lower() in WALL_NAMES:
                 return WALL_NAMES[value.lower()]
+            if var.name == SOLVER_PARAMETER and isinstance(value, str) and value.lower() in SOLVER_NAMES:
+                return SOLVER_NAMES[value.lower()]
             if isinstance(value, bool):
                 raise ValueError
             f = float(value)
@@ -245,7 +263,8 @@ def coerce_value(var: VariableInfo, value: Any, argument: str) -> float | int | 
                 raise ValueError
             return bool(value)
     except (TypeError, ValueError):
-        hint = " (or one of none, compliant, rigid)" if var.name == "wall" else ""
+        hint = {"wall": " (or one of none, compliant, rigid)",
+                SOLVER_PARAMETER: " (or one of " + ", ".join(SOLVER_NAMES) + ")"}.get(var.name, "")
         raise HarnessInputError(
             argument, f"{value!r} is not a valid {var.type} value for FMU variable {var.name!r}{hint}"
         ) from None

@@ -21,8 +21,10 @@ by ``xtol``, and is an irrational fraction of it, so the march does not land on 
 guiding map's own edges.  An edge with no bracket (the search range ended first, or no
 orbit was found to start from) is reported as unresolved (``sigma`` None, with the
 interval searched), never as a number.  See docs/theory.md, "How window edges are found".  Newton itself is
-:func:`mapcheck.orbits.solve_periodic_orbit` (finite-difference Jacobian, restarts of the
-FMU from perturbed states).
+:func:`mapcheck.orbits.solve_periodic_orbit`: with the FMU's own derivatives when it reports
+them (one run per period gives the state and the chained exact Jacobian, so the multipliers
+that decide the lower edges carry no difference error), else by central differences
+(restarts of the FMU from perturbed states: ~5 times the runs per Newton iteration).
 """
 from __future__ import annotations
 
@@ -34,6 +36,7 @@ import numpy as np
 
 from mapcheck.orbits import PeriodicOrbit, edge_kind, solve_periodic_orbit
 
+from .jacobian import resolve_method
 from .simulator import Simulator
 
 __all__ = ["StroboscopicMap", "Edge", "NEWTON", "MARCH_STEPS", "good_orbit", "window_edges", "map_guided_windows", "newton_for"]
@@ -63,13 +66,21 @@ class StroboscopicMap:
         FMU parameters (sigma is set per call of :meth:`at`).
     theta : float
         Section phase; keep it away from the impacts (1/2).
+    derivatives : str
+        "auto" (the FMU's exact derivatives when it reports them), "exact" or "fd" (central
+        differences, the fallback and cross-check).
     """
 
-    def __init__(self, sim: Simulator, params: Mapping[str, Any], theta: float = 0.5) -> None:
+    def __init__(self, sim: Simulator, params: Mapping[str, Any], theta: float = 0.5,
+                 derivatives: str = "auto") -> None:
         self.sim = sim
         self.params = {k: v for k, v in params.items() if k not in ("u0", "v0")}
         self.theta = float(theta)
         self.evaluations = 0
+        self.derivatives = resolve_method(sim, derivatives, "derivatives")
+        if hasattr(sim, "track_derivatives"):
+            # variational equations only where they are used
+            sim.track_derivatives(self.derivatives == "exact")
 
     def offset(self, sigma: float) -> np.ndarray:
         """p(theta) of (4) at this sigma."""
@@ -90,6 +101,19 @@ class StroboscopicMap:
             return u - off[0], v - off[1], n
 
         return step
+
+    def at_with_jacobian(self, sigma: float) -> Callable[[float, float], tuple[float, float, int, np.ndarray]] | None:
+        """The map at ``sigma`` with its exact Jacobian, ``dstep(wu, wv) -> (wu1, wv1, n, J)``
+        (J in w coordinates = J in z: a translation), or None with finite differences."""
+        if self.derivatives != "exact":
+            return None
+        step = self.at(sigma)
+
+        def dstep(wu: float, wv: float) -> tuple[float, float, int, np.ndarray]:
+            u, v, n = step(wu, wv)
+            return u, v, n, self.sim.derivatives()[0]  # type: ignore[attr-defined]
+
+        return dstep
 
     def iterate(self, sigma: float, w: np.ndarray, n: int) -> tuple[np.ndarray, int]:
         """n periods in one run (no restarts) from w; returns (w_n, wall entries)."""
@@ -147,11 +171,12 @@ def good_orbit(smap: StroboscopicMap, M: int, sigma: float, guesses: list[np.nda
     """Try Newton from each guess; True with the orbit if one converges to a stable maximal
     period-M orbit, else False with the most informative failed orbit (a converged one)."""
     step = smap.at(sigma)
+    dstep = smap.at_with_jacobian(sigma)
     failed: PeriodicOrbit | None = None
     for g in guesses:
         if g is None:
             continue
-        orb = solve_periodic_orbit(step, g, M, **(newton or NEWTON))
+        orb = solve_periodic_orbit(step, g, M, **(newton or NEWTON), dstep=dstep)
         if orb.maximal and orb.stable:
             return True, orb
         if failed is None or (orb.converged and not failed.converged):
@@ -294,11 +319,11 @@ def _shoot_window(smap: StroboscopicMap, c: Any, M: int, w: tuple[float, float |
 
 def _shoot_window_task(source: Any, params: Mapping[str, Any], theta: float, c: Any, M: int,
                        w: tuple[float, float | None], sigma_range: tuple[float, float], xtol: float,
-                       relative: bool) -> tuple[int, Edge, Edge, int]:
+                       relative: bool, derivatives: str = "auto") -> tuple[int, Edge, Edge, int]:
     """:func:`_shoot_window` in a worker process, on an FMU instance of its own."""
     from .simulator import FmuSimulator
 
-    smap = StroboscopicMap(FmuSimulator(source, instance_name=f"shoot-M{M}"), params, theta)
+    smap = StroboscopicMap(FmuSimulator(source, instance_name=f"shoot-M{M}"), params, theta, derivatives)
     e_lo, e_hi = _shoot_window(smap, c, M, w, sigma_range, xtol, relative)
     return M, e_lo, e_hi, smap.evaluations
 
@@ -340,7 +365,7 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
         ctx = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx) as pool:
             futures = [pool.submit(_shoot_window_task, smap.sim.source, smap.params, smap.theta, c, M, w,
-                                   sigma_range, tols[M], relative) for M, w in todo.items()]
+                                   sigma_range, tols[M], relative, smap.derivatives) for M, w in todo.items()]
             for f in futures:
                 M, e_lo, e_hi, n = f.result()
                 results[M] = (e_lo, e_hi)
