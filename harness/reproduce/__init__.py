@@ -15,6 +15,9 @@ Targets (one module each, ``harness/reproduce/*.py``):
 * ``rescaling`` -- window shift soft compliant vs rigid wall against (1+r)^2/(1-r)^2.
 * ``direct`` -- one-step map prediction against the FMU's pre-impact map, error order in eps.
 
+``impact-harness windows`` (:mod:`harness.reproduce.windows`) is Figure 9's comparison for any
+parameter set; ``reproduce fig9`` runs it with the paper's parameters.
+
 ``--quick`` gives a coarse version (under a minute on 2 cores); the default is the
 publication-quality run.
 """
@@ -84,6 +87,8 @@ class Context:
                                     f"parameter {SOLVER_PARAMETER!r}); it integrates with CVODE only")
         self.solver = solver
         self.t_start = time.perf_counter()
+        #: the ``impact-harness`` command line that reproduces this run (report footer)
+        self.command = f"reproduce {target}{' --quick' if self.quick else ''} --out {self.out}"
 
     def simulator(self):
         """A fresh in-process FMU simulator (for shooting and Jacobians)."""
@@ -139,8 +144,7 @@ def write_outputs(ctx: Context, result: Mapping[str, Any], report: str) -> tuple
     jpath = ctx.out / f"{ctx.target}.json"
     jpath.write_text(json.dumps(to_jsonable(data), indent=2) + "\n")
     rpath = ctx.out / "report.md"
-    footer = (f"\n\n---\nRun: `impact-harness reproduce {ctx.target}{' --quick' if ctx.quick else ''} "
-              f"--out {ctx.out}`, {ctx.elapsed():.1f} s, FMU sha256 {ctx.fmu.sha256[:12]}, "
+    footer = (f"\n\n---\nRun: `impact-harness {ctx.command}`, {ctx.elapsed():.1f} s, FMU sha256 {ctx.fmu.sha256[:12]}, "
               f"harness {__version__}. Numbers: `{jpath.name}`.\n")
     rpath.write_text(report.rstrip() + footer)
     return jpath, rpath
@@ -159,7 +163,7 @@ def run_target(target: str, out: str | Path, quick: bool = False, workers: int |
 
 
 def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
-    """Add the ``reproduce`` subcommand (picked up by :mod:`harness.cli`)."""
+    """Add the ``reproduce`` and ``windows`` subcommands (picked up by :mod:`harness.cli`)."""
     p = sub.add_parser(
         "reproduce", help="reproduce a figure of the paper: FMU vs maps, with a report",
         description="Run the FMU sweeps / shooting / Jacobians and the maps for one of the paper's figures, "
@@ -175,6 +179,9 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
                    help="the FMU's integrator (default cvode: the paper's question is about the ODE as a general "
                    "integrator solves it; closed-form: exact propagation, linear contact law)")
     p.set_defaults(func=cmd_reproduce)
+    from .windows import register as register_windows
+
+    register_windows(sub, parents)
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:
