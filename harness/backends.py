@@ -15,6 +15,7 @@ Fault tolerance:
 from __future__ import annotations
 
 import multiprocessing
+import os
 import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -105,7 +106,7 @@ class ProcessBackend:
         ctx = multiprocessing.get_context("spawn")
         self._queue = ctx.Queue()
         return ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=init_pool_worker,
-                                   initargs=(self._queue,))
+                                   initargs=(self._queue, os.getpid()))
 
     def _drain(self, on_progress: ProgressCallback, stop: threading.Event) -> None:
         """Forward the workers' progress reports to ``on_progress`` (a helper thread)."""

@@ -6,6 +6,7 @@ paid once per worker and per sweep.
 """
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -104,14 +105,47 @@ def execute(task: SweepTask, sim: Any, report: Callable[[str, int], None] | None
 _POOL_PROGRESS_QUEUE: Any = None
 
 
-def init_pool_worker(progress_queue: Any) -> None:
+def init_pool_worker(progress_queue: Any, parent_pid: int | None = None) -> None:
     """Process-pool initializer: Ctrl-C is left to the parent (which stops the pool and keeps
-    the checkpoint), and per-point progress goes to ``progress_queue``."""
+    the checkpoint), per-point progress goes to ``progress_queue``, SIGTERM removes this
+    worker's temporary folder and exits at once, and the worker dies with its parent."""
     import signal
 
     global _POOL_PROGRESS_QUEUE
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _exit_on_signal)
     _POOL_PROGRESS_QUEUE = progress_queue
+    die_with_parent(parent_pid)
+
+
+def _exit_on_signal(signum: int, frame: Any) -> None:
+    # os._exit, not SystemExit: the pool's worker loop catches BaseException from a task and
+    # would send it back as a result instead of exiting
+    from . import tempdirs
+
+    tempdirs.remove_now()
+    os._exit(128 + signum)
+
+
+def die_with_parent(parent_pid: int | None) -> bool:
+    """Ask Linux to send this process SIGTERM when its parent dies, SIGKILL included
+    (``prctl(PR_SET_PDEATHSIG)``); without it, workers of a killed sweep wait on their task
+    queue as orphans for good.  Returns False where prctl is unavailable (not Linux).
+
+    If the parent died before the request took effect, exit now.
+    """
+    import ctypes
+    import signal
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(1, int(signal.SIGTERM), 0, 0, 0) != 0:  # 1 = PR_SET_PDEATHSIG
+            return False
+    except (OSError, AttributeError):
+        return False
+    if parent_pid is not None and os.getppid() != parent_pid:
+        _exit_on_signal(int(signal.SIGTERM), None)
+    return True
 
 
 def _reporter(progress: Any) -> Callable[[str, int], None] | None:
