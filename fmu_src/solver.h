@@ -13,6 +13,7 @@ typedef struct {
     void *y;    /* N_Vector */
     void *A;    /* SUNMatrix */
     void *LS;   /* SUNLinearSolver */
+    int n;      /* equations: 2, or SENS_NEQ with the sensitivities (sens.h) */
     /* Time is origin + tau with an integer origin (see model.h). */
     double origin;
     double tau;

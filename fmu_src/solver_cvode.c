@@ -11,6 +11,9 @@
  */
 #include "solver.h"
 
+#include "closed_form.h"
+#include "sens.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -34,17 +37,28 @@ static const double MAX_EVENTS_PER_UNIT_TIME = 1e5;
 #define CV(s) ((s)->cvode)
 #define YV(s) ((N_Vector)(s)->y)
 
+/* With sensitivities the state is (u, v, J, S) of sens.h (SENS_NEQ components), else (u, v). */
 static int rhs(realtype t, N_Vector y, N_Vector ydot, void *user_data) {
-    model_derivatives((const ModelData *)user_data, t, N_VGetArrayPointer(y),
-                      N_VGetArrayPointer(ydot));
+    if (N_VGetLength(y) == SENS_NEQ)
+        sens_rhs((const ModelData *)user_data, t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+    else
+        model_derivatives((const ModelData *)user_data, t, N_VGetArrayPointer(y),
+                          N_VGetArrayPointer(ydot));
     return 0;
 }
 
 static int jac(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *user_data, N_Vector t1,
                N_Vector t2, N_Vector t3) {
-    (void)t; (void)fy; (void)t1; (void)t2; (void)t3;
+    (void)fy; (void)t1; (void)t2; (void)t3;
+    if (N_VGetLength(y) == SENS_NEQ) {
+        double big[SENS_NEQ][SENS_NEQ];
+        sens_jacobian((const ModelData *)user_data, t, N_VGetArrayPointer(y), big);
+        for (int i = 0; i < SENS_NEQ; ++i)
+            for (int j = 0; j < SENS_NEQ; ++j) SM_ELEMENT_D(J, i, j) = big[i][j];
+        return 0;
+    }
     double a[2][2];
-    model_jacobian((const ModelData *)user_data, N_VGetArrayPointer(y), a);
+    model_jacobian((const ModelData *)user_data, t, N_VGetArrayPointer(y), a);
     SM_ELEMENT_D(J, 0, 0) = a[0][0];
     SM_ELEMENT_D(J, 0, 1) = a[0][1];
     SM_ELEMENT_D(J, 1, 0) = a[1][0];
@@ -63,20 +77,20 @@ static void error_handler(int code, const char *module, const char *function, ch
     snprintf(s->msg, sizeof s->msg, "%s/%s (flag %d): %s", module, function, code, msg);
 }
 
-int solver_create(Solver *s, ModelData *m) {
-    memset(s, 0, sizeof *s);
-    SUNContext ctx;
-    if (SUNContext_Create(NULL, &ctx) != 0) goto fail;
-    s->ctx = ctx;
-    s->y = N_VNew_Serial(2, ctx);
+/* Allocates CVODE for n equations in the existing context. */
+static int create_cvode(Solver *s, ModelData *m, int n) {
+    SUNContext ctx = (SUNContext)s->ctx;
+    s->n = n;
+    s->y = N_VNew_Serial(n, ctx);
     s->cvode = CVodeCreate(CV_ADAMS, ctx);
     if (!s->y || !s->cvode) goto fail;
     CVodeSetErrHandlerFn(CV(s), error_handler, s);
+    N_VConst(0.0, YV(s));
     NV_Ith_S(YV(s), 0) = m->u;
     NV_Ith_S(YV(s), 1) = m->v;
     if (CVodeInit(CV(s), rhs, 0.0, YV(s)) != CV_SUCCESS) goto fail;
     if (CVodeRootInit(CV(s), MODEL_N_EVENTS, roots) != CV_SUCCESS) goto fail;
-    s->A = SUNDenseMatrix(2, 2, ctx);
+    s->A = SUNDenseMatrix(n, n, ctx);
     s->LS = SUNLinSol_Dense(YV(s), (SUNMatrix)s->A, ctx);
     if (!s->A || !s->LS) goto fail;
     if (CVodeSetLinearSolver(CV(s), (SUNLinearSolver)s->LS, (SUNMatrix)s->A) != CV_SUCCESS) goto fail;
@@ -87,16 +101,30 @@ int solver_create(Solver *s, ModelData *m) {
     s->needs_reinit = 1;
     return 0;
 fail:
-    if (!s->msg[0]) snprintf(s->msg, sizeof s->msg, "could not allocate CVODE");
-    solver_free(s);
     return -1;
 }
 
-void solver_free(Solver *s) {
+static void free_cvode(Solver *s) {
     if (s->cvode) CVodeFree(&s->cvode);
     if (s->LS) SUNLinSolFree((SUNLinearSolver)s->LS);
     if (s->A) SUNMatDestroy((SUNMatrix)s->A);
     if (s->y) N_VDestroy(YV(s));
+    s->cvode = s->LS = s->A = s->y = NULL;
+}
+
+int solver_create(Solver *s, ModelData *m) {
+    memset(s, 0, sizeof *s);
+    SUNContext ctx;
+    if (SUNContext_Create(NULL, &ctx) != 0 || (s->ctx = ctx, create_cvode(s, m, 2) != 0)) {
+        if (!s->msg[0]) snprintf(s->msg, sizeof s->msg, "could not allocate CVODE");
+        solver_free(s);
+        return -1;
+    }
+    return 0;
+}
+
+void solver_free(Solver *s) {
+    free_cvode(s);
     if (s->ctx) {
         SUNContext ctx = (SUNContext)s->ctx;
         SUNContext_Free(&ctx);
@@ -115,12 +143,26 @@ double solver_time(const Solver *s) { return s->origin + s->tau; }
 /* Restarts CVODE at (tau, m->u, m->v) in the model's current mode, moving the integer time
  * origin up to the current period first. */
 static int reinit(Solver *s, ModelData *m) {
+    /* the variational equations ride along only when asked for (no cost otherwise) */
+    const int n = m->sensitivities ? SENS_NEQ : 2;
+    if (n != s->n) {
+        free_cvode(s);
+        if (create_cvode(s, m, n) != 0) {
+            snprintf(s->msg, sizeof s->msg, "could not allocate CVODE for %d equations", n);
+            return -1;
+        }
+    }
     const double k = floor(s->tau);
     s->origin += k;
     s->tau -= k;
+    model_shift_time(m, k); /* the model's input ramps and impact times follow the origin */
     if (model_release_now(m, s->tau)) s->events++;
-    NV_Ith_S(YV(s), 0) = m->u;
-    NV_Ith_S(YV(s), 1) = m->v;
+    if (s->n == SENS_NEQ) {
+        sens_pack(m, N_VGetArrayPointer(YV(s)));
+    } else {
+        NV_Ith_S(YV(s), 0) = m->u;
+        NV_Ith_S(YV(s), 1) = m->v;
+    }
     if (CVodeReInit(CV(s), s->tau, YV(s)) != CV_SUCCESS ||
         CVodeSStolerances(CV(s), m->rtol, m->atol) != CV_SUCCESS) {
         return -1;
@@ -133,12 +175,11 @@ static int reinit(Solver *s, ModelData *m) {
     return 0;
 }
 
-/* The wall indicator g0 along CVODE's interpolant of the last step. */
-static int indicator_at(Solver *s, const ModelData *m, double t, double y[2], double *g0) {
-    N_Vector tmp = N_VNew_Serial(2, (SUNContext)s->ctx);
+/* The wall indicator g0 along CVODE's interpolant of the last step (y: all s->n components). */
+static int indicator_at(Solver *s, const ModelData *m, double t, double y[SENS_NEQ], double *g0) {
+    N_Vector tmp = N_VNew_Serial(s->n, (SUNContext)s->ctx);
     int flag = CVodeGetDky(CV(s), t, 0, tmp);
-    y[0] = NV_Ith_S(tmp, 0);
-    y[1] = NV_Ith_S(tmp, 1);
+    for (int i = 0; i < s->n; ++i) y[i] = NV_Ith_S(tmp, i);
     N_VDestroy(tmp);
     double g[MODEL_N_EVENTS];
     model_event_indicators(m, t, y, g);
@@ -150,12 +191,12 @@ static int indicator_at(Solver *s, const ModelData *m, double t, double y[2], do
  * step. Locates the first crossing by Illinois regula falsi on the interpolant; on return *tc and
  * yc hold the crossing (on the far side of the wall, so the event applies). */
 static int locate_missed_crossing(Solver *s, const ModelData *m, double t_turn, double *tc,
-                                  double yc[2]) {
+                                  double yc[SENS_NEQ]) {
     realtype tn, hu;
     CVodeGetCurrentTime(CV(s), &tn);
     CVodeGetLastStep(CV(s), &hu);
     double lo = fmax(s->tau_good, tn - hu), hi = t_turn;
-    double ylo[2], yhi[2], glo, ghi;
+    double ylo[SENS_NEQ], yhi[SENS_NEQ], glo, ghi;
     if (indicator_at(s, m, lo, ylo, &glo) != CV_SUCCESS ||
         indicator_at(s, m, hi, yhi, &ghi) != CV_SUCCESS)
         return -1;
@@ -166,10 +207,11 @@ static int locate_missed_crossing(Solver *s, const ModelData *m, double t_turn, 
     for (int it = 0; it < 200 && hi - lo > 4e-16 * fmax(1.0, fabs(hi)); ++it) {
         double t = (lo * ghi - hi * glo) / (ghi - glo);
         if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
-        double y[2], g;
+        double y[SENS_NEQ], g;
         indicator_at(s, m, t, y, &g);
         if (g * far > 0.0) {
-            hi = t; ghi = g; yhi[0] = y[0]; yhi[1] = y[1];
+            hi = t; ghi = g;
+            memcpy(yhi, y, sizeof(double) * s->n);
             if (side == +1) glo *= 0.5;
             side = +1;
         } else {
@@ -179,15 +221,14 @@ static int locate_missed_crossing(Solver *s, const ModelData *m, double t_turn, 
         }
     }
     *tc = hi;
-    yc[0] = yhi[0];
-    yc[1] = yhi[1];
+    memcpy(yc, yhi, sizeof(double) * s->n);
     return 0;
 }
 
 int solver_apply_pending(Solver *s, ModelData *m) {
     if (!s->pending) return 0;
     double y[2] = {m->u, m->v};
-    model_event_update(m, s->tau, y, 0);
+    sens_event_update(m, s->tau, y);
     m->u = y[0];
     m->v = y[1];
     s->events++;
@@ -202,6 +243,7 @@ int solver_advance(Solver *s, ModelData *m, double t_end) {
 
 int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) {
     s->msg[0] = '\0';
+    if (m->solver == SOLVER_CLOSED_FORM) return closed_form_advance(s, m, t_end, stop_at_event);
     solver_apply_pending(s, m);
     if (s->needs_reinit || s->tau > REORIGIN_AFTER) {
         if (reinit(s, m) != 0) return -1;
@@ -226,17 +268,19 @@ int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) 
         }
         double *y = N_VGetArrayPointer(YV(s));
         s->tau = tret;
+        if (s->n == SENS_NEQ) sens_unpack(m, y);
         m->u = y[0];
         m->v = y[1];
         if (flag != CV_ROOT_RETURN) continue; /* CV_TSTOP_RETURN: tret == tau_end */
 
         int info[MODEL_N_EVENTS];
         CVodeGetRootInfo(CV(s), info);
-        if (info[0] == 0 && !model_missed_crossing(m, y)) {
+        if (info[0] == 0 && !model_missed_crossing(m, tret, y)) {
             s->tau_good = tret; /* a turning point on the right side of the wall */
             continue;
         }
-        double yc[2] = {y[0], y[1]}, tc = tret;
+        double yc[SENS_NEQ], tc = tret;
+        memcpy(yc, y, sizeof(double) * s->n);
         if (info[0] == 0) {
             if (locate_missed_crossing(s, m, tret, &tc, yc) != 0) {
                 snprintf(s->msg, sizeof s->msg,
@@ -246,6 +290,7 @@ int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) 
             }
             s->guard_hits++;
         }
+        if (s->n == SENS_NEQ) sens_unpack(m, yc); /* J, S at the crossing */
         if (stop_at_event) { /* FMI 3.0 early return: the jump is the importer's event mode */
             s->tau = tc;
             m->u = yc[0];
@@ -254,7 +299,7 @@ int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) 
             s->needs_reinit = 1;
             return 1;
         }
-        model_event_update(m, tc, yc, 0);
+        sens_event_update(m, tc, yc);
         s->tau = tc;
         m->u = yc[0];
         m->v = yc[1];

@@ -78,6 +78,10 @@ def plan_tasks(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, 
     return tasks
 
 
+#: What a checkpoint keeps of each finished point of an unfinished chain: its results and
+#: ``end`` = (t, u, v), the state the chain went on from.
+PARTIAL_FIELDS = (*RESULT_FIELDS, "end")
+
 #: Mode of the task that runs a hysteresis loop: its first half is the up scan, its
 #: second half the down scan from the state the up scan ended in.
 LOOP = "both"
@@ -134,6 +138,9 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         "impacts": np.full(shape + [n], -1, dtype=np.int64),
         "period": np.full(shape, -1, dtype=np.int64),
         "orbit_impacts": np.full(shape, -1, dtype=np.int64),
+        "dynamics": np.full(shape, -1, dtype=np.int64),
+        "lyapunov": np.full(shape + [2], np.nan),
+        "lyapunov_err": np.full(shape + [2], np.nan),
     }
     index_of_value = {float(x): i for i, x in enumerate(grid)}
     for key, task in tasks.items():
@@ -145,7 +152,8 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
             d = directions.index(direction)
             idx = (d, index_of_value[value]) if j is None else (d, index_of_value[value], j)
             for name in RESULT_FIELDS:
-                arrays[name][idx] = res[name][row]
+                if name in res:  # a checkpoint written before a field existed lacks it
+                    arrays[name][idx] = res[name][row]
     sample_dims = dims + ["sample"]
     ds = xr.Dataset(
         {
@@ -159,6 +167,24 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         coords=coords,
         attrs=dict(attrs),
     )
+    from .classify import DYNAMICS_NAMES
+
+    codes = sorted(DYNAMICS_NAMES)
+    ds["dynamics"] = (dims, arrays["dynamics"], {
+        "long_name": "dynamics of the orbit", "flag_values": np.array(codes, dtype=np.int64),
+        "flag_meanings": " ".join(DYNAMICS_NAMES[c].replace(" ", "_").replace("-", "_") for c in codes),
+        "comment": "periodic: periodic samples, converged; chaotic: largest Lyapunov exponent > 0 by more "
+                   "than 3 standard errors; quasi_periodic: largest exponent 0 within 3 standard errors (band "
+                   "< 0.02); not_converged: largest exponent < 0 (attracting orbit not reached), still "
+                   "settling, or undecided; unclassified: not periodic and no exponents (sampling.lyapunov = 0)"})
+    if sampling.lyapunov:
+        ds = ds.assign_coords(exponent=[1, 2])
+        ds["lyapunov"] = (dims + ["exponent"], arrays["lyapunov"], {
+            "long_name": "Lyapunov exponents of the stroboscopic map", "units": "1/forcing period",
+            "comment": f"QR method over {sampling.lyapunov} periods after the samples, natural log"})
+        ds["lyapunov_err"] = (dims + ["exponent"], arrays["lyapunov_err"], {
+            "long_name": "standard error of the Lyapunov exponents (batch means of 10 blocks)",
+            "units": "1/forcing period"})
     ds[spec.param].attrs["long_name"] = f"swept FMU parameter {spec.param}"
     ds["direction"].attrs["long_name"] = ("fresh: every point from the same state; up/down: continuation "
                                           "(with both, down starts where up ended)")
@@ -270,10 +296,10 @@ def run_sweep(
             results[key] = store.load(key)
             continue
         rows = store.load_partial(key) if store is not None else None
-        if rows is not None and 0 < len(rows["period"]) < len(task.values):
+        if rows is not None and "end" in rows and 0 < len(rows["period"]) < len(task.values):
             done = len(rows["period"])
-            partial[key] = {name: list(rows[name]) for name in RESULT_FIELDS}
-            t_last, u_last, v_last = rows["t"][-1][-1], rows["u"][-1][-1], rows["v"][-1][-1]
+            partial[key] = {name: list(rows[name]) for name in PARTIAL_FIELDS}
+            t_last, u_last, v_last = rows["end"][-1]  # the state after the last finished point
             task = dataclasses.replace(task, resume=(done, float(t_last), float(u_last), float(v_last)))
             stats.resumed_points += done
         todo[key] = task
@@ -315,12 +341,12 @@ def run_sweep(
         with lock:
             if key in results:
                 return  # a late report of a task already finished
-            rows = partial.setdefault(key, {name: [] for name in RESULT_FIELDS})
+            rows = partial.setdefault(key, {name: [] for name in PARTIAL_FIELDS})
             if row is not None and points == len(rows["period"]) + 1:  # the next point, in order
-                for name in RESULT_FIELDS:
+                for name in PARTIAL_FIELDS:
                     rows[name].append(row[name])
                 if store is not None:
-                    store.save_partial(key, {name: np.asarray(rows[name]) for name in RESULT_FIELDS})
+                    store.save_partial(key, {name: np.asarray(rows[name]) for name in PARTIAL_FIELDS})
                     stats.kept_points += 1
             in_flight[key] = points - first_of[key]  # points computed in this run
             show()
@@ -367,6 +393,7 @@ def run_sweep(
         "sampling.tol": sampling.tol,
         "sampling.max_period": sampling.max_period,
         "sampling.extend": sampling.extend,
+        "sampling.lyapunov": sampling.lyapunov,
         "initial.u0": state0[0],
         "initial.v0": state0[1],
         **{f"model.{k}": v for k, v in base.items()},
