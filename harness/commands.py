@@ -204,10 +204,11 @@ def _check_sweep_budget(args: argparse.Namespace, exp: Experiment) -> None:
     grid_arg = L.arg("sweep", "values") if L.get("sweep", "values") is not None else L.arg("sweep", "num")
     factors = {grid_arg: n_values, "--scan" if args.scan else L.arg("sweep", "scan_values"): n_scan,
                L.arg("sampling", "transient"): s.n_transient, L.arg("sampling", "samples"): s.n_samples,
-               L.arg("sampling", "extend"): s.extend}
+               L.arg("sampling", "extend"): s.extend, L.arg("sampling", "lyapunov"): s.lyapunov}
     blame = max(factors, key=lambda k: factors[k])
+    # a Lyapunov period costs up to 5 runs (central differences when the FMU has no derivatives)
     Budget.from_args(args).check(
-        sweep_estimate(n_values, len(modes), n_scan, s.n_transient, s.n_samples, s.extend, blame))
+        sweep_estimate(n_values, len(modes), n_scan, s.n_transient, s.n_samples, s.extend + 5 * s.lyapunov, blame))
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
