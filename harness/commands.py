@@ -51,7 +51,8 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     g.add_argument("--num", dest="sweep__num", type=count, metavar="N", help="number of values (default 91)")
     g.add_argument("--values", dest="sweep__values", metavar="V1,V2,...", help="explicit values (instead of start/stop/num)")
     g.add_argument("--mode", dest="sweep__mode", metavar="MODE",
-                   help="fresh, up, down or both (= up and down); comma-separated list allowed (default both)")
+                   help="fresh, up, down or both (a hysteresis loop: up, then down from the state where the up "
+                   "scan ended); comma-separated list allowed (default both)")
     g.add_argument("--scan", metavar="NAME=V1,V2,...|NAME=START:STOP:NUM",
                    help="second axis of a 2D scan, e.g. --scan Gamma=10,100,1000")
     b = p.add_argument_group("execution")
@@ -251,7 +252,14 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             shutil.rmtree(ckpt)
             ds = sweep()
     except KeyboardInterrupt:
-        print(f"interrupted: finished points are kept in {ckpt}; rerun the same command to resume", file=sys.stderr)
+        # say what is really on disk: whole tasks and the leading points of chains
+        if stats.kept_points:
+            print(f"interrupted: {stats.kept_points} of {stats.total_points} points are kept in {ckpt}; "
+                  "rerun the same command to resume", file=sys.stderr)
+        else:
+            print("interrupted before any point finished; nothing kept", file=sys.stderr)
+            if ckpt_is_new:
+                shutil.rmtree(ckpt, ignore_errors=True)
         raise
     except (HarnessInputError, FmuRejectedInput):
         # Rejected input: a rerun needs other settings, which could not resume this
@@ -263,7 +271,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     shutil.rmtree(ckpt, ignore_errors=True)  # the NetCDF file now holds everything
     print(f"{spec.param}: {len(spec.values)} values x {', '.join(spec.modes)}"
           + (f" x {spec.scan_param} ({len(spec.scan_values)} values)" if spec.scan_param else "")
-          + f"; {stats.computed} tasks computed, {stats.resumed} resumed; "
+          + f"; {stats.computed} tasks computed, {stats.resumed} resumed"
+          + (f" ({stats.resumed_points} points of unfinished chains resumed)" if stats.resumed_points else "")
+          + "; "
           f"wall time {stats.wall_time:.2f} s on {ds.attrs['backend']} "
           f"(tasks used {ds.attrs['tasks_cpu_time_s']:.1f} CPU s)")
     grid = ds[spec.param].values
