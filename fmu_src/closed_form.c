@@ -71,8 +71,11 @@ typedef struct {
  * W0 + W1 (tau - tref). */
 static void inputs(const ModelData *m, double *F0, double *F1, double *W0, double *W1,
                    double *tref) {
-    (void)m;
-    *F0 = *F1 = *W0 = *W1 = *tref = 0.0;
+    *F0 = m->F_ext;
+    *F1 = m->dF_ext;
+    *W0 = m->u_wall;
+    *W1 = m->du_wall;
+    *tref = m->in_tau;
 }
 
 static void mode_init(Mode *md, const ModelData *m, int contact) {
@@ -295,6 +298,9 @@ const char *closed_form_unsupported(const ModelData *m) {
     if (m->wall == WALL_COMPLIANT && m->contact != CONTACT_LINEAR)
         return "solver = 1 (closed form) needs the linear contact law (contact = 0): the Hertz "
                "and Hunt-Crossley laws are nonlinear, use solver = 0 (CVODE)";
+    if (m->dF_ext != 0.0 || m->du_wall != 0.0)
+        return "solver = 1 (closed form) takes constant inputs only (its sticking release time "
+               "assumes a fixed wall): use solver = 0 (CVODE) with input derivatives";
     return NULL;
 }
 
@@ -316,10 +322,11 @@ static double release_time(const ModelData *m, double tau0) {
     return t;
 }
 
-static void reorigin(Solver *s) {
+static void reorigin(Solver *s, ModelData *m) {
     const double k = floor(s->tau);
     s->origin += k;
     s->tau -= k;
+    model_shift_time(m, k); /* the model's input ramps and impact times follow the origin */
 }
 
 /* The jump of a pending event (FMI 3.0 early return), with its saltation matrix. */
@@ -341,7 +348,7 @@ int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event
         return -1;
     }
     apply_pending(s, m);
-    reorigin(s);
+    reorigin(s, m);
     s->needs_reinit = 1; /* CVODE, if used next, restarts from here */
     double tau_end = t_end - s->origin;
     if (tau_end < s->tau) {
@@ -423,7 +430,7 @@ int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event
         }
         const double k = floor(s->tau);
         if (k > 0.0) {
-            reorigin(s);
+            reorigin(s, m);
             tau_end -= k;
             mode_init(&modes[0], m, 0); /* tref moves with the origin (the ports) */
             mode_init(&modes[1], m, 1);

@@ -78,7 +78,7 @@ static double dforce_dsigma(const ModelData *m, double tau) {
 void sens_rhs(const ModelData *m, double tau, const double y[SENS_NEQ], double dy[SENS_NEQ]) {
     model_derivatives(m, tau, y, dy);
     double A[2][2];
-    model_jacobian(m, y, A);
+    model_jacobian(m, tau, y, A);
     /* J' = A J (row-major J in y[2..5]) */
     for (int j = 0; j < 2; ++j) {
         dy[2 + j] = A[0][0] * y[2 + j] + A[0][1] * y[4 + j];
@@ -90,10 +90,9 @@ void sens_rhs(const ModelData *m, double tau, const double y[SENS_NEQ], double d
 
 void sens_jacobian(const ModelData *m, double tau, const double y[SENS_NEQ],
                    double jac[SENS_NEQ][SENS_NEQ]) {
-    (void)tau;
     memset(jac, 0, sizeof(double) * SENS_NEQ * SENS_NEQ);
     double A[2][2];
-    model_jacobian(m, y, A);
+    model_jacobian(m, tau, y, A);
     /* blocks: (u, v), (J11, J21), (J12, J22), (S1, S2), each with A */
     static const int idx[4][2] = {{0, 1}, {2, 4}, {3, 5}, {6, 7}};
     for (int b = 0; b < 4; ++b)

@@ -125,6 +125,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "x_stop": 1e-2,
         "x_num": 25,
         "state": None,
+        "method": "auto",  # exact (the FMU's derivatives), fd (differences), auto (exact when available)
         "rtol": None,  # None: the FMU's own (tight) default tolerances
         "atol": None,
     },
@@ -166,6 +167,7 @@ CLI_FLAGS: dict[tuple[str, str], str] = {
     ("jacobian", "x_stop"): "--x-stop",
     ("jacobian", "x_num"): "--x-num",
     ("jacobian", "state"): "--state",
+    ("jacobian", "method"): "--method",
     ("simulate", "t0"): "--t0",
     ("simulate", "t_end"): "--t-end",
     ("simulate", "dt"): "--dt",

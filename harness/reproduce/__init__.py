@@ -61,10 +61,13 @@ class Context:
     workers : int or None
     progress : bool
     fmu : FmuModel
+    solver : str
+        The FMU's integrator, "cvode" (the default: the paper's question is about the ODE as a
+        general integrator solves it) or "closed-form".
     """
 
     def __init__(self, target: str, out: str | Path, quick: bool = False, workers: int | None = None,
-                 progress: bool = False, fmu_path: str | None = None) -> None:
+                 progress: bool = False, fmu_path: str | None = None, solver: str = "cvode") -> None:
         from ..config import default_fmu_path
         from ..fmi import FmuModel
 
@@ -75,6 +78,14 @@ class Context:
         self.workers = workers
         self.progress = progress
         self.fmu = FmuModel(fmu_path or default_fmu_path(), "--fmu")
+        from ..fmi import SOLVER_NAMES, SOLVER_PARAMETER
+
+        if solver not in SOLVER_NAMES:
+            raise HarnessInputError("--solver", f"unknown solver {solver!r}; one of {', '.join(SOLVER_NAMES)}")
+        if SOLVER_PARAMETER not in self.fmu.variables and SOLVER_NAMES[solver] != 0:
+            raise HarnessInputError("--solver", f"{self.fmu.path.name} has no closed-form solver mode (no "
+                                    f"parameter {SOLVER_PARAMETER!r}); it integrates with CVODE only")
+        self.solver = solver
         self.t_start = time.perf_counter()
         #: the ``impact-harness`` command line that reproduces this run (report footer)
         self.command = f"reproduce {target}{' --quick' if self.quick else ''} --out {self.out}"
@@ -90,6 +101,10 @@ class Context:
         p = self.fmu.defaults()
         p.pop("u0", None)
         p.pop("v0", None)
+        from ..fmi import SOLVER_NAMES, SOLVER_PARAMETER
+
+        if SOLVER_PARAMETER in self.fmu.variables:
+            p[SOLVER_PARAMETER] = SOLVER_NAMES[self.solver]
         for k, v in overrides.items():
             p[k] = self.fmu.coerce(k, v, k)
         return p
@@ -122,7 +137,7 @@ def write_outputs(ctx: Context, result: Mapping[str, Any], report: str) -> tuple
     data = dict(result)
     data.setdefault("run", {})
     data["run"].update({
-        "target": ctx.target, "quick": ctx.quick, "runtime_s": round(ctx.elapsed(), 2),
+        "target": ctx.target, "quick": ctx.quick, "solver": ctx.solver, "runtime_s": round(ctx.elapsed(), 2),
         "fmu": str(ctx.fmu.path), "fmu_sha256": ctx.fmu.sha256, "version": __version__,
         "python": platform.python_version(),
     })
@@ -136,11 +151,11 @@ def write_outputs(ctx: Context, result: Mapping[str, Any], report: str) -> tuple
 
 
 def run_target(target: str, out: str | Path, quick: bool = False, workers: int | None = None,
-               progress: bool = False, fmu_path: str | None = None) -> dict[str, Any]:
+               progress: bool = False, fmu_path: str | None = None, solver: str = "cvode") -> dict[str, Any]:
     """Run one reproduction; returns its result dict (also written to ``out``)."""
     if target not in TARGETS:
         raise HarnessInputError("FIG", f"unknown target {target!r}; choose from {', '.join(TARGETS)}")
-    ctx = Context(target, out, quick, workers, progress, fmu_path)
+    ctx = Context(target, out, quick, workers, progress, fmu_path, solver)
     module = importlib.import_module(TARGETS[target])
     result, report = module.run(ctx)
     write_outputs(ctx, result, report)
@@ -160,6 +175,9 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     p.add_argument("--workers", "-j", type=int, metavar="N", help="local worker processes for sweeps (default: all cores)")
     p.add_argument("--fmu", metavar="PATH", help="FMU (default build/fmu/ImpactOscillator.fmu)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument("--solver", choices=("cvode", "closed-form"), default="cvode",
+                   help="the FMU's integrator (default cvode: the paper's question is about the ODE as a general "
+                   "integrator solves it; closed-form: exact propagation, linear contact law)")
     p.set_defaults(func=cmd_reproduce)
     from .windows import register as register_windows
 
@@ -171,7 +189,8 @@ def cmd_reproduce(args: argparse.Namespace) -> int:
         raise HarnessInputError("--workers", f"must be >= 1, got {args.workers}")
     out = args.out or f"results/{args.figure}"
     t0 = time.perf_counter()
-    result = run_target(args.figure, out, args.quick, args.workers, not args.no_progress, args.fmu)
+    result = run_target(args.figure, out, args.quick, args.workers, not args.no_progress, args.fmu,
+                        getattr(args, "solver", "cvode"))
     verdict = result.get("verdict", "")
     print(f"{args.figure}: {verdict}")
     print(f"wrote {Path(out) / 'report.md'} and {Path(out) / (args.figure + '.json')} "
