@@ -25,7 +25,7 @@ Wall models (``wall=``):
 
 Between wall events the solution is exact: the particular solution of the linear ODE
 with the stiffness in force (in the wall the static offset is -Omega^2/(Omega^2 + kappa^2))
-plus the homogeneous propagator (FORMULAS.md section 2, valid at every damping).
+plus the homogeneous propagator (docs/theory.md section 2, valid at every damping).
 Displacements from an anchor point are computed as
 ``(P(tau) - I)(z_a - q(t_a)) + (q(t) - q(t_a))`` with both brackets accurate to small
 relative error for small tau, so that chattering impacts 1e-8 apart are resolved.
@@ -422,7 +422,7 @@ class ExactOscillator:
         return float(s[0, 0]), float(s[0, 1]), int(c[0])
 
     def pre_impact_map(self, u, v, n: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Exact counterpart of the near-grazing maps (31)/(32) (FORMULAS.md section 3).
+        """Exact counterpart of the near-grazing maps (31)/(32) (docs/theory.md section 3).
 
         The map's state is the pre-impact ("virtual") state at t = n: the orbit before
         its impact near n, continued to t = n as if there were no wall (figure 3).  So:
