@@ -43,7 +43,8 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
 
     p = sub.add_parser("sweep", parents=[common, sampling], help="bifurcation sweep (fresh / up / down / both), 1D or 2D",
                        description="Sweep an FMU parameter (sigma by default): fresh starts from the same state, or "
-                       "quasi-static continuation up and/or down carrying the state. Draws the bifurcation diagram.")
+                       "quasi-static continuation up and/or down carrying the state (both: one hysteresis loop, the down "
+                       "scan starting where the up scan ended). Draws the bifurcation diagram.")
     g = p.add_argument_group("sweep")
     g.add_argument("--param", dest="sweep__param", metavar="NAME", help="swept FMU parameter (default sigma)")
     g.add_argument("--start", dest="sweep__start", type=float, metavar="X", help="first value (default 1.0)")
@@ -51,8 +52,8 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     g.add_argument("--num", dest="sweep__num", type=count, metavar="N", help="number of values (default 91)")
     g.add_argument("--values", dest="sweep__values", metavar="V1,V2,...", help="explicit values (instead of start/stop/num)")
     g.add_argument("--mode", dest="sweep__mode", metavar="MODE",
-                   help="fresh, up, down or both (a hysteresis loop: up, then down from the state where the up "
-                   "scan ended); comma-separated list allowed (default both)")
+                   help="fresh, up, down, or both: a hysteresis loop, up and then down from the state where the "
+                   "up scan ended (up,down: two independent scans); comma-separated list allowed (default both)")
     g.add_argument("--scan", metavar="NAME=V1,V2,...|NAME=START:STOP:NUM",
                    help="second axis of a 2D scan, e.g. --scan Gamma=10,100,1000")
     b = p.add_argument_group("execution")
@@ -193,7 +194,7 @@ def _scan_count(text: str) -> float:
 def _check_sweep_budget(args: argparse.Namespace, exp: Experiment) -> None:
     """Refuse a sweep whose grid, samples or periods exceed the limits, before any grid
     array exists (``np.linspace(0, 1, 10**9)`` alone is 8 GB)."""
-    from .config import parse_modes
+    from .config import parse_modes, sweep_directions
 
     L, s = exp.layers, exp.sampling
     if args.scan:
@@ -212,7 +213,7 @@ def _check_sweep_budget(args: argparse.Namespace, exp: Experiment) -> None:
     blame = max(factors, key=lambda k: factors[k])
     # a Lyapunov period costs up to 5 runs (central differences when the FMU has no derivatives)
     Budget.from_args(args).check(
-        sweep_estimate(n_values, len(modes), n_scan, s.n_transient, s.n_samples, s.extend + 5 * s.lyapunov, blame))
+        sweep_estimate(n_values, len(sweep_directions(modes)), n_scan, s.n_transient, s.n_samples, s.extend + 5 * s.lyapunov, blame))
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:

@@ -35,7 +35,7 @@ import xarray as xr
 
 from .backends import Backend, make_backend
 from .checkpoint import Checkpoint, fingerprint
-from .config import SamplingSpec, SweepSpec
+from .config import SamplingSpec, SweepSpec, sweep_directions
 from .errors import HarnessInputError
 from .fmi import INITIAL_STATE, FmuModel
 from .progress import progress_bar
@@ -60,17 +60,15 @@ def plan_tasks(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, 
         if second is not None:
             base[spec.scan_param] = float(second)
         suffix = "" if second is None else f"-s{j:04d}"
-        loop = "up" in spec.modes and "down" in spec.modes
         for mode in spec.modes:
             if mode == "fresh":
                 for i, value in enumerate(grid):
                     key = f"fresh{suffix}-p{i:05d}"
                     tasks[key] = SweepTask(key, mode, spec.param, (float(value),), base, state0, sampling)
-            elif loop:
-                if mode == "up":  # one task for the loop: up, then down from where up ended
-                    chain = np.concatenate([grid, grid[::-1]])
-                    key = f"{LOOP}{suffix}"
-                    tasks[key] = SweepTask(key, LOOP, spec.param, tuple(float(x) for x in chain), base, state0, sampling)
+            elif mode == LOOP:  # one task: up, then down from where up ended
+                chain = np.concatenate([grid, grid[::-1]])
+                key = f"{LOOP}{suffix}"
+                tasks[key] = SweepTask(key, LOOP, spec.param, tuple(float(x) for x in chain), base, state0, sampling)
             else:
                 chain = grid if mode == "up" else grid[::-1]
                 key = f"{mode}{suffix}"
@@ -119,7 +117,7 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
              sampling: SamplingSpec, attrs: Mapping[str, Any]) -> xr.Dataset:
     """Put task results on the grid: dims (direction, param[, scan_param], sample)."""
     grid = np.sort(np.asarray(spec.values, dtype=float))
-    directions = list(spec.modes)
+    directions = sweep_directions(spec.modes)
     dims = ["direction", spec.param]
     coords: dict[str, Any] = {"direction": directions, spec.param: grid}
     shape = [len(directions), len(grid)]

@@ -54,7 +54,7 @@ def test_both_is_a_loop_down_starts_where_up_ended(model: FmuModel) -> None:
     restart of the FMU from the up scan's final sample reproduces the down scan's first point."""
     grid = np.linspace(-0.03, 0.03, 5)
     s = SamplingSpec(n_transient=60, n_samples=8)
-    ds = run_sweep(model, SweepSpec("sigma", grid, ("up", "down")), params=LOOP_PARAMS, state0=(grid[0], 0.0),
+    ds = run_sweep(model, SweepSpec("sigma", grid, ("both",)), params=LOOP_PARAMS, state0=(grid[0], 0.0),
                    sampling=s, backend="serial", progress=False)
     up_top = ds.sel(direction="up", sigma=grid[-1])
     down_top = ds.sel(direction="down", sigma=grid[-1])
@@ -67,6 +67,11 @@ def test_both_is_a_loop_down_starts_where_up_ended(model: FmuModel) -> None:
     r = sample_periods(sim, s.n_transient, s.n_samples)
     np.testing.assert_allclose(down_top["u"].values, r.u, rtol=0, atol=1e-8)
     np.testing.assert_allclose(down_top["v"].values, r.v, rtol=0, atol=1e-7)
+    # `up,down` stay two independent scans, the down one restarted from (u0, v0) at t = theta
+    apart = run_sweep(model, SweepSpec("sigma", grid, ("up", "down")), params=LOOP_PARAMS, state0=(grid[0], 0.0),
+                      sampling=s, backend="serial", progress=False)
+    assert float(apart.sel(direction="down", sigma=grid[-1])["t"].values[0]) == s.n_transient + 1
+    xr.testing.assert_equal(apart["u"].sel(direction="up"), ds["u"].sel(direction="up"))
     # and the loop is a hysteresis loop: below sigma = 0 up has no impacts, down keeps them
     hits = ds["impacts"].sum("sample")
     below = ds["sigma"] < 0
@@ -105,7 +110,7 @@ def test_interrupted_loop_keeps_its_points_and_resumes(tmp_path: Path, model: Fm
     assert "1 tasks computed, 0 resumed (5 points of unfinished chains resumed)" in res.stdout
     assert not ckpt.exists()
     grid = np.array([float(x) for x in values.split(",")])
-    reference = run_sweep(model, SweepSpec("sigma", grid, ("up", "down")), params=LOOP_PARAMS, state0=(-0.03, 0.0),
+    reference = run_sweep(model, SweepSpec("sigma", grid, ("both",)), params=LOOP_PARAMS, state0=(-0.03, 0.0),
                           sampling=SamplingSpec(n_transient=60, n_samples=8), backend="serial", progress=False)
     with xr.open_dataset(out) as resumed:
         for name in ("period", "orbit_impacts", "impacts", "t"):

@@ -1,5 +1,5 @@
 """``reproduce fig6/fig7 --quick``: slopes of the FMU map's Jacobian near grazing and the
-hysteretic transition, (nu, Omega) = (0.196, 7.368) (FORMULAS.md section 8).
+hysteretic transition, (nu, Omega) = (0.196, 7.368) (docs/theory.md section 8).
 
 Theory: the impact contribution J11 - P11 (coordinates at t = n) goes like x^(+1/2) for soft
 (beta << 1) elastic contacts (the map is O(x^(3/2)), N = I), like x^(-1/2) for soft contacts
