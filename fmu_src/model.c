@@ -50,6 +50,10 @@ void model_set_defaults(ModelData *m) {
     /* Hunt-Crossley: an impact at speed v_in leaves roughly r ~ 1 - (2/3) alpha v_in, so 0.15
      * gives r ~ 0.9 at v_in ~ 1 */
     m->alpha_hc = 0.15;
+    /* CVODE needs >= 20 steps per unit time (its maximal step 0.05) and ~100-1000 at the
+     * defaults; chatter ends in sticking after ~100 impacts. */
+    m->max_events_per_time = 1e5;
+    m->max_steps_per_time = 2e5;
     m->mode = MODE_FREE;
     m->impacts = 0;
     model_update_derived(m);

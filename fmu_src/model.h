@@ -73,6 +73,9 @@ typedef struct {
     double u0, v0, rtol, atol;
     int contact;      /* ContactLaw */
     double alpha_hc;  /* Hunt-Crossley damping factor */
+    /* Bounds on the work of one doStep, per unit of time advanced (at least one unit); the
+     * solver also caps a doStep at SOLVER_MAX_STEPS_PER_CALL steps (solver.h). */
+    double max_events_per_time, max_steps_per_time;
     /* calculated parameters, kept consistent by model_update_derived() */
     double F_g, phi, kappa, Omega2, kappa2;
     /* continuous state at the current local time */
