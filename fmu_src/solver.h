@@ -23,6 +23,7 @@ typedef struct {
     void *tmp;  /* N_Vector: interpolation */
     void *A;    /* SUNMatrix */
     void *LS;   /* SUNLinearSolver */
+    int n;      /* equations: 2, or SENS_NEQ with the sensitivities (sens.h) */
     /* Time is origin + tau with an integer origin (see model.h). */
     double origin;
     double tau;
@@ -34,10 +35,10 @@ typedef struct {
     double tau_good;
     int needs_reinit;
     int at_stop;     /* CVODE stopped at the re-origin time t_stop, with state y_stop */
-    double t_stop, y_stop[2];
+    double t_stop, y_stop[8];
     /* A crossing located ahead of tau (inside CVODE's last step), its jump not applied yet. */
     int has_next;
-    double t_next, y_next[2];
+    double t_next, y_next[8]; /* 8: room for SENS_NEQ (sens.h) */
     /* Counters since the start, for statistics and tests. */
     long events;
     long guard_hits;  /* crossings the grazing guard (or the side check) recovered */

@@ -22,6 +22,9 @@
  */
 #include "solver.h"
 
+#include "closed_form.h"
+#include "sens.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -46,20 +49,33 @@ static const double MAX_STEP = 0.05;
  * >= 1e-300 and the located times are unchanged (the search works on signs). */
 static const double ROOT_FLOOR = 1e-150;
 
+_Static_assert(SENS_NEQ <= 8, "Solver.y_next and y_stop hold SENS_NEQ components");
+
 #define CV(s) ((s)->cvode)
 #define YV(s) ((N_Vector)(s)->y)
 
+/* With sensitivities the state is (u, v, J, S) of sens.h (SENS_NEQ components), else (u, v). */
 static int rhs(realtype t, N_Vector y, N_Vector ydot, void *user_data) {
-    model_derivatives((const ModelData *)user_data, t, N_VGetArrayPointer(y),
-                      N_VGetArrayPointer(ydot));
+    if (N_VGetLength(y) == SENS_NEQ)
+        sens_rhs((const ModelData *)user_data, t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+    else
+        model_derivatives((const ModelData *)user_data, t, N_VGetArrayPointer(y),
+                          N_VGetArrayPointer(ydot));
     return 0;
 }
 
 static int jac(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *user_data, N_Vector t1,
                N_Vector t2, N_Vector t3) {
-    (void)t; (void)fy; (void)t1; (void)t2; (void)t3;
+    (void)fy; (void)t1; (void)t2; (void)t3;
+    if (N_VGetLength(y) == SENS_NEQ) {
+        double big[SENS_NEQ][SENS_NEQ];
+        sens_jacobian((const ModelData *)user_data, t, N_VGetArrayPointer(y), big);
+        for (int i = 0; i < SENS_NEQ; ++i)
+            for (int j = 0; j < SENS_NEQ; ++j) SM_ELEMENT_D(J, i, j) = big[i][j];
+        return 0;
+    }
     double a[2][2];
-    model_jacobian((const ModelData *)user_data, N_VGetArrayPointer(y), a);
+    model_jacobian((const ModelData *)user_data, t, N_VGetArrayPointer(y), a);
     SM_ELEMENT_D(J, 0, 0) = a[0][0];
     SM_ELEMENT_D(J, 0, 1) = a[0][1];
     SM_ELEMENT_D(J, 1, 0) = a[1][0];
@@ -83,21 +99,21 @@ static void error_handler(int code, const char *module, const char *function, ch
     snprintf(s->msg, sizeof s->msg, "%s/%s (flag %d): %s", module, function, code, msg);
 }
 
-int solver_create(Solver *s, ModelData *m) {
-    memset(s, 0, sizeof *s);
-    SUNContext ctx;
-    if (SUNContext_Create(NULL, &ctx) != 0) goto fail;
-    s->ctx = ctx;
-    s->y = N_VNew_Serial(2, ctx);
-    s->tmp = N_VNew_Serial(2, ctx);
+/* Allocates CVODE for n equations in the existing context. */
+static int create_cvode(Solver *s, ModelData *m, int n) {
+    SUNContext ctx = (SUNContext)s->ctx;
+    s->n = n;
+    s->y = N_VNew_Serial(n, ctx);
+    s->tmp = N_VNew_Serial(n, ctx);
     s->cvode = CVodeCreate(CV_ADAMS, ctx);
     if (!s->y || !s->tmp || !s->cvode) goto fail;
     CVodeSetErrHandlerFn(CV(s), error_handler, s);
+    N_VConst(0.0, YV(s));
     NV_Ith_S(YV(s), 0) = m->u;
     NV_Ith_S(YV(s), 1) = m->v;
     if (CVodeInit(CV(s), rhs, 0.0, YV(s)) != CV_SUCCESS) goto fail;
     if (CVodeRootInit(CV(s), MODEL_N_EVENTS, roots) != CV_SUCCESS) goto fail;
-    s->A = SUNDenseMatrix(2, 2, ctx);
+    s->A = SUNDenseMatrix(n, n, ctx);
     s->LS = SUNLinSol_Dense(YV(s), (SUNMatrix)s->A, ctx);
     if (!s->A || !s->LS) goto fail;
     if (CVodeSetLinearSolver(CV(s), (SUNLinearSolver)s->LS, (SUNMatrix)s->A) != CV_SUCCESS) goto fail;
@@ -108,17 +124,31 @@ int solver_create(Solver *s, ModelData *m) {
     s->needs_reinit = 1;
     return 0;
 fail:
-    if (!s->msg[0]) snprintf(s->msg, sizeof s->msg, "could not allocate CVODE");
-    solver_free(s);
     return -1;
 }
 
-void solver_free(Solver *s) {
+static void free_cvode(Solver *s) {
     if (s->cvode) CVodeFree(&s->cvode);
     if (s->LS) SUNLinSolFree((SUNLinearSolver)s->LS);
     if (s->A) SUNMatDestroy((SUNMatrix)s->A);
     if (s->y) N_VDestroy(YV(s));
     if (s->tmp) N_VDestroy((N_Vector)s->tmp);
+    s->cvode = s->LS = s->A = s->y = s->tmp = NULL;
+}
+
+int solver_create(Solver *s, ModelData *m) {
+    memset(s, 0, sizeof *s);
+    SUNContext ctx;
+    if (SUNContext_Create(NULL, &ctx) != 0 || (s->ctx = ctx, create_cvode(s, m, 2) != 0)) {
+        if (!s->msg[0]) snprintf(s->msg, sizeof s->msg, "could not allocate CVODE");
+        solver_free(s);
+        return -1;
+    }
+    return 0;
+}
+
+void solver_free(Solver *s) {
+    free_cvode(s);
     if (s->ctx) {
         SUNContext ctx = (SUNContext)s->ctx;
         SUNContext_Free(&ctx);
@@ -150,12 +180,26 @@ static int wrong_side(const ModelData *m, double tau, const double y[2]) {
 /* Restarts CVODE at (tau, m->u, m->v) in the model's current mode, moving the integer time
  * origin up to the current period first. */
 static int reinit(Solver *s, ModelData *m) {
+    /* the variational equations ride along only when asked for (no cost otherwise) */
+    const int n = m->sensitivities ? SENS_NEQ : 2;
+    if (n != s->n) {
+        free_cvode(s);
+        if (create_cvode(s, m, n) != 0) {
+            snprintf(s->msg, sizeof s->msg, "could not allocate CVODE for %d equations", n);
+            return -1;
+        }
+    }
     const double k = floor(s->tau);
     s->origin += k;
     s->tau -= k;
+    model_shift_time(m, k); /* the model's input ramps and impact times follow the origin */
     if (model_release_now(m, s->tau)) s->events++;
-    NV_Ith_S(YV(s), 0) = m->u;
-    NV_Ith_S(YV(s), 1) = m->v;
+    if (s->n == SENS_NEQ) {
+        sens_pack(m, N_VGetArrayPointer(YV(s)));
+    } else {
+        NV_Ith_S(YV(s), 0) = m->u;
+        NV_Ith_S(YV(s), 1) = m->v;
+    }
     if (CVodeReInit(CV(s), s->tau, YV(s)) != CV_SUCCESS ||
         CVodeSStolerances(CV(s), m->rtol, m->atol) != CV_SUCCESS ||
         CVodeSetStopTime(CV(s), REORIGIN_AT) != CV_SUCCESS) {
@@ -172,13 +216,24 @@ static int reinit(Solver *s, ModelData *m) {
     return 0;
 }
 
-/* The state on CVODE's interpolant of its last step, at local time t. */
-static int interpolate(Solver *s, double t, double y[2]) {
+/* The state on CVODE's interpolant of its last step, at local time t (all s->n components). */
+static int interpolate(Solver *s, double t, double y[SENS_NEQ]) {
     N_Vector tmp = (N_Vector)s->tmp;
     if (CVodeGetDky(CV(s), t, 0, tmp) != CV_SUCCESS) return -1;
-    y[0] = NV_Ith_S(tmp, 0);
-    y[1] = NV_Ith_S(tmp, 1);
+    for (int i = 0; i < s->n; ++i) y[i] = NV_Ith_S(tmp, i);
     return 0;
+}
+
+/* Copies the s->n components of a state. */
+static void copy_state(const Solver *s, double *dst, const double *src) {
+    memcpy(dst, src, sizeof(double) * (size_t)s->n);
+}
+
+/* Puts the state y (s->n components) into the model. */
+static void set_model_state(const Solver *s, ModelData *m, const double *y) {
+    if (s->n == SENS_NEQ) sens_unpack(m, y);
+    m->u = y[0];
+    m->v = y[1];
 }
 
 /* The wall indicator lies on its mode's side at lo and on the far side at hi (both in CVODE's
@@ -186,7 +241,7 @@ static int interpolate(Solver *s, double t, double y[2]) {
  * signs (never by products, which underflow); stores it as the next event, on the far side of
  * the wall so that the event applies. */
 static int locate_crossing(Solver *s, const ModelData *m, double lo, double hi) {
-    double ylo[2], yhi[2], g[MODEL_N_EVENTS];
+    double ylo[SENS_NEQ], yhi[SENS_NEQ], g[MODEL_N_EVENTS];
     if (interpolate(s, lo, ylo) != 0 || interpolate(s, hi, yhi) != 0) return -1;
     if (wrong_side(m, lo, ylo) || !wrong_side(m, hi, yhi)) return -1; /* not bracketed */
     model_event_indicators(m, lo, ylo, g);
@@ -197,11 +252,12 @@ static int locate_crossing(Solver *s, const ModelData *m, double lo, double hi) 
     for (int it = 0; it < 400 && hi - lo > 4e-16 * fmax(1.0, fabs(hi)); ++it) {
         double t = lo + (hi - lo) * (glo / (glo - ghi)); /* glo, ghi of opposite signs */
         if (!(t > lo && t < hi)) t = lo + 0.5 * (hi - lo);
-        double y[2];
+        double y[SENS_NEQ];
         if (interpolate(s, t, y) != 0) return -1;
         model_event_indicators(m, t, y, g);
         if (wrong_side(m, t, y)) {
-            hi = t; ghi = g[0]; yhi[0] = y[0]; yhi[1] = y[1];
+            hi = t; ghi = g[0];
+            copy_state(s, yhi, y);
             if (side == +1) glo *= 0.5;
             side = +1;
         } else {
@@ -212,8 +268,7 @@ static int locate_crossing(Solver *s, const ModelData *m, double lo, double hi) 
     }
     s->has_next = 1;
     s->t_next = hi;
-    s->y_next[0] = yhi[0];
-    s->y_next[1] = yhi[1];
+    copy_state(s, s->y_next, yhi);
     return 0;
 }
 
@@ -239,7 +294,7 @@ static int rescue(Solver *s, const ModelData *m, double t) {
 int solver_apply_pending(Solver *s, ModelData *m) {
     if (!s->pending) return 0;
     double y[2] = {m->u, m->v};
-    model_event_update(m, s->tau, y, 0);
+    sens_event_update(m, s->tau, y);
     m->u = y[0];
     m->v = y[1];
     s->events++;
@@ -284,8 +339,7 @@ static int over_budget(Solver *s, const ModelData *m, int events) {
 /* Applies the event stored by locate_crossing or CVODE's root return, at its time. */
 static int take_event(Solver *s, ModelData *m, int stop_at_event) {
     s->tau = s->t_next;
-    m->u = s->y_next[0];
-    m->v = s->y_next[1];
+    set_model_state(s, m, s->y_next); /* J, S at the crossing too */
     s->has_next = 0;
     s->needs_reinit = 1;
     if (stop_at_event) { /* FMI 3.0 early return: the jump is the importer's event mode */
@@ -293,7 +347,7 @@ static int take_event(Solver *s, ModelData *m, int stop_at_event) {
         return 1;
     }
     double y[2] = {m->u, m->v};
-    model_event_update(m, s->tau, y, 0);
+    sens_event_update(m, s->tau, y);
     m->u = y[0];
     m->v = y[1];
     s->events++;
@@ -304,6 +358,7 @@ static int take_event(Solver *s, ModelData *m, int stop_at_event) {
 
 int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) {
     s->msg[0] = '\0';
+    if (m->solver == SOLVER_CLOSED_FORM) return closed_form_advance(s, m, t_end, stop_at_event);
     if (!(s->continuing && t_end == s->budget_end)) begin_budget(s, m, t_end);
     s->continuing = 0;
     solver_apply_pending(s, m);
@@ -326,7 +381,7 @@ int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) 
         if (tau_end <= s->tau) return 0; /* h = 0, or below the resolution of t */
         /* CVODE's last step covers the end: interpolate */
         if (s->tn >= tau_end || (s->at_stop && tau_end < s->t_stop)) {
-            double y[2];
+            double y[SENS_NEQ];
             if (interpolate(s, tau_end, y) != 0) {
                 snprintf(s->msg, sizeof s->msg, "could not interpolate at t = %.17g", t_end);
                 return -1;
@@ -336,14 +391,12 @@ int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) 
                 continue;
             }
             s->tau = tau_end;
-            m->u = y[0];
-            m->v = y[1];
+            set_model_state(s, m, y);
             return 0;
         }
         if (s->at_stop) { /* the re-origin time: restart there, the same for every grid */
             s->tau = s->t_stop;
-            m->u = s->y_stop[0];
-            m->v = s->y_stop[1];
+            set_model_state(s, m, s->y_stop);
             if (reinit(s, m) != 0) return -1;
             continue;
         }
@@ -362,8 +415,7 @@ int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) 
         if (flag == CV_TSTOP_RETURN) { /* y = y(tstop), tn within round-off of it */
             s->at_stop = 1;
             s->t_stop = tret;
-            s->y_stop[0] = y[0];
-            s->y_stop[1] = y[1];
+            copy_state(s, s->y_stop, y);
         }
         if (!isfinite(y[0]) || !isfinite(y[1])) {
             snprintf(s->msg, sizeof s->msg, "the state is no longer finite at t = %.17g",
@@ -376,8 +428,7 @@ int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) 
             if (info[0] != 0) { /* CVODE located the crossing: y is on the far side */
                 s->has_next = 1;
                 s->t_next = tret;
-                s->y_next[0] = y[0];
-                s->y_next[1] = y[1];
+                copy_state(s, s->y_next, y);
             } else if (wrong_side(m, tret, y)) { /* a turning point beyond the wall */
                 if (rescue(s, m, tret) != 0) return -1;
             } else {

@@ -16,9 +16,11 @@ from typing import Any
 import numpy as np
 
 from .classify import classify_orbit, windows
-from .cli import overrides_from_args
+from .budget import Budget, grid_count, jacobian_estimate, simulate_estimate, strobe_estimate, sweep_estimate
+from .cli import count, overrides_from_args
 from .config import Experiment, parameter_values
-from .errors import HarnessInputError
+from .errors import FmuRejectedInput, HarnessInputError
+from .outputs import check_output, check_plot
 from .progress import progress_bar
 
 
@@ -46,7 +48,7 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     g.add_argument("--param", dest="sweep__param", metavar="NAME", help="swept FMU parameter (default sigma)")
     g.add_argument("--start", dest="sweep__start", type=float, metavar="X", help="first value (default 1.0)")
     g.add_argument("--stop", dest="sweep__stop", type=float, metavar="X", help="last value (default 0.1)")
-    g.add_argument("--num", dest="sweep__num", type=int, metavar="N", help="number of values (default 91)")
+    g.add_argument("--num", dest="sweep__num", type=count, metavar="N", help="number of values (default 91)")
     g.add_argument("--values", dest="sweep__values", metavar="V1,V2,...", help="explicit values (instead of start/stop/num)")
     g.add_argument("--mode", dest="sweep__mode", metavar="MODE",
                    help="fresh, up, down or both (= up and down); comma-separated list allowed (default both)")
@@ -55,7 +57,7 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     b = p.add_argument_group("execution")
     b.add_argument("--backend", dest="run__backend", choices=["serial", "processes", "dask"],
                    help="where to run (default processes, or dask with --scheduler)")
-    b.add_argument("--workers", "-j", dest="run__workers", type=int, metavar="N",
+    b.add_argument("--workers", "-j", dest="run__workers", type=count, metavar="N",
                    help="local worker processes (default: all cores)")
     b.add_argument("--scheduler", dest="run__scheduler", metavar="tcp://HOST:PORT", help="run on this Dask scheduler")
     b.add_argument("--checkpoint", dest="run__checkpoint", metavar="DIR",
@@ -74,7 +76,7 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
                    help="phase where J is measured, away from the impact (default 0.5)")
     g.add_argument("--x-start", dest="jacobian__x_start", type=float, metavar="X", help="smallest x (default 1e-6)")
     g.add_argument("--x-stop", dest="jacobian__x_stop", type=float, metavar="X", help="largest x (default 1e-2)")
-    g.add_argument("--x-num", dest="jacobian__x_num", type=int, metavar="N", help="number of x values, log-spaced (default 25)")
+    g.add_argument("--x-num", dest="jacobian__x_num", type=count, metavar="N", help="number of x values, log-spaced (default 25)")
     g.add_argument("--state", dest="jacobian__state", metavar="U,V", help="J at this state at t = theta instead of a scan")
     p.set_defaults(func=cmd_jacobian)
 
@@ -88,10 +90,13 @@ def _experiment(args: argparse.Namespace, extra: dict[str, dict[str, Any]] | Non
 
 
 def _outputs(args: argparse.Namespace, exp: Experiment, default_stem: str) -> tuple[Path, Path | None]:
-    out = Path(exp.run.out or f"results/{default_stem}.nc")
+    """The result and plot files, checked writable before any work is done."""
+    out = check_output(exp.run.out or f"results/{default_stem}.nc", exp.layers.arg("run", "out"))
     if args.no_plot:
         return out, None
-    return out, Path(exp.run.plot) if exp.run.plot else out.with_suffix(".png")
+    if exp.run.plot:
+        return out, check_plot(exp.run.plot, exp.layers.arg("run", "plot"))
+    return out, check_plot(out.with_suffix(".png"), "--out")  # OUT.png may be a directory
 
 
 def _command_line(args: argparse.Namespace | None = None) -> str:
@@ -111,6 +116,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     t_end = float(exp.layers.get("simulate", "t_end"))
     dt = float(exp.layers.get("simulate", "dt"))
     out, plot = _outputs(args, exp, "simulate")
+    if not dt > 0:
+        raise HarnessInputError(exp.layers.arg("simulate", "dt"), f"the output step must be > 0, got {dt}")
+    Budget.from_args(args).check(simulate_estimate(t0, t_end, dt, exp.layers.arg("simulate", "dt")))
     t_start = time.perf_counter()
     sim = FmuSimulator(exp.model.source())
     n = max(1, int((t_end - t0) / dt)) if dt > 0 else 1
@@ -135,6 +143,9 @@ def cmd_strobe(args: argparse.Namespace) -> int:
     exp = _experiment(args)
     s = exp.sampling
     out, plot = _outputs(args, exp, "strobe")
+    L = exp.layers
+    blame = L.arg("sampling", "transient") if s.n_transient > s.n_samples else L.arg("sampling", "samples")
+    Budget.from_args(args).check(strobe_estimate(s.n_transient, s.n_samples, blame))
     t_start = time.perf_counter()
     sim = FmuSimulator(exp.model.source())
     with progress_bar(total=s.n_transient + s.n_samples, desc="strobe", unit="period", disable=not exp.run.progress) as bar:
@@ -166,18 +177,55 @@ def _scan_option(text: str | None) -> dict[str, Any]:
     return {"scan_param": name.strip(), "scan_values": [float(v) for v in values]}
 
 
+def _scan_count(text: str) -> float:
+    """Points of the ``--scan`` grid, read from its text without building it."""
+    spec = text.partition("=")[2]
+    if ":" in spec:
+        parts = spec.split(":")
+        return grid_count(parts[-1], None) if len(parts) == 3 else 0.0
+    return grid_count(None, spec)
+
+
+def _check_sweep_budget(args: argparse.Namespace, exp: Experiment) -> None:
+    """Refuse a sweep whose grid, samples or periods exceed the limits, before any grid
+    array exists (``np.linspace(0, 1, 10**9)`` alone is 8 GB)."""
+    from .config import parse_modes
+
+    L, s = exp.layers, exp.sampling
+    if args.scan:
+        n_scan = _scan_count(args.scan)
+    elif L.get("sweep", "scan_param") is not None:
+        n_scan = grid_count(None, L.get("sweep", "scan_values"))
+    else:
+        n_scan = 0.0
+    n_values = grid_count(L.get("sweep", "num"), L.get("sweep", "values"))
+    modes = parse_modes(L.get("sweep", "mode"), L.arg("sweep", "mode"))
+    # blame the largest factor: the flag the user most likely mistyped
+    grid_arg = L.arg("sweep", "values") if L.get("sweep", "values") is not None else L.arg("sweep", "num")
+    factors = {grid_arg: n_values, "--scan" if args.scan else L.arg("sweep", "scan_values"): n_scan,
+               L.arg("sampling", "transient"): s.n_transient, L.arg("sampling", "samples"): s.n_samples,
+               L.arg("sampling", "extend"): s.extend}
+    blame = max(factors, key=lambda k: factors[k])
+    Budget.from_args(args).check(
+        sweep_estimate(n_values, len(modes), n_scan, s.n_transient, s.n_samples, s.extend, blame))
+
+
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``sweep``: 1D/2D sweep on the chosen backend, resumable; NetCDF + diagram."""
     from .results import write_netcdf
     from .sweeps import SweepStats, run_sweep
 
-    exp = _experiment(args, {"sweep": _scan_option(args.scan)})
+    exp = _experiment(args)
+    _check_sweep_budget(args, exp)
+    if args.scan:
+        exp.layers.merge({"sweep": _scan_option(args.scan)}, "cli")
     spec = exp.sweep_spec()
     out, plot = _outputs(args, exp, f"sweep-{spec.param}")
     explicit = exp.run.checkpoint is not None
     ckpt = Path(exp.run.checkpoint) if explicit else out.with_name(out.name + ".partial")
     if args.no_resume and ckpt.exists():
         shutil.rmtree(ckpt)
+    ckpt_is_new = not ckpt.exists()
     stats = SweepStats()
 
     def sweep() -> Any:
@@ -201,6 +249,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         print(f"interrupted: finished points are kept in {ckpt}; rerun the same command to resume", file=sys.stderr)
         raise
+    except (HarnessInputError, FmuRejectedInput):
+        # Rejected input: a rerun needs other settings, which could not resume this
+        # checkpoint anyway; one made by this run goes (else the next run notes discarding it).
+        if ckpt_is_new:
+            shutil.rmtree(ckpt, ignore_errors=True)
+        raise
     write_netcdf(ds, out)
     shutil.rmtree(ckpt, ignore_errors=True)  # the NetCDF file now holds everything
     print(f"{spec.param}: {len(spec.values)} values x {', '.join(spec.modes)}"
@@ -209,6 +263,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
           f"wall time {stats.wall_time:.2f} s on {ds.attrs['backend']} "
           f"(tasks used {ds.attrs['tasks_cpu_time_s']:.1f} CPU s)")
     grid = ds[spec.param].values
+    if "lyapunov" in ds:
+        from .classify import DYNAMICS_NAMES
+
+        codes, counts = np.unique(ds["dynamics"].values, return_counts=True)
+        print("  dynamics (Lyapunov exponents over " f"{exp.sampling.lyapunov} periods): "
+              + ", ".join(f"{DYNAMICS_NAMES[int(c)]} {n}" for c, n in zip(codes, counts)))
     if spec.scan_param is None:
         for direction in ds["direction"].values:
             sel = ds.sel(direction=direction)
@@ -256,6 +316,7 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
         print(f"image {res.image}, step {res.step:.2e}, estimated error {res.error:.1e}")
         return 0
     n = check_count(L.get("jacobian", "x_num"), L.arg("jacobian", "x_num"), minimum=1)
+    Budget.from_args(args).check(jacobian_estimate(n, L.arg("jacobian", "x_num")))
     lo, hi = float(L.get("jacobian", "x_start")), float(L.get("jacobian", "x_stop"))
     if not (0 < lo and 0 < hi):
         raise HarnessInputError(L.arg("jacobian", "x_start"), f"x values must be > 0 (log-spaced), got {lo}, {hi}")

@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
+from .errors import HarnessInputError
+
 import matplotlib
 import matplotlib.ticker
 
@@ -26,11 +28,16 @@ DIRECTION_STYLE = {
 
 
 def _save(fig: plt.Figure, path: str | os.PathLike) -> Path:
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
-    return path
+    from .outputs import atomic_write
+
+    try:
+        with atomic_write(path, "--plot") as tmp:
+            fig.savefig(tmp, dpi=130, format=Path(path).suffix.lstrip(".").lower() or "png")
+    except ValueError as exc:  # e.g. an image format matplotlib does not know
+        raise HarnessInputError("--plot", str(exc)) from None
+    finally:
+        plt.close(fig)
+    return Path(path)
 
 
 def bifurcation_diagram(ds: xr.Dataset, path: str | os.PathLike, variable: str = "u",

@@ -121,18 +121,19 @@ def settings_of(ds: xr.Dataset) -> dict[str, Any]:
     return json.loads(ds.attrs["settings_json"])
 
 
-def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+def write_netcdf(ds: xr.Dataset, path: str | os.PathLike, argument: str = "--out") -> Path:
     """Write ``ds`` to ``path`` (directories created), atomically.
 
     Written to a temporary name first, so that an interruption never leaves a truncated
     file under the final name.
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    ds.to_netcdf(tmp, engine="netcdf4")
-    os.replace(tmp, path)
-    return path
+    from .outputs import atomic_write
+
+    # a unique temporary name in the target's directory, removed on failure
+    # (OUT + ".tmp" left "/tmp.tmp" behind for --out /tmp)
+    with atomic_write(path, argument) as tmp:
+        ds.to_netcdf(tmp, engine="netcdf4")
+    return Path(path)
 
 
 def read_netcdf(path: str | os.PathLike) -> xr.Dataset:

@@ -61,7 +61,7 @@ BAD_INPUT = [
     (["jacobian", "--x-start", "-1"], "--x-start", "must be > 0"),
     (["jacobian", "--theta", "2"], "--theta", r"\[0, 1\)"),
     (["sweep", "--transient", "abc"], "--transient", "invalid int value"),
-    (["simulate", "--dt", "0"], "dt", "must be > 0"),
+    (["simulate", "--dt", "0"], "--dt", "must be > 0"),
     # found by the FMU itself, quoted from its log
     (["strobe", "--set", "wall=rigid", "--u0", "0.01"], None, "rejected the settings.*inside the rigid wall"),
 ]
