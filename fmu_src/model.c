@@ -136,10 +136,11 @@ void model_initialize_state(ModelData *m, double tau0) {
     m->v_impact = 0.0;
     m->t_impact = 0.0;
     m->mode = MODE_FREE;
-    if (m->wall == WALL_COMPLIANT && (m->u0 > w || (m->u0 == w && m->v0 > dw)))
+    /* at rest on the wall (relative to it) the net force decides, as in mapcheck.exact */
+    const int rest_pushed = m->u0 == w && m->v0 == dw && model_wall_force(m, tau0) > 0.0;
+    if (m->wall == WALL_COMPLIANT && (m->u0 > w || (m->u0 == w && m->v0 > dw) || rest_pushed))
         m->mode = MODE_CONTACT; /* a start inside the wall is a state, not an entry: no jump */
-    else if (m->wall == WALL_RIGID && m->u0 == w && m->v0 == dw &&
-             model_wall_force(m, tau0) > 0.0)
+    else if (m->wall == WALL_RIGID && rest_pushed)
         m->mode = MODE_STICK;
 }
 

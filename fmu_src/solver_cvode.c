@@ -243,11 +243,13 @@ static void set_model_state(const Solver *s, ModelData *m, const double *y) {
 static int locate_crossing(Solver *s, const ModelData *m, double lo, double hi) {
     double ylo[SENS_NEQ], yhi[SENS_NEQ], g[MODEL_N_EVENTS];
     if (interpolate(s, lo, ylo) != 0 || interpolate(s, hi, yhi) != 0) return -1;
-    if (wrong_side(m, lo, ylo) || !wrong_side(m, hi, yhi)) return -1; /* not bracketed */
-    model_event_indicators(m, lo, ylo, g);
-    double glo = g[0];
+    if (!wrong_side(m, hi, yhi)) return -1; /* not bracketed */
     model_event_indicators(m, hi, yhi, g);
     double ghi = g[0];
+    model_event_indicators(m, lo, ylo, g);
+    /* lo was seen on the right side (a step end or a restart); the interpolant may put it a
+     * round-off across (a start at rest on the wall): its sign is the right side's, then */
+    double glo = wrong_side(m, lo, ylo) ? copysign(0.0, -ghi) : g[0];
     int side = 0;
     for (int it = 0; it < 400 && hi - lo > 4e-16 * fmax(1.0, fabs(hi)); ++it) {
         double t = lo + (hi - lo) * (glo / (glo - ghi)); /* glo, ghi of opposite signs */
@@ -320,18 +322,17 @@ static void begin_budget(Solver *s, const ModelData *m, double t_end) {
 static int over_budget(Solver *s, const ModelData *m, int events) {
     if (events ? s->events_used <= s->events_bound : s->steps_used <= s->steps_bound) return 0;
     const double bound = events ? s->events_bound : s->steps_bound;
-    const double per = events ? m->max_events_per_time : m->max_steps_per_time;
+    const char *what = events ? "wall events" : "CVODE steps";
     if (bound >= SOLVER_MAX_STEPS_PER_CALL)
         snprintf(s->msg, sizeof s->msg,
-                 "more than %.0f %s in one step before t = %.17g: the limit of %.0f CVODE "
-                 "steps per doStep (split the step)%s", bound, events ? "wall events" : "CVODE steps",
-                 solver_time(s), SOLVER_MAX_STEPS_PER_CALL,
-                 events ? "" : "");
+                 "more than %.0f %s in this doStep (before t = %.17g): the cap of %.0f per doStep "
+                 "(split the step)", bound, what, s->origin + s->tn, SOLVER_MAX_STEPS_PER_CALL);
     else
         snprintf(s->msg, sizeof s->msg,
-                 "more than %.0f %s before t = %.17g: the limit %s = %g per unit time%s",
-                 bound, events ? "wall events" : "CVODE steps", solver_time(s),
-                 events ? "max_events_per_time" : "max_steps_per_time", per,
+                 "more than %.0f %s in this doStep (before t = %.17g): the limit %s = %g per unit "
+                 "time%s", bound, what, s->origin + s->tn,
+                 events ? "max_events_per_time" : "max_steps_per_time",
+                 events ? m->max_events_per_time : m->max_steps_per_time,
                  events ? " (chatter that does not end?)" : " (a stiff or extreme parameter?)");
     return 1;
 }
