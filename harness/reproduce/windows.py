@@ -295,7 +295,7 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
             "rho_per_sigma": c.rho_per_sigma, "theta": problem.theta,
             "sigma_grid": [float(grid[0]), float(grid[-1]), int(len(grid))], "transient": st.transient,
             "samples": st.samples, "shooting_xtol": st.xtol, "shooting_sigma_range": list(st.sigma_range),
-            "fmu_periods_shooting": shoot["fmu_periods"], **st.extra,
+            "fmu_periods_shooting": shoot["fmu_periods"], "shooting_derivatives": shoot["derivatives"], **st.extra,
         },
     }
     return result, report(ctx, problem, result)
@@ -424,7 +424,8 @@ def report(ctx: Context, problem: WindowProblem, res: dict[str, Any], title: str
 def compare_windows(alpha: float | None = None, gamma: float | None = None, *, nu: float | None = None,
                     Omega: float | None = None, r: float = 0.9, wall: str = "compliant", Gamma: float = 10.0,
                     M_max: int = 4, quick: bool = False, out: str | Path = "results/windows",
-                    workers: int | None = None, progress: bool = False, fmu_path: str | None = None) -> dict[str, Any]:
+                    workers: int | None = None, progress: bool = False, fmu_path: str | None = None,
+                    solver: str = "cvode") -> dict[str, Any]:
     """Window edges of the maps and of the ODE (FMU) for one parameter set.
 
     Give either (``alpha``, ``gamma``) of the map (9) or (``nu``, ``Omega``) of the ODE.
@@ -443,7 +444,7 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
                else WindowProblem(float(nu), float(Omega), **kw))
     if workers is not None and workers < 1:
         raise HarnessInputError("--workers", f"must be >= 1, got {workers}")
-    ctx = Context("windows", out, quick, workers, progress, fmu_path)
+    ctx = Context("windows", out, quick, workers, progress, fmu_path, solver)
     ctx.command = _command_line(problem, quick, out)
     result, text = run_windows(ctx, problem, default_settings(problem, quick))
     write_outputs(ctx, result, text)
@@ -480,6 +481,8 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     p.add_argument("--workers", "-j", type=int, metavar="N", help="worker processes (default: up to 2)")
     p.add_argument("--fmu", metavar="PATH", help="FMU (default build/fmu/ImpactOscillator.fmu)")
     p.add_argument("--no-progress", action="store_true", help="no progress bars")
+    p.add_argument("--solver", choices=("cvode", "closed-form"), default="cvode",
+                   help="the FMU's integrator (default cvode; closed-form: exact propagation, linear contact law)")
     p.set_defaults(func=cmd_windows)
 
 
@@ -487,7 +490,7 @@ def cmd_windows(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     res = compare_windows(args.alpha, args.gamma, nu=args.nu, Omega=args.Omega, r=args.r, wall=args.wall,
                           Gamma=args.Gamma, M_max=args.M_max, quick=args.quick, out=args.out, workers=args.workers,
-                          progress=not args.no_progress, fmu_path=args.fmu)
+                          progress=not args.no_progress, fmu_path=args.fmu, solver=args.solver)
     print(res["verdict"])
     print(markdown_window_table(res["windows"]))
     print(f"wrote {Path(args.out) / 'report.md'} and {Path(args.out) / 'windows.json'} "
