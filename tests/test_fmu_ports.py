@@ -381,3 +381,4 @@ def test_model_structure_declares_outputs_on_inputs():
                 for o in md.outputs}
         assert deps["F_contact"] == ["F_ext", "u", "u_wall", "v"], (path, deps)
         assert set(deps) >= {"u", "v", "impacts", "in_contact", "v_impact", "t_impact"}
+
