@@ -71,8 +71,11 @@ typedef struct {
  * W0 + W1 (tau - tref). */
 static void inputs(const ModelData *m, double *F0, double *F1, double *W0, double *W1,
                    double *tref) {
-    (void)m;
-    *F0 = *F1 = *W0 = *W1 = *tref = 0.0;
+    *F0 = m->F_ext;
+    *F1 = m->dF_ext;
+    *W0 = m->u_wall;
+    *W1 = m->du_wall;
+    *tref = m->in_tau;
 }
 
 static void mode_init(Mode *md, const ModelData *m, int contact) {
@@ -351,10 +354,11 @@ static void stuck_state(ModelData *m, double tau) {
     m->v = W1;
 }
 
-static void reorigin(Solver *s) {
+static void reorigin(Solver *s, ModelData *m) {
     const double k = floor(s->tau);
     s->origin += k;
     s->tau -= k;
+    model_shift_time(m, k); /* the input ramps and impact times follow the origin */
 }
 
 /* The jump of a pending event (FMI 3.0 early return), with its saltation matrix. */
@@ -376,7 +380,7 @@ int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event
         return -1;
     }
     apply_pending(s, m);
-    reorigin(s);
+    reorigin(s, m);
     s->needs_reinit = 1; /* CVODE, if used next, restarts from here */
     double tau_end = t_end - s->origin;
     if (tau_end < s->tau) {
@@ -384,7 +388,9 @@ int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event
         return -1;
     }
     const double span = fmax(1.0, ceil(tau_end - s->tau));
-    const long max_events = (long)(MAX_EVENTS_PER_UNIT_TIME * span);
+    const double per_time = m->max_events_per_time > 0.0 ? m->max_events_per_time
+                                                         : MAX_EVENTS_PER_UNIT_TIME;
+    const long max_events = (long)(per_time * span);
     long events = 0;
     Mode modes[2];
     mode_init(&modes[0], m, 0);
@@ -459,7 +465,7 @@ int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event
         }
         const double k = floor(s->tau);
         if (k > 0.0) {
-            reorigin(s);
+            reorigin(s, m);
             tau_end -= k;
             mode_init(&modes[0], m, 0); /* tref moves with the origin (the ports) */
             mode_init(&modes[1], m, 1);

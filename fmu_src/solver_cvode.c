@@ -49,7 +49,7 @@ static int rhs(realtype t, N_Vector y, N_Vector ydot, void *user_data) {
 
 static int jac(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *user_data, N_Vector t1,
                N_Vector t2, N_Vector t3) {
-    (void)t; (void)fy; (void)t1; (void)t2; (void)t3;
+    (void)fy; (void)t1; (void)t2; (void)t3;
     if (N_VGetLength(y) == SENS_NEQ) {
         double big[SENS_NEQ][SENS_NEQ];
         sens_jacobian((const ModelData *)user_data, t, N_VGetArrayPointer(y), big);
@@ -58,7 +58,7 @@ static int jac(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *user_data
         return 0;
     }
     double a[2][2];
-    model_jacobian((const ModelData *)user_data, N_VGetArrayPointer(y), a);
+    model_jacobian((const ModelData *)user_data, t, N_VGetArrayPointer(y), a);
     SM_ELEMENT_D(J, 0, 0) = a[0][0];
     SM_ELEMENT_D(J, 0, 1) = a[0][1];
     SM_ELEMENT_D(J, 1, 0) = a[1][0];
@@ -155,6 +155,7 @@ static int reinit(Solver *s, ModelData *m) {
     const double k = floor(s->tau);
     s->origin += k;
     s->tau -= k;
+    model_shift_time(m, k); /* the model's input ramps and impact times follow the origin */
     if (model_release_now(m, s->tau)) s->events++;
     if (s->n == SENS_NEQ) {
         sens_pack(m, N_VGetArrayPointer(YV(s)));
@@ -274,7 +275,7 @@ int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) 
 
         int info[MODEL_N_EVENTS];
         CVodeGetRootInfo(CV(s), info);
-        if (info[0] == 0 && !model_missed_crossing(m, y)) {
+        if (info[0] == 0 && !model_missed_crossing(m, tret, y)) {
             s->tau_good = tret; /* a turning point on the right side of the wall */
             continue;
         }

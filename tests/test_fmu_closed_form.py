@@ -82,7 +82,10 @@ def test_shallow_contacts_are_never_missed(fmu2, depth, wall):
         st = on_orbit(sigma, 0.5)
         u, v, c = oracle(q).state_at(st["u0"], st["v0"], 0.5, 1.5)
         assert c == expected
-        assert np.max(np.abs(fmu2.state() - (u, v))) <= 1e-12
+        # the state after a contact x deep is ill-conditioned: an error e in u at the turning
+        # point moves the crossing velocity ~sqrt(2 a x) by a e / sqrt(2 a x); the oracle's own
+        # e ~ 1e-13 (mapcheck.exact in double precision) sets the tolerance
+        assert np.max(np.abs(fmu2.state() - (u, v))) <= max(1e-12, 1e-13 / np.sqrt(depth))
 
 
 def test_sticking_on_the_rigid_wall_matches_the_oracle(fmu2):
