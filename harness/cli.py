@@ -81,6 +81,9 @@ def common_parent() -> argparse.ArgumentParser:
                    help="set an FMU parameter, e.g. --set sigma=0.3 --set wall=rigid (repeatable)")
     g.add_argument("--u0", dest="initial__u0", type=float, metavar="U", help="initial displacement")
     g.add_argument("--v0", dest="initial__v0", type=float, metavar="V", help="initial velocity")
+    g.add_argument("--solver", choices=("cvode", "closed-form"),
+                   help="the FMU's integrator: cvode (default) or closed-form (exact propagation of the linear "
+                   "contact law; an FMU without the parameter 'solver' has CVODE only)")
     o = p.add_argument_group("output")
     o.add_argument("--out", "-o", dest="run__out", metavar="FILE.nc", help="NetCDF result file")
     o.add_argument("--plot", dest="run__plot", metavar="FILE.png", help="PNG plot (default: next to --out)")
@@ -111,6 +114,11 @@ def sampling_parent() -> argparse.ArgumentParser:
     g.add_argument("--extend", dest="sampling__extend", type=count, metavar="N",
                    help="sweeps: up to N more periods for points not yet periodic (slow convergence "
                    "near window edges; default 0)")
+    g.add_argument("--lyapunov", dest="sampling__lyapunov", type=count, metavar="N",
+                   help="Lyapunov exponents of the stroboscopic map over N periods after the samples, with "
+                   "their uncertainty, and the classification periodic / quasi-periodic / chaotic / not "
+                   "converged (exact with an FMU that reports its derivatives, else by differences at ~5x "
+                   "the cost; default 0: none)")
     return p
 
 
@@ -126,6 +134,8 @@ def overrides_from_args(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
         if not sep or not name.strip():
             raise HarnessInputError("--set", f"expected NAME=VALUE, got {item!r}")
         layer.setdefault("model", {})[name.strip()] = value.strip()
+    if getattr(args, "solver", None):
+        layer.setdefault("model", {})["solver"] = args.solver
     if getattr(args, "no_progress", False):
         layer.setdefault("run", {})["progress"] = False
     return layer

@@ -263,6 +263,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
           f"wall time {stats.wall_time:.2f} s on {ds.attrs['backend']} "
           f"(tasks used {ds.attrs['tasks_cpu_time_s']:.1f} CPU s)")
     grid = ds[spec.param].values
+    if "lyapunov" in ds:
+        from .classify import DYNAMICS_NAMES
+
+        codes, counts = np.unique(ds["dynamics"].values, return_counts=True)
+        print("  dynamics (Lyapunov exponents over " f"{exp.sampling.lyapunov} periods): "
+              + ", ".join(f"{DYNAMICS_NAMES[int(c)]} {n}" for c, n in zip(codes, counts)))
     if spec.scan_param is None:
         for direction in ds["direction"].values:
             sel = ds.sel(direction=direction)

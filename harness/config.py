@@ -20,6 +20,7 @@ An experiment file holds every parameter of a run::
     samples = 40       # periods sampled
     tol = 1e-5         # periodicity tolerance (relative)
     extend = 0         # extra periods for points not yet periodic (slow near window edges)
+    lyapunov = 0       # periods of Lyapunov exponents after the samples (0: none)
 
     [sweep]
     param = "sigma"
@@ -104,7 +105,8 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "initial": {"u0": None, "v0": None},
     # 300 transient periods: the slow free-flight mode decays like 0.98^n at Figure 9's
     # parameters, and orbits near window edges converge slowly.
-    "sampling": {"theta": 0.0, "transient": 300, "samples": 40, "tol": 1e-5, "max_period": None, "extend": 0},
+    "sampling": {"theta": 0.0, "transient": 300, "samples": 40, "tol": 1e-5, "max_period": None, "extend": 0,
+                 "lyapunov": 0},
     # Default sweep: Figure 9 from period 1 (sigma > ~0.85) down through period 2 and 3.
     "sweep": {
         "param": "sigma",
@@ -149,6 +151,7 @@ CLI_FLAGS: dict[tuple[str, str], str] = {
     ("sampling", "tol"): "--tol",
     ("sampling", "max_period"): "--max-period",
     ("sampling", "extend"): "--extend",
+    ("sampling", "lyapunov"): "--lyapunov",
     ("sweep", "param"): "--param",
     ("sweep", "start"): "--start",
     ("sweep", "stop"): "--stop",
@@ -277,6 +280,9 @@ class SamplingSpec:
     #: extra periods a point may run when its samples are not yet periodic (0: none);
     #: sampled in windows of ``n_samples``, the last window is kept
     extend: int = 0
+    #: periods after the samples over which the Lyapunov exponents of the stroboscopic map
+    #: are averaged (0: none); the FMU's own derivatives when it has them, else differences
+    lyapunov: int = 0
 
     def __post_init__(self) -> None:
         from .sampling import check_count, check_theta
@@ -289,6 +295,8 @@ class SamplingSpec:
         if self.max_period is not None:
             check_count(self.max_period, "max_period", minimum=1)
         check_count(self.extend, "extend")
+        if self.lyapunov:
+            check_count(self.lyapunov, "lyapunov", minimum=2)
 
     @classmethod
     def from_layers(cls, layers: Layered) -> "SamplingSpec":
@@ -304,6 +312,7 @@ class SamplingSpec:
             tol=_number(layers, "sampling", "tol", positive=True),
             max_period=None if mp is None else _count(layers, "sampling", "max_period", minimum=1),
             extend=_count(layers, "sampling", "extend"),
+            lyapunov=_count(layers, "sampling", "lyapunov"),
         )
 
 
@@ -476,7 +485,7 @@ class Experiment:
         model : FmuModel, optional
             Already opened FMU (otherwise opened from ``fmu.path``).
         """
-        from .fmi import FmuModel, INITIAL_STATE
+        from .fmi import FmuModel, INITIAL_STATE, SOLVER_PARAMETER
 
         layers = Layered()
         if config is not None:
@@ -490,6 +499,14 @@ class Experiment:
         for name, value in layers.values["model"].items():
             arg = (f"--set {name}" if layers.origin.get(("model", name)) == "cli"
                    else layers.arg("model", name))
+            if name == SOLVER_PARAMETER and layers.origin.get(("model", name)) == "cli":
+                arg = "--solver"
+            if name == SOLVER_PARAMETER and name not in model.variables:
+                # an FMU without the parameter integrates with CVODE: that choice is a no-op
+                if str(value).lower() in ("cvode", "0"):
+                    continue
+                raise HarnessInputError(arg, f"{model.path.name} has no closed-form solver mode (no parameter "
+                                        f"{SOLVER_PARAMETER!r}); it integrates with CVODE only")
             params[name] = model.coerce(name, value, arg)
         state = []
         for key in INITIAL_STATE:

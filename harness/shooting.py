@@ -329,7 +329,7 @@ def _shoot_window_task(source: Any, params: Mapping[str, Any], theta: float, c: 
 
 
 def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], sigma_range: tuple[float, float],
-                       xtol: float, relative: bool = False, workers: int = 1) -> dict[str, Any]:
+                       xtol: float | Mapping[int, float], relative: bool = False, workers: int = 1) -> dict[str, Any]:
     """ODE windows on the FMU for every period in ``guide`` (the map's windows).
 
     Newton shooting starts inside each map window from the map's own maximal orbit
@@ -337,7 +337,8 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
     ``c``, the state at the FMU's section after the impact), and follows the orbit to both
     edges (:func:`window_edges`).  ``relative``: ``xtol`` is relative to the map window's
     lower edge and the marching is geometric (windows that accumulate at sigma -> 0, as in
-    Figure 1).  ``workers`` > 1 shoots the windows in that many processes (the windows are
+    Figure 1).  ``xtol`` may be a mapping {M: xtol} (one tolerance per window, e.g. a
+    fraction of its width).  ``workers`` > 1 shoots the windows in that many processes (the windows are
     independent; each process opens the FMU of ``smap``'s simulator).
 
     Returns
@@ -353,6 +354,7 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
     out: dict[str, Any] = {"windows": {}, "kinds": {}, "brackets": {}, "intervals": {}, "unresolved": {},
                            "multipliers_at_lower_edge": {}}
     todo = {M: w for M, w in guide.items() if w is not None}
+    tols = {M: float(xtol[M]) if isinstance(xtol, Mapping) else float(xtol) for M in todo}
     results: dict[int, tuple[Edge, Edge]] = {}
     evaluations = 0
     if workers > 1 and len(todo) > 1:
@@ -363,14 +365,14 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
         ctx = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx) as pool:
             futures = [pool.submit(_shoot_window_task, smap.sim.source, smap.params, smap.theta, c, M, w,
-                                   sigma_range, xtol, relative, smap.derivatives) for M, w in todo.items()]
+                                   sigma_range, tols[M], relative, smap.derivatives) for M, w in todo.items()]
             for f in futures:
                 M, e_lo, e_hi, n = f.result()
                 results[M] = (e_lo, e_hi)
                 evaluations += n
     else:
         for M, w in todo.items():
-            results[M] = _shoot_window(smap, c, M, w, sigma_range, xtol, relative)
+            results[M] = _shoot_window(smap, c, M, w, sigma_range, tols[M], relative)
     for M, w in guide.items():
         if w is None:
             out["windows"][M] = None

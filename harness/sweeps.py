@@ -108,6 +108,9 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         "impacts": np.full(shape + [n], -1, dtype=np.int64),
         "period": np.full(shape, -1, dtype=np.int64),
         "orbit_impacts": np.full(shape, -1, dtype=np.int64),
+        "dynamics": np.full(shape, -1, dtype=np.int64),
+        "lyapunov": np.full(shape + [2], np.nan),
+        "lyapunov_err": np.full(shape + [2], np.nan),
     }
     index_of_value = {float(x): i for i, x in enumerate(grid)}
     for key, task in tasks.items():
@@ -119,7 +122,8 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         for row, value in enumerate(task.values):
             idx = (d, index_of_value[value]) if j is None else (d, index_of_value[value], j)
             for name in RESULT_FIELDS:
-                arrays[name][idx] = res[name][row]
+                if name in res:  # a checkpoint written before a field existed lacks it
+                    arrays[name][idx] = res[name][row]
     sample_dims = dims + ["sample"]
     ds = xr.Dataset(
         {
@@ -133,6 +137,24 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         coords=coords,
         attrs=dict(attrs),
     )
+    from .classify import DYNAMICS_NAMES
+
+    codes = sorted(DYNAMICS_NAMES)
+    ds["dynamics"] = (dims, arrays["dynamics"], {
+        "long_name": "dynamics of the orbit", "flag_values": np.array(codes, dtype=np.int64),
+        "flag_meanings": " ".join(DYNAMICS_NAMES[c].replace(" ", "_").replace("-", "_") for c in codes),
+        "comment": "periodic: periodic samples, converged; chaotic: largest Lyapunov exponent > 0 by more "
+                   "than 3 standard errors; quasi_periodic: largest exponent 0 within 3 standard errors (band "
+                   "< 0.02); not_converged: largest exponent < 0 (attracting orbit not reached), still "
+                   "settling, or undecided; unclassified: not periodic and no exponents (sampling.lyapunov = 0)"})
+    if sampling.lyapunov:
+        ds = ds.assign_coords(exponent=[1, 2])
+        ds["lyapunov"] = (dims + ["exponent"], arrays["lyapunov"], {
+            "long_name": "Lyapunov exponents of the stroboscopic map", "units": "1/forcing period",
+            "comment": f"QR method over {sampling.lyapunov} periods after the samples, natural log"})
+        ds["lyapunov_err"] = (dims + ["exponent"], arrays["lyapunov_err"], {
+            "long_name": "standard error of the Lyapunov exponents (batch means of 10 blocks)",
+            "units": "1/forcing period"})
     ds[spec.param].attrs["long_name"] = f"swept FMU parameter {spec.param}"
     ds["direction"].attrs["long_name"] = "fresh: every point from the same state; up/down: continuation"
     return ds
@@ -305,6 +327,7 @@ def run_sweep(
         "sampling.tol": sampling.tol,
         "sampling.max_period": sampling.max_period,
         "sampling.extend": sampling.extend,
+        "sampling.lyapunov": sampling.lyapunov,
         "initial.u0": state0[0],
         "initial.v0": state0[1],
         **{f"model.{k}": v for k, v in base.items()},

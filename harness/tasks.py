@@ -12,13 +12,13 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .classify import classify_orbit, still_settling
+from .classify import classify_dynamics, classify_orbit, still_settling
 from .config import SamplingSpec
 from .fmi import INITIAL_STATE, FmuSource
 from .sampling import sample_periods
-from .simulator import simulator_for
+from .simulator import has_derivatives, simulator_for
 
-RESULT_FIELDS = ("u", "v", "impacts", "t", "period", "orbit_impacts")
+RESULT_FIELDS = ("u", "v", "impacts", "t", "period", "orbit_impacts", "dynamics", "lyapunov", "lyapunov_err")
 
 
 @dataclass(frozen=True)
@@ -67,9 +67,52 @@ def execute(task: SweepTask, sim: Any, report: Callable[[str, int], None] | None
         "t": np.empty((k, n)),
         "period": np.empty(k, dtype=np.int64),
         "orbit_impacts": np.empty(k, dtype=np.int64),
+        "dynamics": np.empty(k, dtype=np.int64),
+        "lyapunov": np.full((k, 2), np.nan),
+        "lyapunov_err": np.full((k, 2), np.nan),
     }
     params = dict(task.params)
     state0 = task.state0
+    exact = bool(s.lyapunov) and has_derivatives(sim)
+    tracked_before = bool(getattr(sim, "tracking", False))
+    if exact:
+        sim.track_derivatives(True)  # the variational equations from the first start on
+    try:
+        _run_points(task, sim, params, state0, exact, out, report)
+    finally:
+        if has_derivatives(sim):  # the simulator is reused by the next task on this worker
+            sim.track_derivatives(tracked_before)
+    # CPU seconds of this task on its worker: with the wall time this tells how much of
+    # the machine a sweep really got (shared machines, oversubscribed clusters)
+    out["cpu_s"] = np.array(time.process_time() - cpu_start)
+    return out
+
+
+def _lyapunov_here(sim: Any, params: dict[str, Any], n_periods: int, exact: bool) -> Any:
+    """Lyapunov exponents over the next ``n_periods`` periods from where ``sim`` stands; the
+    run goes on from their end (a continuation carries that state)."""
+    from .lyapunov import lyapunov_from_jacobians, orbit_jacobians, period_jacobians
+
+    n0 = sim.read()[2]
+    if exact:
+        Js, _ = period_jacobians(sim, n_periods)
+        return lyapunov_from_jacobians(Js, method="exact", impacts=sim.read()[2] - n0)
+    # differences: the orbit first, then the Jacobians at its points by restarts, then a
+    # restart at its end (equivalent: the state at a section time fixes the future)
+    t0 = sim.time
+    u0, v0, _ = sim.read()
+    r = sample_periods(sim, 0, n_periods)
+    impacts = int(r.impacts.sum())
+    t = np.concatenate(([t0], r.t[:-1]))
+    Js = orbit_jacobians(sim, params, t, np.concatenate(([u0], r.u[:-1])), np.concatenate(([v0], r.v[:-1])))
+    sim.start(params, float(r.t[-1]), r.final_state)
+    return lyapunov_from_jacobians(Js, method="fd", impacts=impacts)
+
+
+def _run_points(task: SweepTask, sim: Any, params: dict[str, Any], state0: tuple[float, float], exact: bool,
+                out: dict[str, np.ndarray], report: Callable[[str, int], None] | None) -> None:
+    s = task.sampling
+    k = len(task.values)
     for i, value in enumerate(task.values):
         if i == 0:
             if task.param in INITIAL_STATE:  # sweeping the initial state (basin scans)
@@ -92,12 +135,16 @@ def execute(task: SweepTask, sim: Any, report: Callable[[str, int], None] | None
             orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
         out["u"][i], out["v"][i], out["impacts"][i], out["t"][i] = r.u, r.v, r.impacts, r.t
         out["period"][i], out["orbit_impacts"][i] = orbit.period, orbit.impacts
+        settling = orbit.periodic and still_settling(r.u, r.v, orbit.period, s.tol)
+        lam = err = float("nan")
+        if s.lyapunov:
+            now = dict(params) if task.param in INITIAL_STATE else {**params, task.param: value}
+            ly = _lyapunov_here(sim, now, s.lyapunov, exact)
+            out["lyapunov"][i], out["lyapunov_err"][i] = ly.exponents, ly.uncertainty
+            lam, err = ly.largest, ly.largest_uncertainty
+        out["dynamics"][i] = classify_dynamics(orbit.period, settling, lam, err)
         if report is not None and i + 1 < k:  # the last point arrives with the result
             report(task.key, i + 1)
-    # CPU seconds of this task on its worker: with the wall time this tells how much of
-    # the machine a sweep really got (shared machines, oversubscribed clusters)
-    out["cpu_s"] = np.array(time.process_time() - cpu_start)
-    return out
 
 
 # Progress channel of a process-pool worker, set by the pool's initializer.

@@ -6,7 +6,8 @@ comparison logic, so that it can be tested without the FMU:
 * coordinates: the FMU samples the real state at t = n + theta; the maps' state is the
   pre-impact ("virtual") state at t = n (FORMULAS.md section 3), related by the free
   propagator (8).  :func:`free_flight`, :func:`virtual_to_phase`, :func:`phase_to_natural`.
-* windows: :func:`map_windows` (any coefficients), :func:`sweep_windows` (runs of maximal period-M
+* windows: :func:`predicted_windows` ((64), the 2D map, the 2D map with A~, for any
+  coefficients), :func:`map_windows` (any coefficients), :func:`sweep_windows` (runs of maximal period-M
   orbits in an up or down scan), :func:`scan_confirmation`, :func:`window_differences`,
   :func:`best_variant`, :func:`markdown_window_table`; starting guesses for shooting on the
   FMU from the map's orbits: :func:`maximal_orbit_section_guess` (:func:`maximal_orbit_guess`).
@@ -35,6 +36,7 @@ __all__ = [
     "maximal_orbit_section_guess",
     "sweep_windows",
     "map_windows",
+    "predicted_windows",
     "window_differences",
     "scan_confirmation",
     "best_variant",
@@ -162,6 +164,36 @@ def map_windows(c: Coefficients, M_max: int, sigma_grid: np.ndarray, variant: st
         w = max(ws, key=lambda w: w.hi - w.lo)
         out[M] = (float(w.lo), None if w.kind_hi == "range" else float(w.hi))
     return out
+
+
+def predicted_windows(c: Coefficients, M_max: int, sigma_grid: np.ndarray) -> dict[str, Windows]:
+    """The three map predictions of the sigma-edges of the stable maximal period-M windows.
+
+    Parameters
+    ----------
+    c : Coefficients
+        :func:`mapcheck.coeffs.coefficients` of the parameter set ((39) rigid wall, (48)
+        compliant wall).
+    M_max : int
+    sigma_grid : ndarray
+        Sorted sigma grid for the 2D maps' window search (each window is bisected from it).
+
+    Returns
+    -------
+    dict
+        ``{"theory_64": {M: (lo, hi)}, "map": ..., "map_A_tilde": ...}``: (64) with rho
+        linear in sigma; the 2D map (37)/(38) with rho linear in sigma; the same with
+        |A~(sigma)| in rho.  ``hi`` None where a window has no upper edge (M = 1) or
+        reaches the end of the grid; a window None where there is none.
+    """
+    from .windows import window_1d
+
+    t64: Windows = {}
+    for M in range(1, M_max + 1):
+        lo, hi = window_1d(M)
+        t64[M] = None if lo > hi else (lo / c.rho_per_sigma, None if not math.isfinite(hi) else hi / c.rho_per_sigma)
+    return {"theory_64": t64, "map": map_windows(c, M_max, sigma_grid, "paper"),
+            "map_A_tilde": map_windows(c, M_max, sigma_grid, "tilde")}
 
 
 def sweep_windows(values: np.ndarray, period: np.ndarray, impacts: np.ndarray) -> dict[int, tuple[float, float]]:

@@ -11,7 +11,7 @@ cd "$root"
 log() { printf '[setup] %s\n' "$*" >&2; }
 
 # --- 1. Debian packages -------------------------------------------------------------------
-apt_pkgs=(libsundials-dev build-essential cmake zip)
+apt_pkgs=(libsundials-dev build-essential cmake zip valgrind)
 missing=()
 for p in "${apt_pkgs[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
