@@ -212,6 +212,8 @@ def c_driver_args(driver: Path, case: Case, x0, periods: int, repeat: int, out: 
         var = model.variables[name]
         if var.type == "Real":
             args.append(f"r:{var.value_reference}={float(value)!r}")
+        elif var.type == "Boolean":
+            args.append(f"b:{var.value_reference}={int(bool(value))}")
         else:
             args.append(f"i:{var.value_reference}={int(value)}")
     return args

@@ -703,7 +703,10 @@ int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_a
         return core_fail(c, fn, "currentCommunicationPoint %.17g differs from the FMU's time "
                          "%.17g", t, now);
     apply_input_jump(c);
-    if (c->m.sensitivities) sens_reset(&c->m); /* derivatives w.r.t. the state at t */
+    if (c->m.sensitivities) { /* derivatives w.r.t. the state at t */
+        sens_reset(&c->m);
+        c->s.needs_reinit = 1; /* CVODE carries J, S in its own history: restart it with J = I */
+    }
     const double t_end = t + h;
     const long events_before = c->s.events, guard_before = c->s.guard_hits;
 
