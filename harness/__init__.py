@@ -34,6 +34,8 @@ _EXPORTS = {
     "FmuError": "errors", "HarnessInputError": "errors",
     "FmuModel": "fmi", "FmuSource": "fmi",
     "JacobianResult": "jacobian", "JacobianScan": "jacobian", "jacobian_vs_x": "jacobian", "map_jacobian": "jacobian",
+    "LyapunovResult": "lyapunov", "lyapunov_exponents": "lyapunov", "lyapunov_from_jacobians": "lyapunov",
+    "classify_dynamics": "classify",
     "read_netcdf": "results", "write_netcdf": "results",
     "StrobeResult": "sampling", "simulate": "sampling", "strobe": "sampling",
     "FmuSimulator": "simulator", "MappingSimulator": "simulator", "Simulator": "simulator",

@@ -204,8 +204,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     # recorded in the results' attributes
     args.command_line = " ".join([PROG, *(shlex.quote(a) for a in argv)])
     prog = f"{PROG} {args.command}"
+    restore = _terminate_like_interrupt()
     try:
         return int(args.func(args) or 0)
+    except Terminated:
+        print(f"{prog}: terminated", file=sys.stderr)
+        return 143
     except HarnessInputError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
@@ -232,3 +236,24 @@ def main(argv: Sequence[str] | None = None) -> int:
         # files the user named (unreadable, unwritable, vanished): one line, not a traceback
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
+    finally:
+        restore()  # the extraction folder goes at exit (harness.tempdirs), SIGTERM included
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, handled like Ctrl-C (workers stopped, checkpoint kept, temp folder removed)."""
+
+
+def _terminate_like_interrupt() -> Any:
+    """Raise :class:`Terminated` on SIGTERM in the main thread; returns the undo function."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+
+    def handler(signum: int, frame: Any) -> None:
+        raise Terminated()
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    return lambda: signal.signal(signal.SIGTERM, previous)

@@ -43,7 +43,8 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
 
     p = sub.add_parser("sweep", parents=[common, sampling], help="bifurcation sweep (fresh / up / down / both), 1D or 2D",
                        description="Sweep an FMU parameter (sigma by default): fresh starts from the same state, or "
-                       "quasi-static continuation up and/or down carrying the state. Draws the bifurcation diagram.")
+                       "quasi-static continuation up and/or down carrying the state (both: one hysteresis loop, the down "
+                       "scan starting where the up scan ended). Draws the bifurcation diagram.")
     g = p.add_argument_group("sweep")
     g.add_argument("--param", dest="sweep__param", metavar="NAME", help="swept FMU parameter (default sigma)")
     g.add_argument("--start", dest="sweep__start", type=float, metavar="X", help="first value (default 1.0)")
@@ -51,7 +52,8 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     g.add_argument("--num", dest="sweep__num", type=count, metavar="N", help="number of values (default 91)")
     g.add_argument("--values", dest="sweep__values", metavar="V1,V2,...", help="explicit values (instead of start/stop/num)")
     g.add_argument("--mode", dest="sweep__mode", metavar="MODE",
-                   help="fresh, up, down or both (= up and down); comma-separated list allowed (default both)")
+                   help="fresh, up, down, or both: a hysteresis loop, up and then down from the state where the "
+                   "up scan ended (up,down: two independent scans); comma-separated list allowed (default both)")
     g.add_argument("--scan", metavar="NAME=V1,V2,...|NAME=START:STOP:NUM",
                    help="second axis of a 2D scan, e.g. --scan Gamma=10,100,1000")
     b = p.add_argument_group("execution")
@@ -78,6 +80,9 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     g.add_argument("--x-stop", dest="jacobian__x_stop", type=float, metavar="X", help="largest x (default 1e-2)")
     g.add_argument("--x-num", dest="jacobian__x_num", type=count, metavar="N", help="number of x values, log-spaced (default 25)")
     g.add_argument("--state", dest="jacobian__state", metavar="U,V", help="J at this state at t = theta instead of a scan")
+    g.add_argument("--method", dest="jacobian__method", choices=("auto", "exact", "fd"),
+                   help="exact: the FMU's own derivatives (variational equations); fd: central differences; "
+                   "auto (default): exact when the FMU reports them")
     p.set_defaults(func=cmd_jacobian)
 
 
@@ -189,7 +194,7 @@ def _scan_count(text: str) -> float:
 def _check_sweep_budget(args: argparse.Namespace, exp: Experiment) -> None:
     """Refuse a sweep whose grid, samples or periods exceed the limits, before any grid
     array exists (``np.linspace(0, 1, 10**9)`` alone is 8 GB)."""
-    from .config import parse_modes
+    from .config import parse_modes, sweep_directions
 
     L, s = exp.layers, exp.sampling
     if args.scan:
@@ -204,10 +209,11 @@ def _check_sweep_budget(args: argparse.Namespace, exp: Experiment) -> None:
     grid_arg = L.arg("sweep", "values") if L.get("sweep", "values") is not None else L.arg("sweep", "num")
     factors = {grid_arg: n_values, "--scan" if args.scan else L.arg("sweep", "scan_values"): n_scan,
                L.arg("sampling", "transient"): s.n_transient, L.arg("sampling", "samples"): s.n_samples,
-               L.arg("sampling", "extend"): s.extend}
+               L.arg("sampling", "extend"): s.extend, L.arg("sampling", "lyapunov"): s.lyapunov}
     blame = max(factors, key=lambda k: factors[k])
+    # a Lyapunov period costs up to 5 runs (central differences when the FMU has no derivatives)
     Budget.from_args(args).check(
-        sweep_estimate(n_values, len(modes), n_scan, s.n_transient, s.n_samples, s.extend, blame))
+        sweep_estimate(n_values, len(sweep_directions(modes)), n_scan, s.n_transient, s.n_samples, s.extend + 5 * s.lyapunov, blame))
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
@@ -247,7 +253,14 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             shutil.rmtree(ckpt)
             ds = sweep()
     except KeyboardInterrupt:
-        print(f"interrupted: finished points are kept in {ckpt}; rerun the same command to resume", file=sys.stderr)
+        # say what is really on disk: whole tasks and the leading points of chains
+        if stats.kept_points:
+            print(f"interrupted: {stats.kept_points} of {stats.total_points} points are kept in {ckpt}; "
+                  "rerun the same command to resume", file=sys.stderr)
+        else:
+            print("interrupted before any point finished; nothing kept", file=sys.stderr)
+            if ckpt_is_new:
+                shutil.rmtree(ckpt, ignore_errors=True)
         raise
     except (HarnessInputError, FmuRejectedInput):
         # Rejected input: a rerun needs other settings, which could not resume this
@@ -259,7 +272,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     shutil.rmtree(ckpt, ignore_errors=True)  # the NetCDF file now holds everything
     print(f"{spec.param}: {len(spec.values)} values x {', '.join(spec.modes)}"
           + (f" x {spec.scan_param} ({len(spec.scan_values)} values)" if spec.scan_param else "")
-          + f"; {stats.computed} tasks computed, {stats.resumed} resumed; "
+          + f"; {stats.computed} tasks computed, {stats.resumed} resumed"
+          + (f" ({stats.resumed_points} points of unfinished chains resumed)" if stats.resumed_points else "")
+          + "; "
           f"wall time {stats.wall_time:.2f} s on {ds.attrs['backend']} "
           f"(tasks used {ds.attrs['tasks_cpu_time_s']:.1f} CPU s)")
     grid = ds[spec.param].values
@@ -310,10 +325,11 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
             u, v = (float(s) for s in str(state).replace(" ", "").split(","))
         except ValueError:
             raise HarnessInputError(L.arg("jacobian", "state"), f"expected U,V, got {state!r}") from None
-        res = map_jacobian(sim, params, (u, v), theta=theta)
+        res = map_jacobian(sim, params, (u, v), theta=theta, method=str(L.get("jacobian", "method")))
         print(f"J at (u, v) = ({u}, {v}), t = {theta}:")
         print(np.array2string(res.J, precision=8))
-        print(f"image {res.image}, step {res.step:.2e}, estimated error {res.error:.1e}")
+        print(f"image {res.image}; " + ("exact (the FMU's derivatives)" if res.method == "exact" else
+                                         f"central differences, step {res.step:.2e}, estimated error {res.error:.1e}"))
         return 0
     n = check_count(L.get("jacobian", "x_num"), L.arg("jacobian", "x_num"), minimum=1)
     Budget.from_args(args).check(jacobian_estimate(n, L.arg("jacobian", "x_num")))
@@ -325,7 +341,8 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
     x = np.geomspace(lo, hi, n)
     out, plot = _outputs(args, exp, "jacobian")
     with progress_bar(total=n, desc="jacobian", unit="x", disable=not exp.run.progress) as bar:
-        scan = jacobian_vs_x(sim, params, x, theta, float(L.get("jacobian", "measure_theta")), progress=bar)
+        scan = jacobian_vs_x(sim, params, x, theta, float(L.get("jacobian", "measure_theta")), progress=bar,
+                             method=str(L.get("jacobian", "method")))
     settings = {**exp.as_attrs(), **{f"model.{k}": v for k, v in params.items()},
                 **{f"jacobian.{k}": v for k, v in L.values["jacobian"].items()}}
     ds = jacobian_dataset(scan, provenance(settings, exp.model, "serial", time.perf_counter() - t_start, _command_line(args)))
@@ -334,7 +351,7 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
     ok = (dJ[:, 0, 0] > 0)
     if ok.sum() >= 2:
         slope = np.polyfit(np.log(x[ok]), np.log(dJ[ok, 0, 0]), 1)[0]
-        print(f"log-log slope of |J11 - P11| against x: {slope:+.3f}")
+        print(f"log-log slope of |J11 - P11| against x ({scan.method}): {slope:+.3f}")
     print(f"wrote {out}")
     if plot:
         print(f"plot: {jacobian_plot(ds, plot)}")

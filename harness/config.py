@@ -73,7 +73,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-SWEEP_MODES = ("fresh", "up", "down")
+SWEEP_MODES = ("fresh", "up", "down", "both")
 BACKENDS = ("serial", "processes", "dask")
 
 
@@ -125,6 +125,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "x_stop": 1e-2,
         "x_num": 25,
         "state": None,
+        "method": "auto",  # exact (the FMU's derivatives), fd (differences), auto (exact when available)
         "rtol": None,  # None: the FMU's own (tight) default tolerances
         "atol": None,
     },
@@ -166,6 +167,7 @@ CLI_FLAGS: dict[tuple[str, str], str] = {
     ("jacobian", "x_stop"): "--x-stop",
     ("jacobian", "x_num"): "--x-num",
     ("jacobian", "state"): "--state",
+    ("jacobian", "method"): "--method",
     ("simulate", "t0"): "--t0",
     ("simulate", "t_end"): "--t-end",
     ("simulate", "dt"): "--dt",
@@ -394,20 +396,33 @@ class SweepSpec:
 
 
 def parse_modes(mode: Any, argument: str) -> tuple[str, ...]:
-    """``"both"`` -> ``("up", "down")``; a list or comma string of fresh/up/down/both."""
+    """A list or comma string of fresh/up/down/both, checked and without repeats.
+
+    ``both`` is the hysteresis loop (up, then down from the state where the up scan ended);
+    ``up,down`` are two independent scans, each from the initial state.
+    """
     items = mode.replace(",", " ").split() if isinstance(mode, str) else list(mode)
     out: list[str] = []
     for m in items:
         m = str(m).lower()
-        expanded = ("up", "down") if m == "both" else (m,)
-        for e in expanded:
-            if e not in SWEEP_MODES:
-                raise HarnessInputError(argument, f"unknown sweep mode {m!r}; choose from fresh, up, down, both")
-            if e not in out:
-                out.append(e)
+        if m not in SWEEP_MODES:
+            raise HarnessInputError(argument, f"unknown sweep mode {m!r}; choose from fresh, up, down, both")
+        if m not in out:
+            out.append(m)
     if not out:
         raise HarnessInputError(argument, "no sweep mode given")
+    if "both" in out and ("up" in out or "down" in out):
+        raise HarnessInputError(argument, "'both' is the up-then-down loop already; give it alone, or "
+                                "'up,down' for two independent scans from the initial state")
     return tuple(out)
+
+
+def sweep_directions(modes: tuple[str, ...] | list[str]) -> list[str]:
+    """The directions of a sweep's results: ``both`` stands for up and down."""
+    out: list[str] = []
+    for m in modes:
+        out.extend(("up", "down") if m == "both" else (m,))
+    return out
 
 
 @dataclass(frozen=True)

@@ -17,12 +17,9 @@ never to fmpy directly.  This module is the only place that knows about fmpy and
 """
 from __future__ import annotations
 
-import atexit
 import collections
 import hashlib
 import os
-import shutil
-import tempfile
 import threading
 import zipfile
 from dataclasses import dataclass, field
@@ -290,15 +287,13 @@ class FmuSource:
 
 _EXTRACT_LOCK = threading.Lock()
 _EXTRACTED: dict[str, tuple[str, "FmuModel"]] = {}
-_TMP_ROOT: str | None = None
 
 
 def _tmp_root() -> str:
-    global _TMP_ROOT
-    if _TMP_ROOT is None:
-        _TMP_ROOT = tempfile.mkdtemp(prefix="impact-harness-")
-        atexit.register(shutil.rmtree, _TMP_ROOT, True)
-    return _TMP_ROOT
+    # one folder per process, removed on exit, SIGTERM, or by the next run after a SIGKILL
+    from . import tempdirs
+
+    return tempdirs.root()
 
 
 def open_source(source: FmuSource) -> tuple[str, FmuModel]:

@@ -387,4 +387,5 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
             out["unresolved"][M] = missing
         out["multipliers_at_lower_edge"][M] = e_lo.multipliers
     out["fmu_periods"] = smap.evaluations + evaluations
+    out["derivatives"] = smap.derivatives  # "exact" (the FMU's) or "fd" (central differences)
     return out

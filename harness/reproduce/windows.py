@@ -295,7 +295,7 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
             "rho_per_sigma": c.rho_per_sigma, "theta": problem.theta,
             "sigma_grid": [float(grid[0]), float(grid[-1]), int(len(grid))], "transient": st.transient,
             "samples": st.samples, "shooting_xtol": st.xtol, "shooting_sigma_range": list(st.sigma_range),
-            "fmu_periods_shooting": shoot["fmu_periods"], **st.extra,
+            "fmu_periods_shooting": shoot["fmu_periods"], "shooting_derivatives": shoot["derivatives"], **st.extra,
         },
     }
     return result, report(ctx, problem, result)
