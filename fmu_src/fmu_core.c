@@ -78,9 +78,9 @@ typedef struct {
 } VarDef;
 
 static double get_in_contact(const CoreInstance *c) { return c->m.mode != MODE_FREE; }
-/* Sensitivities of the last doStep (sens.h); NaN when not computed. */
+/* Sensitivities of the last doStep (sens.h); J = I, S = 0 (as set at initialisation) when they
+ * are not computed, so that every output stays finite. */
 static double get_sens(const CoreInstance *c, int i) {
-    if (!c->m.sensitivities || c->is_me) return NAN;
     return i < 4 ? c->m.sJ[i / 2][i % 2] : c->m.sS[i - 4];
 }
 static double get_J_uu(const CoreInstance *c) { return get_sens(c, 0); }
@@ -556,8 +556,8 @@ static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char
     if (!finite_within(m->u, CORE_MAX_STATE) || !finite_within(m->v, CORE_MAX_STATE))
         return "continuous state (u, v) not finite or beyond 1e15";
     for (int i = 0; i < 6; ++i)
-        if (isnan(i < 4 ? m->sJ[i / 2][i % 2] : m->sS[i - 4]))
-            return "sensitivities (J_uu ... S_v) not a number";
+        if (!isfinite(i < 4 ? m->sJ[i / 2][i % 2] : m->sS[i - 4]))
+            return "sensitivities (J_uu ... S_v) not finite";
     if (!finite_within(m->dF_ext, MAX_DF_EXT) || !finite_within(m->du_wall, MAX_DU_WALL) ||
         !finite_within(m->in_tau, 2 * CORE_MAX_TIME) || !isfinite(m->v_impact) ||
         !finite_within(m->t_impact, 2 * CORE_MAX_TIME))
