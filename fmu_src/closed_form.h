@@ -2,7 +2,7 @@
  * The closed-form solver (parameter solver = 1): the linear contact law makes the ODE linear on
  * each side of the wall, so between wall events the state is the exact solution
  *     y(tau) = q(tau) + P(tau - tau_a) (y_a - q(tau_a))
- * (q the particular solution of the mode, P its propagator, FORMULAS.md section 2), and the wall
+ * (q the particular solution of the mode, P its propagator, docs/theory.md section 2), and the wall
  * crossings are found by a certified search that cannot step over a contact, however shallow
  * (see closed_form.c). Same events, jumps, counters and sensitivities as the CVODE driver; the
  * FMI glue calls closed_form_advance where it would call solver_advance_ex.

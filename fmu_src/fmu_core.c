@@ -565,7 +565,7 @@ static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char
     if (!finite_within(s->start_time, CORE_MAX_TIME) ||
         !finite_within(s->me_time, 2 * CORE_MAX_TIME) ||
         !finite_within(s->origin, 2 * CORE_MAX_TIME) || s->origin != floor(s->origin) ||
-        m->origin != s->origin || !(s->tau >= 0.0) || !finite_within(s->tau, 2 * CORE_MAX_TIME))
+        (!c->is_me && m->origin != s->origin) || !(s->tau >= 0.0) || !finite_within(s->tau, 2 * CORE_MAX_TIME))
         return "times not finite, out of range, or inconsistent";
     if (s->pending != 0 && (s->pending != 1 || c->is_me)) return "bad pending-event flag";
     if (s->inputs_changed != 0 && s->inputs_changed != 1) return "bad input flag";
@@ -696,8 +696,11 @@ int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_a
     if (c->is_me) return core_fail(c, fn, "a Model Exchange instance");
     if (event_needed) *event_needed = 0;
     if (early_return) *early_return = 0;
-    if (!isfinite(t) || !isfinite(h) || h < 0.0 || !(fabs(t + h) <= 2 * CORE_MAX_TIME))
+    if (!isfinite(t) || !isfinite(h) || h < 0.0)
         return core_fail(c, fn, "bad communication step (t = %g, h = %g)", t, h);
+    if (!(fabs(t + h) <= CORE_MAX_TIME))
+        return core_fail(c, fn, "the step's end t + h = %g is beyond the FMU's time range "
+                         "|t| <= %g", t + h, CORE_MAX_TIME);
     const double now = solver_time(&c->s);
     if (fabs(t - now) > 1e-9 * fmax(1.0, fabs(now)))
         return core_fail(c, fn, "currentCommunicationPoint %.17g differs from the FMU's time "
@@ -823,8 +826,8 @@ int core_completed_step(CoreInstance *c, const char *fn, int *enter_event, int *
 
 int core_set_time(CoreInstance *c, const char *fn, double t) {
     ME_ONLY(c, fn, CS_EVENT | CS_CONT);
-    if (!finite_within(t, 2 * CORE_MAX_TIME))
-        return core_fail(c, fn, "time = %g: must be finite with |t| <= %g", t, 2 * CORE_MAX_TIME);
+    if (!finite_within(t, CORE_MAX_TIME))
+        return core_fail(c, fn, "time = %g: must be finite with |t| <= %g", t, CORE_MAX_TIME);
     c->me_time = t;
     c->m.origin = floor(t);
     return CORE_OK;

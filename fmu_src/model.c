@@ -1,7 +1,7 @@
 /*
  * ImpactOscillator physics: parameters, right-hand side, Jacobian, event indicators and the
  * jumps at the wall. Equation numbers refer to Molenaar, de Weger & van de Water (2001) and to
- * ../shared/paper/FORMULAS.md.
+ * docs/theory.md.
  */
 #include "model.h"
 

@@ -13,7 +13,7 @@ be small against the distance to the grazing set but large against the integrato
 agree best (the classical step selection for noisy differences), and reports that
 disagreement as the error estimate.
 
-For the map near grazing (FORMULAS.md section 8) :func:`jacobian_vs_x` follows the
+For the map near grazing (docs/theory.md section 8) :func:`jacobian_vs_x` follows the
 family of orbits whose wall-free continuation at t = n is (u, v) = (x, 0): J is measured at
 the section phase ``measure_theta`` (default 1/2, far from the impact near t = n, where
 every element is generic) and expressed in the coordinates of the section phase ``theta``

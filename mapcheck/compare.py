@@ -4,7 +4,7 @@ The harness measures (sweep Datasets, shooting edges, Jacobians); this module ho
 comparison logic, so that it can be tested without the FMU:
 
 * coordinates: the FMU samples the real state at t = n + theta; the maps' state is the
-  pre-impact ("virtual") state at t = n (FORMULAS.md section 3), related by the free
+  pre-impact ("virtual") state at t = n (docs/theory.md section 3), related by the free
   propagator (8).  :func:`free_flight`, :func:`virtual_to_phase`, :func:`phase_to_natural`.
 * windows: :func:`predicted_windows` ((64), the 2D map, the 2D map with A~, for any
   coefficients), :func:`map_windows` (any coefficients), :func:`sweep_windows` (runs of maximal period-M
@@ -322,7 +322,7 @@ def scaled_state(eps: float, direction: Sequence[float], c: Coefficients) -> tup
     """The physical state (u, v, sigma) at (x, y, rho) = l eps (a, b, s) in natural coordinates.
 
     The map (37)/(38) is an expansion in the size of (x, y, rho); its error is
-    O(eps^(3/2)) (FORMULAS.md section 4).  The factor l of (36) makes eps the same physical
+    O(eps^(3/2)) (docs/theory.md section 4).  The factor l of (36) makes eps the same physical
     size for every wall (chi = x / l ~ eps: impact velocity ~ sqrt(eps)); l differs by
     (1+r)^2/(1-r)^2 between the rigid (39) and the compliant (48) map.  Inverse (35) (exact
     inverse of (33)) with A; sigma = rho / (rho/sigma) of (39)/(48).
@@ -339,7 +339,7 @@ def map_one_step_error(u: float, v: float, sigma: float, u1_ode: float, v1_ode: 
 
     The map is (31)/(32) in physical coordinates (with L from (26)-(30), r_eff of ``c``);
     both images are expressed in the natural coordinates (33)/(34), where the state is
-    O(eps) and the map's error is O(eps^(3/2)) (FORMULAS.md section 4); divided by l (36)
+    O(eps) and the map's error is O(eps^(3/2)) (docs/theory.md section 4); divided by l (36)
     so that the error is in the units of chi for every wall.
     """
     from .maps import physical_map

@@ -25,7 +25,7 @@ Wall models (``wall=``):
 
 Between wall events the solution is exact: the particular solution of the linear ODE
 with the stiffness in force (in the wall the static offset is -Omega^2/(Omega^2 + kappa^2))
-plus the homogeneous propagator (FORMULAS.md section 2, valid at every damping).
+plus the homogeneous propagator (docs/theory.md section 2, valid at every damping).
 Displacements from an anchor point are computed as
 ``(P(tau) - I)(z_a - q(t_a)) + (q(t) - q(t_a))`` with both brackets accurate to small
 relative error for small tau, so that chattering impacts 1e-8 apart are resolved.
@@ -237,12 +237,30 @@ class ExactOscillator:
     v_stick : float
         Rigid wall only: post-impact speed below which, with the net force pushing
         into the wall, chatter is ended by sticking (see module docstring).
+    F_ext, u_wall : float
+        The FMU's ports, held constant: an external force on the right-hand side and the
+        wall's position (contact for u > u_wall, the compliant spring acts on u - u_wall).
+        They shift the equilibrium and the wall.  With c = u_wall + 1 - F_ext / Omega^2 > 0,
+        u = u_wall + c y maps the problem exactly onto the port-free one in y with
+        sigma' = (1 + sigma) / c - 1 (the equation is linear, the wall laws homogeneous), which
+        is what is solved.  c <= 0 (the equilibrium at or beyond the wall) is not covered.
     """
 
     def __init__(self, nu: float, Omega: float, sigma: float, r: float = 0.9,
-                 Gamma: float = 10.0, wall: str = "compliant", v_stick: float = 1e-9):
+                 Gamma: float = 10.0, wall: str = "compliant", v_stick: float = 1e-9,
+                 F_ext: float = 0.0, u_wall: float = 0.0):
         if wall not in ("none", "compliant", "rigid"):
             raise ValueError(f"wall must be 'none', 'compliant' or 'rigid', not {wall!r}")
+        self.F_ext, self.u_wall = float(F_ext), float(u_wall)
+        self._inner: ExactOscillator | None = None
+        if self.F_ext != 0.0 or self.u_wall != 0.0:
+            c = self.u_wall + 1.0 - self.F_ext / float(Omega) ** 2
+            if not c > 0.0:
+                raise ValueError(f"u_wall + 1 - F_ext/Omega^2 = {c:g}: the equilibrium is at or "
+                                 "beyond the wall, not covered by the scaling")
+            self._scale = c
+            self._inner = ExactOscillator(nu, Omega, (1.0 + float(sigma)) / c - 1.0, r, Gamma,
+                                          wall, v_stick / c)
         self.nu, self.Omega, self.sigma = float(nu), float(Omega), float(sigma)
         self.r, self.Gamma, self.wall, self.v_stick = float(r), float(Gamma), wall, float(v_stick)
         self.kappa = math.sqrt(self.Gamma) * self.Omega
@@ -254,11 +272,18 @@ class ExactOscillator:
     # ------------------------------------------------------------------ helpers
     def wall_free_orbit(self, t) -> tuple[np.ndarray, np.ndarray]:
         """p(t) and p'(t) of (4), the wall-free periodic solution."""
+        if self._inner is not None:
+            p, dp = self._inner.wall_free_orbit(t)
+            return self.u_wall + self._scale * p, self._scale * dp
         th = TWO_PI * np.mod(np.asarray(t, dtype=float), 1.0)
         return (1.0 + self.sigma) * np.cos(th) - 1.0, -TWO_PI * (1.0 + self.sigma) * np.sin(th)
 
     def net_wall_force(self, t) -> np.ndarray:
-        """F(t) - Omega^2: the acceleration at u = v = 0 (> 0 pushes into the wall)."""
+        """F(t) - Omega^2: the acceleration at u = v = 0 (> 0 pushes into the wall).
+
+        With ports: F(t) + F_ext - Omega^2 (u_wall + 1), the acceleration on the wall at rest."""
+        if self._inner is not None:
+            return self._scale * self._inner.net_wall_force(t)
         th = TWO_PI * np.mod(np.asarray(t, dtype=float), 1.0)
         return self._free.force(th) - self.Omega ** 2
 
@@ -354,6 +379,12 @@ class ExactOscillator:
             Cumulative wall entries since t0 (compliant: entries into u > 0; rigid:
             impacts, every chattering impact counted).
         """
+        if self._inner is not None:
+            c = self._scale
+            states, counts = self._inner.strobe((u0 - self.u_wall) / c, v0 / c, times, t0)
+            states = states * c
+            states[:, 0] += self.u_wall
+            return states, counts
         times = np.asarray(times, dtype=float).reshape(-1)
         if times.size and (np.any(np.diff(times) < 0) or times[0] < t0):
             raise ValueError("times must be sorted and >= t0")
@@ -378,6 +409,9 @@ class ExactOscillator:
         list of (t, kind)
             kind is "enter"/"exit" (compliant), "impact"/"stick"/"release" (rigid).
         """
+        if self._inner is not None:
+            return self._inner.crossings((u0 - self.u_wall) / self._scale, v0 / self._scale,
+                                         t0, t1)
         st, events = self._initial_state(float(u0), float(v0), float(t0))
         self._advance(st, float(t1), events)
         return [(t, k) for t, k in events if t <= t1]
@@ -388,7 +422,7 @@ class ExactOscillator:
         return float(s[0, 0]), float(s[0, 1]), int(c[0])
 
     def pre_impact_map(self, u, v, n: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Exact counterpart of the near-grazing maps (31)/(32) (FORMULAS.md section 3).
+        """Exact counterpart of the near-grazing maps (31)/(32) (docs/theory.md section 3).
 
         The map's state is the pre-impact ("virtual") state at t = n: the orbit before
         its impact near n, continued to t = n as if there were no wall (figure 3).  So:
@@ -408,6 +442,8 @@ class ExactOscillator:
         contacts : ndarray of int
             Wall entries/impacts in (n - 1/2, n + 1/2].
         """
+        if self._inner is not None:
+            raise NotImplementedError("pre_impact_map: the paper's maps have no ports")
         u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
         shape = u.shape
         u, v = u.reshape(-1), v.reshape(-1)

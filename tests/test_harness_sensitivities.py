@@ -128,12 +128,12 @@ def test_exact_jacobian_agrees_with_differences(model, sim, over, state, theta) 
     assert ex.method == "exact"
     np.testing.assert_allclose(ex.image, fd.image, atol=1e-10)
     np.testing.assert_allclose(ex.J, fd.J, atol=max(20 * fd.error, 1e-7) * max(1.0, np.abs(fd.J).max()))
-    # d/d sigma against a central difference in sigma (h = 1e-4: CVODE's ~1e-10 error over h
-    # stays below 1e-5; h = 1e-6 gave differences 1e-4 off)
+    # d/d sigma against a central difference in sigma: h = 1e-4 keeps the images' ~1e-10
+    # error at ~1e-6 in the quotient, the truncation O(h^2) below it (smooth away from grazing)
     h = 1e-4
     plus = map_jacobian(sim, {**p, "sigma": p["sigma"] + h}, state, theta=theta, method="fd").image
     minus = map_jacobian(sim, {**p, "sigma": p["sigma"] - h}, state, theta=theta, method="fd").image
-    np.testing.assert_allclose(ex.S, (plus - minus) / (2 * h), rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(ex.S, (plus - minus) / (2 * h), rtol=1e-5, atol=3e-6)
 
 
 @needs_sens
@@ -185,9 +185,10 @@ def test_newton_exact_and_fd_find_the_same_orbit(model, sim) -> None:
         out[method] = (orb, smap.evaluations)
     (fd, n_fd), (ex, n_ex) = out["fd"], out["exact"]
     np.testing.assert_allclose(ex.z, fd.z, atol=1e-9)
-    # the small multiplier (~2e-4) carries the differences' absolute error (~2e-6): compare
-    # against the largest; the exact pair satisfies det = r^2 e^(-2 nu) (below) to 1e-7
-    np.testing.assert_allclose(np.sort(np.abs(ex.multipliers)), np.sort(np.abs(fd.multipliers)),
-                               rtol=1e-4, atol=1e-4 * float(np.max(np.abs(fd.multipliers))))
+    # the leading multiplier to the differences' accuracy; the small one (~2e-4) carries their
+    # ~3e-5 error in J, so the determinant is the sharper check of the exact one
+    m_ex, m_fd = np.sort(np.abs(ex.multipliers)), np.sort(np.abs(fd.multipliers))
+    assert m_ex[1] == pytest.approx(m_fd[1], rel=1e-4)
+    assert m_ex[0] == pytest.approx(m_fd[0], rel=3e-2)
     assert float(np.prod(ex.multipliers).real) == pytest.approx(p["r"] ** 2 * math.exp(-2 * p["nu"]), rel=1e-7)
     assert n_ex * 3 < n_fd

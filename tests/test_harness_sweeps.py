@@ -1,6 +1,6 @@
 """Sweeps on the real FMU: period adding (Figure 9), hysteresis, 2D scans, resuming, worker loss.
 
-Expected windows come from the paper's 1D theory (FORMULAS.md section 6, eq (56) with the
+Expected windows come from the paper's 1D theory (docs/theory.md section 6, eq (56) with the
 |A~(sigma)| scale of section 7 item 3, and eq (64)), not from the harness's own output.
 """
 from __future__ import annotations
@@ -26,7 +26,7 @@ DATA_VARS = ("u", "v", "impacts", "t", "period", "orbit_impacts")
 
 
 def rho_of_sigma(sigma: float, nu: float, Omega: float, r: float) -> float:
-    """Strongly damped 1D map parameter, eq (56) with |A~(sigma)| (FORMULAS.md 7.3)."""
+    """Strongly damped 1D map parameter, eq (56) with |A~(sigma)| (docs/theory.md section 7, item 3)."""
     A_tilde = (1 + sigma) * 4 * math.pi**2 - sigma * Omega**2
     return nu * Omega**2 * sigma / (2 * A_tilde * (1 - r) ** 2)
 

@@ -55,7 +55,7 @@ def test_orbit_solver_reproduces_64_for_the_1d_map():
         else:
             assert abs(w.hi - hi) < 1e-12 and w.kind_hi == "graze"
     assert windows(p, 4, grid) == [] and windows(p, 5, grid) == []
-    # the orbit itself: sqrt(x_M) = M rho (FORMULAS.md section 6)
+    # the orbit itself: sqrt(x_M) = M rho (docs/theory.md section 6)
     orb = maximal_orbits(p, 3, np.array([0.1]))
     k = int(np.argmax(orb.stable))
     assert math.isclose(orb.s[k, 0], 0.3, rel_tol=1e-12)

@@ -11,7 +11,7 @@ without touching C: everything that defines what happens at the wall is in
 ``event_update``, ``missed_crossing``, ``release_now``).
 
 The model is the non-dimensional driven oscillator of Molenaar, de Weger & van de Water (2001),
-eqs (3), (5), (40), (53) (see ``shared/paper/FORMULAS.md``, section 1)::
+eqs (3), (5), (40), (53) (see ``docs/theory.md``, section 1)::
 
     u'' + nu u' + Omega^2 (u + 1) [+ kappa^2 u in contact] = (1 + sigma) F_g cos(2 pi t + phi)
 

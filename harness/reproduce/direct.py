@@ -1,6 +1,6 @@
 """Direct state comparison near grazing: the map's one-step prediction against the FMU.
 
-The FMU's pre-impact map (the exact counterpart of (31)/(32), FORMULAS.md section 3): a
+The FMU's pre-impact map (the exact counterpart of (31)/(32), docs/theory.md section 3): a
 virtual state at t = n is propagated freely back to n - 1/2, the FMU integrates with the
 wall to n + 1/2, and the result is propagated freely to n + 1.  Along rays
 (x, y, rho) = l eps (a, b, s) in natural coordinates the error of the map's image, in natural

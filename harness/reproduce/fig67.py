@@ -3,7 +3,7 @@ hysteretic period-3 -> period-1 transition, (nu, Omega) = (0.196, 7.368), compli
 
 * J(x) along the grazing family (wall-free state (x, 0) at t = n, sigma = 0) for
   Gamma = 10, 1e2, 1e3, 1e4 (and, beyond the paper, 1e5 and 1e6 for the hard limit),
-  in the paper's coordinates at t = n, where J11 carries the singularity (FORMULAS.md
+  in the paper's coordinates at t = n, where J11 carries the singularity (docs/theory.md
   section 8).  The impact contribution J11 - P11 is fitted on log-log axes in the soft
   (beta <= 0.1) and hard (beta >= 5) regimes, beta = r kappa sqrt(8 pi^2 x) / |A|:
   expected +1/2 soft at r = 1 (the map is O(x^(3/2)): N = I, no square root), -1/2 soft
@@ -59,7 +59,7 @@ SETTINGS = {
 
 
 def beta_of(x: np.ndarray, r: float, Gamma: float) -> np.ndarray:
-    """beta = r kappa sqrt(8 pi^2 x) / |A| at sigma = 0, v_n = 0 (FORMULAS.md section 8)."""
+    """beta = r kappa sqrt(8 pi^2 x) / |A| at sigma = 0, v_n = 0 (docs/theory.md section 8)."""
     return r * math.sqrt(Gamma) * OMEGA * np.sqrt(8.0 * math.pi ** 2 * np.asarray(x)) / A_ABS
 
 
@@ -271,7 +271,7 @@ def _report(ctx: Context, res: dict[str, Any]) -> str:
            if res["method"] == "exact" else "central differences, restarts from perturbed states")
         + f", x = {p['x_range'][0]:g} to {p['x_range'][1]:g}, {p['x_num']} points) along the "
         "grazing family (wall-free state (x, 0) at t = n, sigma = 0), in the paper's coordinates at t = n where J11 "
-        "is the singular element (FORMULAS.md section 8), against the theory's exponents of the impact contribution "
+        "is the singular element (docs/theory.md section 8), against the theory's exponents of the impact contribution "
         f"J11 - P11: soft contacts (beta <= {SOFT_BETA:g}) {res['expected']['soft']:+.1f}, hard contacts "
         f"(beta >= {HARD_BETA:g}) -1/2; beta = r kappa sqrt(8 pi^2 x)/|A|. Fitted where the Jacobian's error estimate "
         "is below 5% of the value, on at least 3 points over a decade of x. 'offset removed': the exponent of "

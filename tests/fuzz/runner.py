@@ -249,7 +249,10 @@ def fuzz(build: Path, sequences: int, seed: int = 13, timeout: float = 20.0,
         kind = crash_kind(res.returncode, res.stderr)
         crash: dict[str, Any] = {"seed": s, "index": last, "kind": kind,
                                  "message": _excerpt(res.stderr)}
-        if minimise_crashes and kind not in {c["kind"] for c in rep.crashes}:
+        where = next((ln.split(" runtime error")[0] for ln in res.stderr.splitlines()
+                      if "runtime error" in ln or "ERROR: AddressSanitizer" in ln), "")
+        crash["where"] = where
+        if minimise_crashes and (kind, where) not in {(c["kind"], c["where"]) for c in rep.crashes}:
             crash["minimal"] = minimise_crash(build, s, kind, timeout)
         rep.crashes.append(crash)
         rep.sequences += 1

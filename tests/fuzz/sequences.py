@@ -53,6 +53,7 @@ class Generator:
         self.ints = desc.of_kind("int")
         self.bools = desc.of_kind("bool")
         self.params = [v for v in desc.variables if v.causality in ("parameter", "input")]
+        self.inputs = [v for v in self.reals if v.causality == "input"]
 
     # -- values ---------------------------------------------------------------------------
     def real_value(self, rng: random.Random, start: float | None) -> float:
@@ -125,7 +126,7 @@ class Generator:
         me = interface_is_me(interface)
         ops = list(ACTIONS_ALWAYS) + (list(ACTIONS_ME) * 2 if me else [])
         weights = {"step": 10, "get_all": 3, "set": 6, "integrate": 8, "get_state": 3,
-                   "set_state": 3, "roundtrip": 2, "deser": 4}
+                   "set_state": 3, "roundtrip": 2, "deser": 4, "set_der": 2}
         op = rng.choices(ops, weights=[weights.get(o, 1) for o in ops])[0]
         slot = rng.randrange(3)
         if op == "set":
@@ -149,7 +150,7 @@ class Generator:
             start = rng.choice((0.0, rng.uniform(-5, 5), rng.choice(EXTREMES)))
             return {"op": op, "start": start, "tol": rng.choice((None, 1e-6, rng.choice(EXTREMES)))}
         if op == "set_der":
-            v = rng.choice(self.reals)
+            v = rng.choice(self.inputs if self.inputs and rng.random() < 0.8 else self.reals)
             return {"op": "set_der", "vrs": [v.vr], "order": rng.choice((1, 1, 2, 0, -1, 99)),
                     "values": [self.real_value(rng, 0.0)]}
         if op == "integrate":
