@@ -109,6 +109,13 @@ def _command_line(args: argparse.Namespace | None = None) -> str:
     return line if line else " ".join(["impact-harness", *sys.argv[1:]])
 
 
+def _finite(layers: Any, section: str, key: str) -> float:
+    """A finite number from the settings, or a one-line error naming the flag or file key."""
+    from .config import _number
+
+    return _number(layers, section, key)
+
+
 def cmd_simulate(args: argparse.Namespace) -> int:
     """``simulate``: time series from (u0, v0) at --t0 to --t-end; NetCDF + PNG."""
     from .plots import timeseries_plot
@@ -117,13 +124,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .simulator import FmuSimulator
 
     exp = _experiment(args)
-    t0 = float(exp.layers.get("simulate", "t0"))
-    t_end = float(exp.layers.get("simulate", "t_end"))
-    dt = float(exp.layers.get("simulate", "dt"))
+    L = exp.layers
+    t0, t_end = _finite(L, "simulate", "t0"), _finite(L, "simulate", "t_end")
+    dt = _finite(L, "simulate", "dt")
     out, plot = _outputs(args, exp, "simulate")
     if not dt > 0:
-        raise HarnessInputError(exp.layers.arg("simulate", "dt"), f"the output step must be > 0, got {dt}")
-    Budget.from_args(args).check(simulate_estimate(t0, t_end, dt, exp.layers.arg("simulate", "dt")))
+        raise HarnessInputError(L.arg("simulate", "dt"), f"the output step must be > 0, got {dt}")
+    if not t_end > t0:
+        raise HarnessInputError(L.arg("simulate", "t_end"), f"must be greater than the start time {t0}, got {t_end}")
+    Budget.from_args(args).check(simulate_estimate(t0, t_end, dt, L.arg("simulate", "dt")))
     t_start = time.perf_counter()
     sim = FmuSimulator(exp.model.source())
     n = max(1, int((t_end - t0) / dt)) if dt > 0 else 1
