@@ -47,6 +47,10 @@ void model_set_defaults(ModelData *m) {
     m->origin = 0.0;
     m->max_events_per_time = 1e5;
     m->max_steps_per_time = 2e5;
+    m->sensitivities = 0;
+    m->solver = SOLVER_CVODE;
+    m->sJ[0][0] = m->sJ[1][1] = 1.0; /* J = I, S = 0: nothing integrated yet */
+    m->sJ[0][1] = m->sJ[1][0] = m->sS[0] = m->sS[1] = 0.0;
     model_update_derived(m);
     m->u = m->u0;
     m->v = m->v0;
@@ -65,6 +69,13 @@ void model_update_derived(ModelData *m) {
 const char *model_check_consistency(const ModelData *m, char *buf, size_t n) {
     if (m->wall == WALL_COMPLIANT && !(m->Gamma > 0.0)) {
         snprintf(buf, n, "Gamma = %g: a compliant wall needs Gamma > 0", m->Gamma);
+        return buf;
+    }
+    if (m->solver == SOLVER_CLOSED_FORM && m->wall == WALL_COMPLIANT &&
+        m->contact != CONTACT_LINEAR) {
+        snprintf(buf, n, "solver = 1 (closed form) needs the linear contact law, not contact = %d "
+                 "(%s): use solver = 0 (CVODE)", m->contact,
+                 m->contact == CONTACT_HERTZ ? "Hertz" : "Hunt-Crossley");
         return buf;
     }
     const double w = m->u_wall;

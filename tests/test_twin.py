@@ -161,7 +161,7 @@ def _variables(path: Path) -> dict[str, dict]:
     return {
         v.name: dict(vr=v.valueReference, type=v.type, causality=v.causality,
                      variability=v.variability, initial=v.initial,
-                     start=None if v.start is None else float(v.start),
+                     start=None if v.start is None or v.type == "Boolean" else float(v.start),
                      min=v.min, max=v.max, unit=v.unit)
         for v in md.modelVariables
     }
