@@ -45,6 +45,8 @@ void model_set_defaults(ModelData *m) {
     m->F_ext = m->u_wall = m->dF_ext = m->du_wall = m->in_tau = 0.0;
     m->v_impact = m->t_impact = 0.0;
     m->origin = 0.0;
+    /* CVODE needs >= 20 steps per unit time (its maximal step 0.05) and ~100-1000 at the
+     * defaults; chatter ends in sticking after ~100 impacts. */
     m->max_events_per_time = 1e5;
     m->max_steps_per_time = 2e5;
     m->sensitivities = 0;
@@ -145,10 +147,11 @@ void model_initialize_state(ModelData *m, double tau0) {
     m->v_impact = 0.0;
     m->t_impact = 0.0;
     m->mode = MODE_FREE;
-    if (m->wall == WALL_COMPLIANT && (m->u0 > w || (m->u0 == w && m->v0 > dw)))
+    /* at rest on the wall (relative to it) the net force decides, as in mapcheck.exact */
+    const int rest_pushed = m->u0 == w && m->v0 == dw && model_wall_force(m, tau0) > 0.0;
+    if (m->wall == WALL_COMPLIANT && (m->u0 > w || (m->u0 == w && m->v0 > dw) || rest_pushed))
         m->mode = MODE_CONTACT; /* a start inside the wall is a state, not an entry: no jump */
-    else if (m->wall == WALL_RIGID && m->u0 == w && m->v0 == dw &&
-             model_wall_force(m, tau0) > 0.0)
+    else if (m->wall == WALL_RIGID && rest_pushed)
         m->mode = MODE_STICK;
 }
 
