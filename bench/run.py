@@ -34,6 +34,7 @@ import json
 import math
 import os
 import platform
+import re
 import shlex
 import subprocess
 import sys
@@ -211,6 +212,8 @@ def c_driver_args(driver: Path, case: Case, x0, periods: int, repeat: int, out: 
         var = model.variables[name]
         if var.type == "Real":
             args.append(f"r:{var.value_reference}={float(value)!r}")
+        elif var.type == "Boolean":
+            args.append(f"b:{var.value_reference}={int(bool(value))}")
         else:
             args.append(f"i:{var.value_reference}={int(value)}")
     return args
@@ -613,6 +616,19 @@ def report(res: dict, command: str) -> str:
     return "\n".join(L)
 
 
+_SECTION = re.compile(r"<!-- (\w+):begin -->.*?<!-- \1:end -->", re.S)
+
+
+def keep_sections(path: Path, text: str) -> str:
+    """`text` with the marked sections (<!-- NAME:begin --> ... <!-- NAME:end -->) that other
+    benchmark scripts wrote into the existing `path` appended, so that a rewrite keeps them."""
+    if not path.exists():
+        return text
+    found = [m.group(0) for m in _SECTION.finditer(path.read_text())]
+    kept = [sec for sec in found if sec not in text]
+    return text.rstrip() + ("\n\n" + "\n\n".join(kept) + "\n" if kept else "\n")
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="smoke test: few periods, small parallel job")
@@ -625,7 +641,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.from_json:
         res = json.loads(Path(args.from_json).read_text())
         text = report(res, "python bench/run.py" + (" --quick" if res["quick"] else ""))
-        Path(args.out or ROOT / "BENCHMARKS.md").write_text(text)
+        path = Path(args.out or ROOT / "BENCHMARKS.md")
+        path.write_text(keep_sections(path, text))
         return 0
     S = dict(SETTINGS[args.quick])
     if args.long_periods:
@@ -697,7 +714,7 @@ def main(argv: list[str] | None = None) -> int:
     print(goals_table(res)[0])
     out = args.out or (None if args.quick else str(ROOT / "BENCHMARKS.md"))
     if out:
-        Path(out).write_text(text)
+        Path(out).write_text(keep_sections(Path(out), text))
         print(f"wrote {out}", file=sys.stderr)
     if args.json:
         Path(args.json).write_text(json.dumps(res, indent=1, default=float))

@@ -31,8 +31,6 @@ CORPUS = sorted((ROOT / "tests" / "fuzz_corpus").glob("*.json"))
 # /work/coord/findings_fuzz.md); an entry here marks its corpus files xfail (not strict) until
 # the fix lands, then it is deleted.
 OPEN_FINDINGS: dict[str, str] = {
-    "F8": "solver: tiny positive steps fail",
-    "F11": "solver: valid physics fails (r = 0 compliant wall, rigid chatter)",
     "F12": "core: an ME instance's own state past t = 1 is refused on deserialisation",
 }
 

@@ -97,11 +97,14 @@ def test_interrupted_loop_keeps_its_points_and_resumes(tmp_path: Path, model: Fm
     try:
         _wait_for(lambda: Path(str(release) + ".reached").exists() and _partial_rows(ckpt / "both.partial.npz") == 5,
                   "the loop to stop before point 5 with 5 points stored")
+        children = [c.pid for c in psutil.Process(proc.pid).children(recursive=True)]
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=60)
     finally:
         proc.kill()
     assert proc.returncode == 130, err
+    _wait_for(lambda: _gone(children), "the worker and the resource tracker to exit", limit=60)
+    assert _tmp_dirs_of([proc.pid, *children]) == []  # Ctrl-C leaves no extraction folder
     assert "interrupted: 5 of 8 points are kept" in err and "rerun the same command to resume" in err
     assert not out.exists()
 
@@ -180,3 +183,23 @@ def test_stale_folders_of_dead_processes_are_swept(tmp_path: Path) -> None:
         (d / "sub").mkdir(parents=True)
     assert remove_stale(tmp_path) == [stale]
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(d.name for d in (live, mine, legacy))
+
+
+def test_folder_of_a_killed_serial_run_is_swept_by_the_next_run(tmp_path: Path) -> None:
+    """A SIGKILLed process keeps its extraction folder (nothing can run in it); the next
+    run of the harness removes it."""
+    release = tmp_path / "never"
+    proc = subprocess.Popen([sys.executable, "-m", "harness", "sweep", "--values", "0.5", "--mode", "fresh",
+                             "--transient", "5", "--samples", "3", "--backend", "serial", "--out", str(tmp_path / "x.nc"),
+                             "--no-plot", "--no-progress"], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            env={**os.environ, TEST_HOOK_ENV: f"fresh-p00000:0:block:{release}"})
+    _wait_for(lambda: Path(str(release) + ".reached").exists(), "the run to block inside its task")
+    proc.kill()
+    proc.wait(timeout=60)
+    left = _tmp_dirs_of([proc.pid])
+    assert len(left) == 1 and (left[0] / "").is_dir()
+    res = subprocess.run([sys.executable, "-m", "harness", "strobe", "--transient", "2", "--samples", "2",
+                          "--out", str(tmp_path / "s.nc"), "--no-plot", "--no-progress"],
+                         cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert not left[0].exists()

@@ -1,0 +1,119 @@
+"""The closed-form solver mode of the FMU (solver = 1, issue 11.3): exact propagation on each
+side of the wall with a certified crossing search. Checked against the FMU's CVODE mode (per
+period, within the error budget 1e-8), against mapcheck.exact (the independent closed form in
+Python), on contacts down to 1e-14 deep, with sticking on the rigid wall, in FMI 2.0 and 3.0;
+the nonlinear contact laws are refused.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+
+from tests.fmu_support import FMU3_PATH, on_orbit
+from tests.sens_support import FIG9, UNDERDAMPED, Fmu, one_period, oracle
+
+CASES = {
+    "fig9_compliant": dict(FIG9, wall=1),
+    "fig9_sigma0.2": dict(FIG9, sigma=0.2, wall=1),
+    "underdamped_compliant": dict(UNDERDAMPED, wall=1),
+    "underdamped_rigid": dict(UNDERDAMPED, wall=2),
+    "soft_r1": dict(UNDERDAMPED, sigma=0.05, r=1.0, Gamma=10.0, wall=1),
+    "rigid_heavy_damping": dict(nu=100.0, Omega=2 ** 0.5, sigma=0.1, r=0.5, wall=2),
+    "no_wall": dict(UNDERDAMPED, sigma=0.3, wall=0),
+}
+
+
+@pytest.fixture(scope="module")
+def fmu2():
+    f = Fmu(2)
+    yield f
+    f.close()
+
+
+def orbit(f: Fmu, params: dict, n: int, t0: float = 0.5, solver: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """n periods (one doStep each) from the wall-free orbit at t0: states and impact counts."""
+    f.start(t0, **params, **on_orbit(params["sigma"], t0), solver=solver)
+    xs, ns = [], []
+    for k in range(1, n + 1):
+        f.step(t0 + k)
+        xs.append(f.state())
+        ns.append(f.impacts())
+    return np.array(xs), np.array(ns)
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_closed_form_mode_agrees_with_cvode_mode_per_period(fmu2, case):
+    p = CASES[case]
+    xs, ns = orbit(fmu2, p, 12)
+    assert p["wall"] == 0 or ns[-1] > 0
+    for k in range(len(xs) - 1):
+        t0 = 0.5 + k + 1
+        a, _, _ = one_period(fmu2, p, xs[k], t0, sens=False, solver=0)
+        n0 = fmu2.impacts()
+        b, _, _ = one_period(fmu2, p, xs[k], t0, sens=False, solver=1)
+        assert fmu2.impacts() == n0
+        assert np.max(np.abs(a - b)) <= 1e-8, (case, k, a, b)
+
+
+@pytest.mark.parametrize("case", sorted(CASES))
+def test_closed_form_mode_matches_mapcheck_exact(fmu2, case):
+    p = CASES[case]
+    xs, ns = orbit(fmu2, p, 12)
+    osc = oracle(p)
+    for k in range(len(xs) - 1):
+        t0 = 0.5 + k + 1
+        u, v, c = osc.state_at(xs[k][0], xs[k][1], t0, t0 + 1.0)
+        assert np.max(np.abs(xs[k + 1] - (u, v))) <= 1e-10, (case, k)
+        assert ns[k + 1] - ns[k] == c
+
+
+@pytest.mark.parametrize("depth", [1e-6, 1e-10, 1e-14])
+@pytest.mark.parametrize("wall", [1, 2])
+def test_shallow_contacts_are_never_missed(fmu2, depth, wall):
+    """At sigma = x the wall-free orbit peaks at u = x at t = 1: a contact x deep, lasting
+    ~sqrt(x) of a period. At sigma = -x the orbit misses the wall by x: no contact."""
+    p = dict(UNDERDAMPED, wall=wall, Gamma=100.0)
+    for sigma, expected in ((depth, 1), (-depth, 0)):
+        q = dict(p, sigma=sigma)
+        fmu2.start(0.5, **q, **on_orbit(sigma, 0.5), solver=1)
+        fmu2.step(1.5)
+        assert fmu2.impacts() == expected, (sigma, wall)
+        st = on_orbit(sigma, 0.5)
+        u, v, c = oracle(q).state_at(st["u0"], st["v0"], 0.5, 1.5)
+        assert c == expected
+        # the state after a contact x deep is ill-conditioned: an error e in u at the turning
+        # point moves the crossing velocity ~sqrt(2 a x) by a e / sqrt(2 a x); the oracle's own
+        # e ~ 1e-13 (mapcheck.exact in double precision) sets the tolerance
+        assert np.max(np.abs(fmu2.state() - (u, v))) <= max(1e-12, 1e-13 / np.sqrt(depth))
+
+
+def test_sticking_on_the_rigid_wall_matches_the_oracle(fmu2):
+    """Strong damping and r = 0.5: chatter ends in sticking (Zeno truncation) and release at
+    the closed-form time when the wall force changes sign."""
+    p = dict(nu=100.0, Omega=2 ** 0.5, sigma=0.5, r=0.5, wall=2)
+    xs, ns = orbit(fmu2, p, 6)
+    ref, _ = oracle(p).strobe(*on_orbit(p["sigma"], 0.5).values(), np.arange(1, 7) + 0.5, t0=0.5)
+    assert ns[-1] > 20  # chatter
+    assert np.max(np.abs(xs - ref)) <= 1e-10
+
+
+@pytest.mark.parametrize("contact", [1, 2])
+def test_nonlinear_contact_laws_are_refused(fmu2, contact):
+    with pytest.raises(FMICallException):
+        fmu2.start(0.0, **dict(FIG9, wall=1), contact=contact, solver=1)
+    fmu2.started = True
+
+
+def test_fmi3_closed_form_equals_fmi2():
+    if not FMU3_PATH.exists():
+        pytest.skip("FMI 3.0 FMU not built")
+    f2, f3 = Fmu(2), Fmu(3)
+    try:
+        p = CASES["underdamped_rigid"]
+        a, _ = orbit(f2, p, 5)
+        b, _ = orbit(f3, p, 5)
+        assert np.array_equal(a, b)
+    finally:
+        f2.close()
+        f3.close()
