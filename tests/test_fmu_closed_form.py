@@ -117,3 +117,60 @@ def test_fmi3_closed_form_equals_fmi2():
     finally:
         f2.close()
         f3.close()
+
+
+# (wall, sigma, Gamma, r, F_ext, u_wall, start): the ports shift the equilibrium and the wall
+PORT_CASES = [
+    ("compliant", FIG9, 0.5, 10.0, 0.9, 0.02, -0.1, (-0.4, 0.0)),
+    ("rigid", FIG9, 0.5, 10.0, 0.9, 0.02, -0.1, (-0.4, 0.0)),
+    ("compliant", UNDERDAMPED, 0.1, 1000.0, 0.9, 5.0, 0.2, (-0.5, 1.0)),
+    ("rigid", UNDERDAMPED, 0.1, 1000.0, 0.7, -3.0, 0.3, (-0.5, 1.0)),
+]
+
+
+@pytest.mark.parametrize("wall,lin,sigma,Gamma,r,F,w,start", PORT_CASES)
+def test_constant_ports_match_the_oracle(wall, lin, sigma, Gamma, r, F, w, start):
+    from mapcheck.exact import ExactOscillator
+    from tests.fmu_support import WALLS, LoggedSlave
+    f = LoggedSlave(name="cf-ports")
+    try:
+        lin = {k: lin[k] for k in ("nu", "Omega")}
+        f.start(wall=WALLS[wall], sigma=sigma, Gamma=Gamma, r=r, u0=start[0], v0=start[1],
+                F_ext=F, u_wall=w, solver=1, **lin)
+        ex = ExactOscillator(sigma=sigma, r=r, Gamma=Gamma, wall=wall, F_ext=F, u_wall=w, **lin)
+        times = np.arange(1.0, 21.0)
+        want, impacts = ex.strobe(start[0], start[1], times)
+        got = []
+        for t in times:
+            f.step_to(t)
+            got.append(f.state())
+        assert np.max(np.abs(np.array(got) - want)) < 1e-10
+        assert f.impacts() == impacts[-1] > 0
+    finally:
+        f.close()
+
+
+@pytest.mark.parametrize("wall", ["compliant", "rigid"])
+def test_ramped_ports_closed_form_equals_cvode(wall):
+    """F_ext and u_wall as ramps (values and first derivatives per step, FMI 2.0): a moving
+    wall, with contacts; the closed form against CVODE mode step by step."""
+    from tests.fmu_support import WALLS, LoggedSlave
+    runs = {}
+    for solver in (0, 1):
+        f = LoggedSlave(name=f"ramp{solver}")
+        try:
+            f.start(wall=WALLS[wall], sigma=0.1, Gamma=100.0, r=0.8, u0=-0.5, v0=1.0,
+                    nu=UNDERDAMPED["nu"], Omega=UNDERDAMPED["Omega"], solver=solver)
+            out, h = [], 0.5
+            for k in range(12):
+                t = k * h
+                F0, F1, w0, w1 = 2.0 + 0.4 * t, 0.4, -0.05 + 0.02 * t, 0.02
+                f.set(F_ext=F0, u_wall=w0)
+                f.slave.setRealInputDerivatives([f.vr["F_ext"], f.vr["u_wall"]], [1, 1], [F1, w1])
+                f.step_to(t + h)
+                out.append((*f.state(), f.impacts()))
+            runs[solver] = np.array(out)
+        finally:
+            f.close()
+    assert runs[1][-1, 2] > 2 and np.array_equal(runs[0][:, 2], runs[1][:, 2])
+    assert np.max(np.abs(runs[0][:, :2] - runs[1][:, :2])) < 1e-8
