@@ -203,3 +203,27 @@ def test_folder_of_a_killed_serial_run_is_swept_by_the_next_run(tmp_path: Path) 
                          cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr
     assert not left[0].exists()
+
+
+def test_other_pools_of_the_harness_die_with_their_parent(tmp_path: Path) -> None:
+    """The parallel shooting's pool uses init_child_process: its workers go with a SIGKILLed
+    parent too."""
+    script = tmp_path / "parent.py"
+    script.write_text(
+        "import multiprocessing, os, time\n"
+        "from concurrent.futures import ProcessPoolExecutor\n"
+        "from harness.tasks import init_child_process\n"
+        "if __name__ == '__main__':\n"
+        "    ctx = multiprocessing.get_context('spawn')\n"
+        "    pool = ProcessPoolExecutor(1, mp_context=ctx, initializer=init_child_process, initargs=(os.getpid(),))\n"
+        "    print(pool.submit(os.getpid).result(), flush=True)\n"
+        "    time.sleep(600)  # hold the pool until killed\n")
+    proc = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    try:
+        worker = int(proc.stdout.readline())
+        assert psutil.pid_exists(worker)
+        proc.kill()
+        proc.wait(timeout=60)
+        _wait_for(lambda: _gone([worker]), "the pool worker to exit", limit=60)
+    finally:
+        proc.kill()
