@@ -298,35 +298,67 @@ const char *closed_form_unsupported(const ModelData *m) {
     if (m->wall == WALL_COMPLIANT && m->contact != CONTACT_LINEAR)
         return "solver = 1 (closed form) needs the linear contact law (contact = 0): the Hertz "
                "and Hunt-Crossley laws are nonlinear, use solver = 0 (CVODE)";
-    if (m->dF_ext != 0.0 || m->du_wall != 0.0)
-        return "solver = 1 (closed form) takes constant inputs only (its sticking release time "
-               "assumes a fixed wall): use solver = 0 (CVODE) with input derivatives";
     return NULL;
 }
 
-/* Release time of a mass sticking on the rigid wall: the first tau >= tau0 at which the net
- * force into the wall, amp F_g cos(2 pi tau + phi) - K, is no longer positive. */
-static double release_time(const ModelData *m, double tau0) {
+/* Release time of a mass sticking on the rigid wall: the first tau in [tau0, tau_end] at which
+ * the net force into the wall, f(tau) = A cos(2 pi tau + phi) + beta tau + const (beta from the
+ * input ramps), is no longer positive; tau_end if it stays positive. Between the zeros of
+ * f' (sin(2 pi tau + phi) = beta / (2 pi A), known in closed form) f is monotone, so the first
+ * piece whose end has f <= 0 holds the root, found by bisection. */
+static double release_time(const ModelData *m, double tau0, double tau_end) {
     if (model_wall_force(m, tau0) <= 0.0) return tau0;
-    const double A = (1.0 + m->sigma) * m->F_g;
-    const double K = A * cos(TWO_PI * tau0 + m->phi) - model_wall_force(m, tau0);
-    const double c = K / A;
-    if (c <= -1.0) return INFINITY;
-    /* phase psi = 2 pi tau + phi in (-acos c, acos c) holds the mass; it leaves at acos c */
-    const double psi = fmod(TWO_PI * tau0 + m->phi, TWO_PI);
-    double dpsi = fmod(acos(c) - psi, TWO_PI);
-    if (dpsi < 0.0) dpsi += TWO_PI;
-    double t = tau0 + dpsi / TWO_PI;
-    /* rounding may leave the force a hair above zero at the computed time */
-    for (int k = 0; k < 4 && model_wall_force(m, t) > 0.0; ++k) t = nextafter(t, INFINITY);
-    return t;
+    const double A = fabs((1.0 + m->sigma) * m->F_g);
+    /* the forcing has period 1: the difference over one period is the ramp's slope */
+    const double beta = model_wall_force(m, tau0 + 1.0) - model_wall_force(m, tau0);
+    const double s = A > 0.0 ? beta / (TWO_PI * A) : (beta > 0.0 ? 2.0 : -2.0);
+    double crit[2] = {0.0, 0.0}; /* phases of the turning points, in [0, 2 pi) */
+    int nc = 0;
+    if (fabs(s) <= 1.0) {
+        crit[0] = asin(s);
+        crit[1] = M_PI - crit[0];
+        if (crit[0] < 0.0) crit[0] += TWO_PI;
+        nc = 2;
+    }
+    double a = tau0;
+    while (a < tau_end) {
+        /* the next turning point after a (or one period on, if f is monotone) */
+        double b = a + 1.0;
+        const double psi = fmod(TWO_PI * a + m->phi, TWO_PI);
+        for (int k = 0; k < nc; ++k) {
+            double d = fmod(crit[k] - psi, TWO_PI);
+            if (d <= 0.0) d += TWO_PI;
+            b = fmin(b, a + d / TWO_PI);
+        }
+        b = fmin(b, tau_end);
+        if (model_wall_force(m, b) <= 0.0) {
+            double lo = a, hi = b; /* f(lo) > 0 >= f(hi), f monotone */
+            for (int it = 0; it < 200 && hi - lo > 2.0 * DBL_EPSILON * fabs(hi); ++it) {
+                const double mid = 0.5 * (lo + hi);
+                if (model_wall_force(m, mid) > 0.0) lo = mid;
+                else hi = mid;
+            }
+            return hi;
+        }
+        if (b >= tau_end) break;
+        a = b;
+    }
+    return tau_end;
+}
+
+/* A mass sticking on the wall at tau: at the wall, moving with it. */
+static void stuck_state(ModelData *m, double tau) {
+    double F0, F1, W0, W1, tref;
+    inputs(m, &F0, &F1, &W0, &W1, &tref);
+    m->u = W0 + W1 * (tau - tref);
+    m->v = W1;
 }
 
 static void reorigin(Solver *s, ModelData *m) {
     const double k = floor(s->tau);
     s->origin += k;
     s->tau -= k;
-    model_shift_time(m, k); /* the model's input ramps and impact times follow the origin */
+    model_shift_time(m, k); /* the input ramps and impact times follow the origin */
 }
 
 /* The jump of a pending event (FMI 3.0 early return), with its saltation matrix. */
@@ -356,7 +388,9 @@ int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event
         return -1;
     }
     const double span = fmax(1.0, ceil(tau_end - s->tau));
-    const long max_events = (long)(MAX_EVENTS_PER_UNIT_TIME * span);
+    const double per_time = m->max_events_per_time > 0.0 ? m->max_events_per_time
+                                                         : MAX_EVENTS_PER_UNIT_TIME;
+    const long max_events = (long)(per_time * span);
     long events = 0;
     Mode modes[2];
     mode_init(&modes[0], m, 0);
@@ -368,9 +402,10 @@ int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event
     }
     while (s->tau < tau_end) {
         if (m->mode == MODE_STICK) {
-            const double tr = release_time(m, s->tau);
-            if (tr >= tau_end) {
+            const double tr = release_time(m, s->tau, tau_end);
+            if (tr >= tau_end && model_wall_force(m, tau_end) > 0.0) {
                 s->tau = tau_end;
+                stuck_state(m, tau_end); /* carried along by the wall */
                 break;
             }
             s->tau = tr;

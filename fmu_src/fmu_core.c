@@ -3,6 +3,7 @@
  * Everything the standard asks of an instance lives here once; fmi2_cs.c and fmi3.c translate.
  */
 #include "fmu_core.h"
+#include "sens.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -77,6 +78,17 @@ typedef struct {
 } VarDef;
 
 static double get_in_contact(const CoreInstance *c) { return c->m.mode != MODE_FREE; }
+/* Sensitivities of the last doStep (sens.h); J = I, S = 0 (as set at initialisation) when they
+ * are not computed, so that every output stays finite. */
+static double get_sens(const CoreInstance *c, int i) {
+    return i < 4 ? c->m.sJ[i / 2][i % 2] : c->m.sS[i - 4];
+}
+static double get_J_uu(const CoreInstance *c) { return get_sens(c, 0); }
+static double get_J_uv(const CoreInstance *c) { return get_sens(c, 1); }
+static double get_J_vu(const CoreInstance *c) { return get_sens(c, 2); }
+static double get_J_vv(const CoreInstance *c) { return get_sens(c, 3); }
+static double get_S_u(const CoreInstance *c) { return get_sens(c, 4); }
+static double get_S_v(const CoreInstance *c) { return get_sens(c, 5); }
 static double get_der(const CoreInstance *c, int i) {
     const double y[2] = {c->m.u, c->m.v};
     double dy[2];
@@ -138,6 +150,14 @@ static const VarDef VARS[] = {
      0, NULL, 0},
     {VR_MAX_STEPS, "max_steps_per_time", VT_REAL, K_FIXED, FIELD(max_steps_per_time), 1, 1e9, 0,
      NULL, 0},
+    {VR_SENSITIVITIES, "sensitivities", VT_BOOLEAN, K_FIXED, FIELD(sensitivities), 0, 1, 0, NULL, 0},
+    {VR_SOLVER, "solver", VT_INTEGER, K_FIXED, FIELD(solver), 0, 1, 0, NULL, 0},
+    {VR_J_UU, "J_uu", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_J_uu, 0},
+    {VR_J_UV, "J_uv", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_J_uv, 0},
+    {VR_J_VU, "J_vu", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_J_vu, 0},
+    {VR_J_VV, "J_vv", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_J_vv, 0},
+    {VR_S_U, "S_u", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_S_u, 0},
+    {VR_S_V, "S_v", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_S_v, 0},
 };
 #define N_VARS (sizeof VARS / sizeof VARS[0])
 
@@ -435,7 +455,7 @@ int core_reset(CoreInstance *c, const char *fn) {
  * snapshot_take/snapshot_restore, check it in snapshot_check, bump SNAPSHOT_VERSION. */
 
 #define SNAPSHOT_MAGIC 0x494d504fu /* "IMPO" */
-#define SNAPSHOT_VERSION 2u
+#define SNAPSHOT_VERSION 3u /* 3: ModelData carries sensitivities, solver, J, S (issue 11) */
 
 typedef struct {
     uint32_t magic, version, iface, size;
@@ -535,6 +555,9 @@ static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char
     if (m->impacts < 0 || s->events < 0 || s->guard_hits < 0) return "negative event counter";
     if (!finite_within(m->u, CORE_MAX_STATE) || !finite_within(m->v, CORE_MAX_STATE))
         return "continuous state (u, v) not finite or beyond 1e15";
+    for (int i = 0; i < 6; ++i)
+        if (!isfinite(i < 4 ? m->sJ[i / 2][i % 2] : m->sS[i - 4]))
+            return "sensitivities (J_uu ... S_v) not finite";
     if (!finite_within(m->dF_ext, MAX_DF_EXT) || !finite_within(m->du_wall, MAX_DU_WALL) ||
         !finite_within(m->in_tau, 2 * CORE_MAX_TIME) || !isfinite(m->v_impact) ||
         !finite_within(m->t_impact, 2 * CORE_MAX_TIME))
@@ -683,6 +706,10 @@ int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_a
         return core_fail(c, fn, "currentCommunicationPoint %.17g differs from the FMU's time "
                          "%.17g", t, now);
     apply_input_jump(c);
+    if (c->m.sensitivities) { /* derivatives w.r.t. the state at t */
+        sens_reset(&c->m);
+        c->s.needs_reinit = 1; /* CVODE carries J, S in its own history: restart it with J = I */
+    }
     const double t_end = t + h;
     const long events_before = c->s.events, guard_before = c->s.guard_hits;
 

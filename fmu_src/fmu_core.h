@@ -7,7 +7,8 @@
  * Exchange calls. The glue files only translate types and status codes.
  *
  * Adding a variable is one entry in VARS[] (fmu_core.c), plus its field in ModelData if it is
- * stored there, plus its XML in both modelDescription files: see /work/coord/core_api.md.
+ * stored there, plus its XML in both modelDescription files (FMI 2.0: 1-based ModelStructure
+ * indices). Snapshots: see the comment above Snapshot in fmu_core.c.
  */
 #ifndef IMPACT_FMU_CORE_H
 #define IMPACT_FMU_CORE_H

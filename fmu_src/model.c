@@ -45,8 +45,14 @@ void model_set_defaults(ModelData *m) {
     m->F_ext = m->u_wall = m->dF_ext = m->du_wall = m->in_tau = 0.0;
     m->v_impact = m->t_impact = 0.0;
     m->origin = 0.0;
+    /* CVODE needs >= 20 steps per unit time (its maximal step 0.05) and ~100-1000 at the
+     * defaults; chatter ends in sticking after ~100 impacts. */
     m->max_events_per_time = 1e5;
     m->max_steps_per_time = 2e5;
+    m->sensitivities = 0;
+    m->solver = SOLVER_CVODE;
+    m->sJ[0][0] = m->sJ[1][1] = 1.0; /* J = I, S = 0: nothing integrated yet */
+    m->sJ[0][1] = m->sJ[1][0] = m->sS[0] = m->sS[1] = 0.0;
     model_update_derived(m);
     m->u = m->u0;
     m->v = m->v0;
@@ -65,6 +71,13 @@ void model_update_derived(ModelData *m) {
 const char *model_check_consistency(const ModelData *m, char *buf, size_t n) {
     if (m->wall == WALL_COMPLIANT && !(m->Gamma > 0.0)) {
         snprintf(buf, n, "Gamma = %g: a compliant wall needs Gamma > 0", m->Gamma);
+        return buf;
+    }
+    if (m->solver == SOLVER_CLOSED_FORM && m->wall == WALL_COMPLIANT &&
+        m->contact != CONTACT_LINEAR) {
+        snprintf(buf, n, "solver = 1 (closed form) needs the linear contact law, not contact = %d "
+                 "(%s): use solver = 0 (CVODE)", m->contact,
+                 m->contact == CONTACT_HERTZ ? "Hertz" : "Hunt-Crossley");
         return buf;
     }
     const double w = m->u_wall;
@@ -134,10 +147,11 @@ void model_initialize_state(ModelData *m, double tau0) {
     m->v_impact = 0.0;
     m->t_impact = 0.0;
     m->mode = MODE_FREE;
-    if (m->wall == WALL_COMPLIANT && (m->u0 > w || (m->u0 == w && m->v0 > dw)))
+    /* at rest on the wall (relative to it) the net force decides, as in mapcheck.exact */
+    const int rest_pushed = m->u0 == w && m->v0 == dw && model_wall_force(m, tau0) > 0.0;
+    if (m->wall == WALL_COMPLIANT && (m->u0 > w || (m->u0 == w && m->v0 > dw) || rest_pushed))
         m->mode = MODE_CONTACT; /* a start inside the wall is a state, not an entry: no jump */
-    else if (m->wall == WALL_RIGID && m->u0 == w && m->v0 == dw &&
-             model_wall_force(m, tau0) > 0.0)
+    else if (m->wall == WALL_RIGID && rest_pushed)
         m->mode = MODE_STICK;
 }
 

@@ -105,7 +105,8 @@ typedef struct {
     double v_impact, t_impact;
     /* Integer origin of local time (absolute t = origin + tau), kept equal to the solver's. */
     double origin;
-    /* Bounds on the work per unit of time (issue 13.3), used by the solver. */
+    /* Bounds on the work of one doStep, per unit of time advanced (at least one unit; issue
+     * 13.3); the solver also caps a doStep at SOLVER_MAX_STEPS_PER_CALL steps (solver.h). */
     double max_events_per_time, max_steps_per_time;
     /* Sensitivities (sens.h) and the solver (closed_form.h), issue 11: parameters, and the
      * derivatives of the state w.r.t. the state at the start of the current doStep (sJ) and

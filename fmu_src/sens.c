@@ -10,12 +10,6 @@
 #define M_PI 3.14159265358979323846
 #endif
 
-/* Velocity of the wall (0 until the wall becomes a moving port). */
-static double wall_velocity(const ModelData *m) {
-    (void)m;
-    return 0.0;
-}
-
 void sens_reset(ModelData *m) {
     m->sJ[0][0] = m->sJ[1][1] = 1.0;
     m->sJ[0][1] = m->sJ[1][0] = 0.0;
@@ -39,11 +33,8 @@ void sens_saltation(const ModelData *before, const ModelData *after, double tau,
     X[0][0] = X[1][1] = 1.0;
     X[0][1] = X[1][0] = 0.0;
     if (before->mode == MODE_STICK) return; /* release: a time event, the state is fixed */
-    if (after->mode == MODE_STICK) {         /* every nearby state sticks too */
-        X[0][0] = X[1][1] = 0.0;
-        return;
-    }
     double DR = 1.0; /* DR = diag(1, DR) */
+    if (after->mode == MODE_STICK) DR = 0.0; /* R(u, v) = (u, w'): every nearby state sticks */
     if (before->mode == MODE_FREE && after->mode == MODE_CONTACT)
         DR = before->contact == CONTACT_LINEAR ? before->r : 1.0;
     else if (before->mode == MODE_FREE && after->mode == MODE_FREE)
@@ -51,7 +42,7 @@ void sens_saltation(const ModelData *before, const ModelData *after, double tau,
     double fm[2], fp[2];
     model_derivatives(before, tau, ym, fm);
     model_derivatives(after, tau, yp, fp);
-    const double hdot = fm[0] - wall_velocity(before);
+    const double hdot = fm[0] - model_wall_velocity(before);
     X[1][1] = DR;
     if (hdot == 0.0) return; /* exact tangency: no crossing transversal to perturb */
     /* (f+ - DR f-) e1^T / hdot; its first component vanishes for every jump of v only */

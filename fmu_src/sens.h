@@ -15,7 +15,7 @@
  *   compliant entry (linear law: v_rel -> r v_rel)  DR = diag(1, r),
  *   compliant entry, Hertz laws; exit               DR = I (f is continuous: X = I),
  *   rigid impact (v_rel -> -r v_rel)                DR = diag(1, -r),
- *   start of sticking (the state goes to the wall)  DR = 0 and f+ = 0: X = 0,
+ *   start of sticking (R(u, v) = (u, w'))          DR = diag(1, 0), f+ = (w', 0): X = 0,
  *   end of sticking (a time event: h = h(t))        X = I.
  * Near grazing v- - w' -> 0 and the entry/impact rows grow like 1/|v-| ~ depth^(-1/2).
  */

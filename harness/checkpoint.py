@@ -62,8 +62,12 @@ class Checkpoint:
                     "delete it or choose another directory",
                 )
         else:
-            self.directory.mkdir(parents=True, exist_ok=True)
-            manifest.write_text(json.dumps({"fingerprint": run_fingerprint}))
+            try:
+                self.directory.mkdir(parents=True, exist_ok=True)
+                manifest.write_text(json.dumps({"fingerprint": run_fingerprint}))
+            except OSError as exc:
+                raise HarnessInputError(argument, f"cannot create the checkpoint {str(self.directory)!r}: "
+                                        f"{exc.strerror or exc}") from None
 
     def _file(self, key: str) -> Path:
         safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in key)

@@ -2,8 +2,10 @@
 
 A sampled orbit x_0 .. x_{N-1} (x = (u, v) at t = n + theta) has period M when
 x_{k+M} = x_k for every k (within a tolerance) and the impact counts per period repeat
-with period M too; M is the smallest such shift.  "Not periodic" (period 0) covers
-chaotic orbits, quasi-periodic ones and orbits that have not converged in the transient.
+with period M too; M is the smallest such shift.  Period 0 means "no period found"; it
+covers chaotic orbits, quasi-periodic ones and orbits that have not converged in the
+transient, which :func:`classify_dynamics` tells apart (the sweeps' ``dynamics`` variable:
+-1 unclassified, 0 not converged, 1 periodic, 2 quasi-periodic, 3 chaotic).
 
 The period-adding windows of the paper's Figure 9 are maximal orbits: period M with one
 impact per M periods, M = 1, 2, 3 as sigma decreases.

@@ -8,7 +8,8 @@ later ``harness/reproduce/``) are picked up when they exist.  A command module e
 
 Exit status: 0 success, 1 the FMU failed during a run, 2 bad input (a one-line message
 naming the argument, or quoting the FMU when it refuses the settings at initialization;
-never a traceback), 130 interrupted.
+also broken FMU binaries, unreadable files, unwritable outputs, runs over the memory or work
+limits of :mod:`harness.budget`; never a traceback), 130 interrupted, 143 terminated.
 """
 from __future__ import annotations
 

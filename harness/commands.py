@@ -109,6 +109,13 @@ def _command_line(args: argparse.Namespace | None = None) -> str:
     return line if line else " ".join(["impact-harness", *sys.argv[1:]])
 
 
+def _finite(layers: Any, section: str, key: str) -> float:
+    """A finite number from the settings, or a one-line error naming the flag or file key."""
+    from .config import _number
+
+    return _number(layers, section, key)
+
+
 def cmd_simulate(args: argparse.Namespace) -> int:
     """``simulate``: time series from (u0, v0) at --t0 to --t-end; NetCDF + PNG."""
     from .plots import timeseries_plot
@@ -117,13 +124,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .simulator import FmuSimulator
 
     exp = _experiment(args)
-    t0 = float(exp.layers.get("simulate", "t0"))
-    t_end = float(exp.layers.get("simulate", "t_end"))
-    dt = float(exp.layers.get("simulate", "dt"))
+    L = exp.layers
+    t0, t_end = _finite(L, "simulate", "t0"), _finite(L, "simulate", "t_end")
+    dt = _finite(L, "simulate", "dt")
     out, plot = _outputs(args, exp, "simulate")
     if not dt > 0:
-        raise HarnessInputError(exp.layers.arg("simulate", "dt"), f"the output step must be > 0, got {dt}")
-    Budget.from_args(args).check(simulate_estimate(t0, t_end, dt, exp.layers.arg("simulate", "dt")))
+        raise HarnessInputError(L.arg("simulate", "dt"), f"the output step must be > 0, got {dt}")
+    if not t_end > t0:
+        raise HarnessInputError(L.arg("simulate", "t_end"), f"must be greater than the start time {t0}, got {t_end}")
+    Budget.from_args(args).check(simulate_estimate(t0, t_end, dt, L.arg("simulate", "dt")))
     t_start = time.perf_counter()
     sim = FmuSimulator(exp.model.source())
     n = max(1, int((t_end - t0) / dt)) if dt > 0 else 1
@@ -150,16 +159,36 @@ def cmd_strobe(args: argparse.Namespace) -> int:
     out, plot = _outputs(args, exp, "strobe")
     L = exp.layers
     blame = L.arg("sampling", "transient") if s.n_transient > s.n_samples else L.arg("sampling", "samples")
-    Budget.from_args(args).check(strobe_estimate(s.n_transient, s.n_samples, blame))
+    # a Lyapunov period costs up to 5 runs (differences when the FMU has no derivatives)
+    Budget.from_args(args).check(strobe_estimate(s.n_transient, s.n_samples + 5 * s.lyapunov, blame))
     t_start = time.perf_counter()
     sim = FmuSimulator(exp.model.source())
+    exact = bool(s.lyapunov) and sim.derivatives_available
+    sim.track_derivatives(exact)
     with progress_bar(total=s.n_transient + s.n_samples, desc="strobe", unit="period", disable=not exp.run.progress) as bar:
         r = strobe(sim, exp.params, exp.state0, s.theta, s.n_transient, s.n_samples, progress=bar)
     orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
+    ly = None
+    if s.lyapunov:
+        from .classify import DYNAMICS_NAMES, classify_dynamics, still_settling
+        from .lyapunov import lyapunov_continued
+
+        ly = lyapunov_continued(sim, exp.params, s.lyapunov, exact)
+        settling = orbit.periodic and still_settling(r.u, r.v, orbit.period, s.tol)
+        dynamics = DYNAMICS_NAMES[classify_dynamics(orbit.period, settling, ly.largest, ly.largest_uncertainty)]
     attrs = provenance(exp.as_attrs(), exp.model, "serial", time.perf_counter() - t_start, _command_line(args))
     ds = strobe_dataset(r, orbit, attrs)
+    if ly is not None:
+        ds = ds.assign_coords(exponent=[1, 2])
+        ds["lyapunov"] = ("exponent", ly.exponents, {"long_name": "Lyapunov exponents of the stroboscopic map",
+                                                     "units": "1/forcing period", "method": ly.method,
+                                                     "comment": f"QR method over {ly.periods} periods after the samples"})
+        ds["lyapunov_err"] = ("exponent", ly.uncertainty, {"long_name": "standard error (batch means of 10 blocks)"})
+        ds.attrs["dynamics"] = dynamics
     write_netcdf(ds, out)
-    print(f"{orbit.label} (residual {orbit.residual:.2e}); wrote {out}")
+    print(f"{orbit.label} (residual {orbit.residual:.2e})"
+          + ("" if ly is None else f"; Lyapunov exponents {ly} per period ({ly.method}): {dynamics}")
+          + f"; wrote {out}")
     if plot:
         print(f"plot: {poincare_section(ds, plot)}")
     return 0

@@ -128,7 +128,9 @@ class FmuModel:
         self.argument = argument
         self.path = Path(path).expanduser().resolve()
         if not self.path.is_file():
-            raise HarnessInputError(argument, f"no such file: {str(path)!r}")
+            what = "is a directory, not an FMU file" if self.path.is_dir() else "no such file"
+            raise HarnessInputError(argument, f"{what}: {str(path)!r}" if what == "no such file"
+                                    else f"{str(path)!r} {what}")
         if not zipfile.is_zipfile(self.path):
             raise HarnessInputError(argument, f"{str(path)!r} is not an FMU (not a zip archive)")
         check_archive(self.path, argument)

@@ -39,7 +39,7 @@ from .config import SamplingSpec, SweepSpec, sweep_directions
 from .errors import HarnessInputError
 from .fmi import INITIAL_STATE, FmuModel
 from .progress import progress_bar
-from .results import provenance
+from .results import ORBIT_IMPACTS_ATTRS, PERIOD_ATTRS, provenance
 from .tasks import RESULT_FIELDS, SweepTask, execute, run_task
 
 __all__ = ["SweepStats", "SweepTask", "assemble", "execute", "plan_tasks", "run_sweep", "run_task"]
@@ -159,8 +159,8 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
             "v": (sample_dims, arrays["v"], {"long_name": "velocity at t = n + theta"}),
             "impacts": (sample_dims, arrays["impacts"], {"long_name": "wall entries in the period ending at the sample"}),
             "t": (sample_dims, arrays["t"], {"long_name": "absolute sample time"}),
-            "period": (dims, arrays["period"], {"long_name": "orbit period in forcing periods (0: not periodic)"}),
-            "orbit_impacts": (dims, arrays["orbit_impacts"], {"long_name": "wall entries per orbit period (-1: not periodic)"}),
+            "period": (dims, arrays["period"], PERIOD_ATTRS),
+            "orbit_impacts": (dims, arrays["orbit_impacts"], ORBIT_IMPACTS_ATTRS),
         },
         coords=coords,
         attrs=dict(attrs),
@@ -394,7 +394,8 @@ def run_sweep(
         "sampling.lyapunov": sampling.lyapunov,
         "initial.u0": state0[0],
         "initial.v0": state0[1],
-        **{f"model.{k}": v for k, v in base.items()},
+        # the swept parameters are coordinates: their FMU defaults would be stale attributes
+        **{f"model.{k}": v for k, v in base.items() if k not in (spec.param, spec.scan_param)},
         "tasks_computed": stats.computed,
         "tasks_resumed": stats.resumed,
         # CPU seconds of the tasks computed in this run, summed over workers

@@ -353,6 +353,14 @@ class ExactOscillator:
                 if st.mode == "out":
                     events.append((t_c, "enter"))
                     st = _State(t_c, 0.0, self.r * vc, "in")
+                    if st.v == 0.0 and self.net_wall_force(t_c) <= 0.0:
+                        # r = 0: the entry leaves the mass on the wall at rest, and the net
+                        # force pulls it out at once: a contact of zero duration. (Left "in",
+                        # its exit at tau = 0 is invisible to _first_crossing, which ignores
+                        # crossings in the first grid step of a start at rest, and the wall's
+                        # spring would act on u < 0.)
+                        events.append((t_c, "exit"))
+                        st = _State(t_c, 0.0, 0.0, "out")
                 else:
                     events.append((t_c, "exit"))
                     st = _State(t_c, 0.0, vc, "out")

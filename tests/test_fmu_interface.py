@@ -51,7 +51,8 @@ def test_model_description_declares_capabilities():
     names = {v.name: v for v in md.modelVariables}
     assert names["sigma"].variability == "tunable"
     assert {u.variable.name for u in md.outputs} == {"u", "v", "impacts", "in_contact",
-                                                     "F_contact", "v_impact", "t_impact"}
+                                                     "F_contact", "v_impact", "t_impact",
+                                                     "J_uu", "J_uv", "J_vu", "J_vv", "S_u", "S_v"}
     assert cs.canInterpolateInputs  # fmi2SetRealInputDerivatives, order 1
     assert {v.name for v in md.modelVariables if v.causality == "input"} == {"F_ext", "u_wall"}
     assert {u.variable.name for u in md.initialUnknowns} >= {"u", "v", "F_g", "phi", "kappa"}

@@ -43,10 +43,19 @@ def _start(fmu, wall, lin, sigma, Gamma, r, F, w, start, **extra):
               F_ext=F, u_wall=w, **lin, **extra)
 
 
+@pytest.mark.parametrize("solver", [0, 1], ids=["cvode", "closed-form"])
 @pytest.mark.parametrize("wall,lin,sigma,Gamma,r,F,w,start", CASES, ids=IDS)
-def test_constant_ports_match_the_closed_form(fmu, wall, lin, sigma, Gamma, r, F, w, start):
-    """FMI 2.0 CS with constant F_ext, u_wall against the exact solution, 20 periods."""
+def test_constant_ports_match_the_closed_form(fmu, wall, lin, sigma, Gamma, r, F, w, start,
+                                              solver):
+    """FMI 2.0 CS with constant F_ext, u_wall against the exact solution (the scaled oracle),
+    20 periods, with either of the FMU's solvers (CVODE; its own closed form, which takes the
+    ports as a shifted equilibrium and wall in its particular solution)."""
+    if "solver" not in fmu.vr:
+        pytest.skip("this FMU has no solver parameter")
+    if solver:
+        lin = dict(lin, solver=solver)
     _start(fmu, wall, lin, sigma, Gamma, r, F, w, start)
+    lin = {k: x for k, x in lin.items() if k != "solver"}
     ex = ExactOscillator(sigma=sigma, r=r, Gamma=Gamma, wall=wall, F_ext=F, u_wall=w, **lin)
     times = np.arange(1.0, 21.0)
     want, impacts = ex.strobe(start[0], start[1], times)
@@ -55,7 +64,7 @@ def test_constant_ports_match_the_closed_form(fmu, wall, lin, sigma, Gamma, r, F
         fmu.step_to(t)
         got.append(fmu.state())
     err = np.max(np.abs(np.array(got) - want))
-    assert err < 1e-8, err
+    assert err < (1e-11 if solver else 1e-8), err
     assert fmu.impacts() == impacts[-1]
     if wall != "none":
         assert impacts[-1] > 0  # the wall is exercised
@@ -313,3 +322,114 @@ def test_inputs_are_validated_where_they_enter(fmu):
         assert name in fmu.errors()[-1]
     assert fmu.get("F_ext") == 0.0 and fmu.get("u_wall") == 0.0
     fmu.step_to(1.0)
+
+
+# -- a moving wall: restitution relative to the wall ---------------------------------------------
+
+def _moving_wall_reference(lin, sigma, Gamma, r, wall, w0, w1, y0, times):
+    """An independent event-driven integration (DOP853 with scipy's event location) of the
+    oscillator against a wall at w0 + w1 t: the compliant wall's spring acts on u - w, its entry
+    jump is v - w1 -> r (v - w1); the rigid wall's impact is v - w1 -> -r (v - w1)."""
+    Om2 = lin["Omega"] ** 2
+    k2 = Gamma * Om2
+    inside = False
+    t, y, out = 0.0, np.array(y0, float), []
+    for T in times:
+        while t < T:
+            f = _rhs_free(lin, sigma, 0.0, 0.0, w0 if inside else None, w1, k2)
+
+            def g(tt, yy):
+                return yy[0] - (w0 + w1 * tt)
+            g.terminal = True
+            g.direction = -1 if inside else 1
+            sol = solve_ivp(f, (t, T), y, method="DOP853", rtol=1e-13, atol=1e-14, events=g,
+                            max_step=0.01)
+            if sol.status == 1 and sol.t_events[0].size and sol.t_events[0][0] > t + 1e-12:
+                t = sol.t_events[0][0]
+                y = sol.y_events[0][0].copy()
+                rel = y[1] - w1
+                if wall == "compliant":
+                    if not inside:
+                        y[1] = w1 + r * rel
+                    inside = not inside
+                else:
+                    y[1] = w1 - r * rel
+                y[0] = w0 + w1 * t
+            else:
+                t, y = T, sol.y[:, -1]
+        out.append(y.copy())
+    return np.array(out)
+
+
+@pytest.mark.parametrize("wall,r", [("compliant", 0.9), ("rigid", 0.7)])
+def test_a_moving_wall_reflects_relative_to_its_velocity(fmu, wall, r):
+    """u_wall(t) = -0.1 - 0.05 t (values and derivatives each step): the impacts and contacts
+    against an independent event-driven integration."""
+    lin, sigma, Gamma = UNDERDAMPED, 0.05, 1000.0
+    w0, w1 = -0.1, -0.05
+    times = np.arange(1.0, 6.0)
+    want = _moving_wall_reference(lin, sigma, Gamma, r, wall, w0, w1, (-0.5, 1.0), times)
+    fmu.start(wall=WALL[wall], sigma=sigma, Gamma=Gamma, r=r, u0=-0.5, v0=1.0, u_wall=w0, **lin)
+    got = _ramp_run(fmu, 1.0, 5.0, 0.0, 0.0, w0, w1, True)
+    assert fmu.impacts() >= 3
+    err = np.max(np.abs(got - want))
+    assert err < 1e-7, err
+    # the same wall held still each step (no derivatives) is a different run
+    fmu.start(wall=WALL[wall], sigma=sigma, Gamma=Gamma, r=r, u0=-0.5, v0=1.0, u_wall=w0, **lin)
+    held = _ramp_run(fmu, 1.0, 5.0, 0.0, 0.0, w0, w1, False)
+    assert np.max(np.abs(held - want)) > 1e-4
+
+
+def test_model_structure_declares_outputs_on_inputs():
+    from fmpy import read_model_description
+
+    from tests.fmu_support import FMU_PATH
+    for path in (FMU_PATH, FMU3_PATH):
+        md = read_model_description(str(path))
+        deps = {o.variable.name: sorted(d.name for d in (o.dependencies or []))
+                for o in md.outputs}
+        assert deps["F_contact"] == ["F_ext", "u", "u_wall", "v"], (path, deps)
+        assert set(deps) >= {"u", "v", "impacts", "in_contact", "v_impact", "t_impact"}
+
+
+
+def test_model_exchange_wall_jump_is_an_event_with_the_same_rule():
+    """ME: the importer sets u_wall beyond the mass (rigid wall) and handles the event the
+    indicator's sign change asks for: the mass is put on the wall, v reflected relative to it."""
+    import ctypes
+
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Model
+
+    from tests.fmu_support import FMU_PATH
+    md = read_model_description(str(FMU_PATH))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    me = FMU2Model(guid=md.guid, unzipDirectory=extract(str(FMU_PATH)),
+                   modelIdentifier=md.modelExchange.modelIdentifier, instanceName="mej")
+    me.instantiate()
+    try:
+        me.setupExperiment(startTime=0.0)
+        me.enterInitializationMode()
+        me.setInteger([vr["wall"]], [2])
+        me.setReal([vr["u0"], vr["v0"], vr["r"]], [-0.5, 1.0, 0.8])
+        me.exitInitializationMode()
+        me.newDiscreteStates()
+        me.enterContinuousTimeMode()
+        g = (ctypes.c_double * 1)()
+        me.getEventIndicators(g, 1)
+        assert g[0] == -0.5
+        me.setReal([vr["u_wall"]], [-0.6])  # the wall jumps 0.1 into the mass
+        me.getEventIndicators(g, 1)
+        assert g[0] == pytest.approx(0.1)  # sign change: the importer enters event mode
+        me.enterEventMode()
+        info = me.newDiscreteStates()
+        assert info[3]  # valuesOfContinuousStatesChanged
+        x = (ctypes.c_double * 2)()
+        me.getContinuousStates(x, 2)
+        assert x[0] <= -0.6 and x[0] == pytest.approx(-0.6, abs=1e-15)
+        assert x[1] == pytest.approx(-0.8 * 1.0)
+        assert me.getInteger([vr["impacts"]])[0] == 1
+        assert me.getReal([vr["v_impact"]])[0] == 1.0
+    finally:
+        me.terminate()
+        me.freeInstance()

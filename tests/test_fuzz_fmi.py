@@ -31,9 +31,6 @@ CORPUS = sorted((ROOT / "tests" / "fuzz_corpus").glob("*.json"))
 # /work/coord/findings_fuzz.md); an entry here marks its corpus files xfail (not strict) until
 # the fix lands, then it is deleted.
 OPEN_FINDINGS: dict[str, str] = {
-    "F7": "solver: no cap on the work of one doStep inside the valid ranges (wall = 0, h = 1e8)",
-    "F8": "solver: tiny positive steps fail",
-    "F11": "solver: valid physics fails (r = 0 compliant wall, rigid chatter)",
     "F12": "core: an ME instance's own state past t = 1 is refused on deserialisation",
 }
 

@@ -175,3 +175,33 @@ def test_solver_flag(model, tmp_path, capsys) -> None:
         assert code == 2 and "--solver" in err and "no closed-form solver" in err
     code, _, err = _run_main([*base, "--solver", "euler"], capsys)
     assert code == 2 and "invalid choice" in err
+
+
+def test_closed_form_solver_gives_the_same_exponents(model, sim) -> None:
+    """solver = 1 (closed form) against CVODE: the periodic orbit's exponents to 1e-6; the
+    chaotic orbits part ways after a few dozen periods (chaos), their exponents agree within
+    the combined uncertainty."""
+    if "solver" not in model.variables:
+        pytest.skip("the FMU has no closed-form solver mode")
+    res = {}
+    for solver in (0, 1):
+        for sigma, n in ((0.5, 200), (0.03, 600)):
+            p = _params(model, sigma=sigma, solver=solver)
+            res[(solver, sigma)] = lyapunov_exponents(sim, p, (-1.0, 0.0), 0.5, n_transient=300, n_periods=n)
+    np.testing.assert_allclose(res[(1, 0.5)].exponents, res[(0, 0.5)].exponents, atol=1e-6)
+    a, b = res[(0, 0.03)], res[(1, 0.03)]
+    assert abs(a.largest - b.largest) < 3.0 * math.hypot(a.largest_uncertainty, b.largest_uncertainty)
+
+
+def test_strobe_reports_exponents(tmp_path, capsys) -> None:
+    from harness import read_netcdf
+
+    out = tmp_path / "st.nc"
+    code, stdout, err = _run_main(["strobe", "--set", "sigma=0.5", "--theta", "0.5", "--transient", "300",
+                                   "--samples", "8", "--lyapunov", "60", "--out", str(out), "--no-plot",
+                                   "--no-progress"], capsys)
+    assert code == 0, err
+    assert "Lyapunov exponents" in stdout and ": periodic" in stdout
+    ds = read_netcdf(out)
+    assert float(ds["lyapunov"].values[0]) == pytest.approx(-0.5007, abs=1e-3)
+    assert ds.attrs["dynamics"] == "periodic"

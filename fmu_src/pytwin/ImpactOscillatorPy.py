@@ -128,7 +128,12 @@ def _guard_pythonfmu_exit(resources: Optional[str]) -> None:
 
 
 class ImpactOscillatorPy(Fmi2Slave):
-    """Driven oscillator with a rigid or compliant wall; CVODE (scikit-sundae) inside."""
+    """Driven oscillator with a rigid or compliant wall; CVODE (scikit-sundae) inside.
+
+    Without the C FMU's ports (F_ext, u_wall in; F_contact, v_impact, t_impact out): pythonfmu
+    assigns value references by registration order without gaps and has no input derivatives,
+    so the shared value references 23-27 cannot be reproduced (README.md here).
+    """
 
     author = "impact-grazing project"
     description = (
