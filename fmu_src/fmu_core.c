@@ -436,6 +436,10 @@ int core_reset(CoreInstance *c, const char *fn) {
     model_set_defaults(&c->m);
     c->start_time = 0.0;
     c->me_time = 0.0;
+    /* the solver's time goes back with the model's (model_set_defaults put m.origin at 0): a
+     * state taken after Reset must pass the snapshot check m.origin == s.origin */
+    c->s.origin = 0.0;
+    c->s.tau = 0.0;
     c->s.needs_reinit = 1;
     c->s.pending = 0;
     c->inputs_changed = 0;
