@@ -298,9 +298,6 @@ const char *closed_form_unsupported(const ModelData *m) {
     if (m->wall == WALL_COMPLIANT && m->contact != CONTACT_LINEAR)
         return "solver = 1 (closed form) needs the linear contact law (contact = 0): the Hertz "
                "and Hunt-Crossley laws are nonlinear, use solver = 0 (CVODE)";
-    if (m->dF_ext != 0.0 || m->du_wall != 0.0)
-        return "solver = 1 (closed form) takes constant inputs only (its sticking release time "
-               "assumes a fixed wall): use solver = 0 (CVODE) with input derivatives";
     return NULL;
 }
 

@@ -567,9 +567,6 @@ static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char
         !finite_within(s->origin, 2 * CORE_MAX_TIME) || s->origin != floor(s->origin) ||
         (!c->is_me && m->origin != s->origin) || !(s->tau >= 0.0) || !finite_within(s->tau, 2 * CORE_MAX_TIME))
         return "times not finite, out of range, or inconsistent";
-    for (int i = 0; i < 2; ++i)
-        if (!isfinite(m->sJ[i][0]) || !isfinite(m->sJ[i][1]) || !isfinite(m->sS[i]))
-            return "sensitivities not finite";
     if (s->pending != 0 && (s->pending != 1 || c->is_me)) return "bad pending-event flag";
     if (s->inputs_changed != 0 && s->inputs_changed != 1) return "bad input flag";
     return NULL;

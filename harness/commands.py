@@ -159,16 +159,36 @@ def cmd_strobe(args: argparse.Namespace) -> int:
     out, plot = _outputs(args, exp, "strobe")
     L = exp.layers
     blame = L.arg("sampling", "transient") if s.n_transient > s.n_samples else L.arg("sampling", "samples")
-    Budget.from_args(args).check(strobe_estimate(s.n_transient, s.n_samples, blame))
+    # a Lyapunov period costs up to 5 runs (differences when the FMU has no derivatives)
+    Budget.from_args(args).check(strobe_estimate(s.n_transient, s.n_samples + 5 * s.lyapunov, blame))
     t_start = time.perf_counter()
     sim = FmuSimulator(exp.model.source())
+    exact = bool(s.lyapunov) and sim.derivatives_available
+    sim.track_derivatives(exact)
     with progress_bar(total=s.n_transient + s.n_samples, desc="strobe", unit="period", disable=not exp.run.progress) as bar:
         r = strobe(sim, exp.params, exp.state0, s.theta, s.n_transient, s.n_samples, progress=bar)
     orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
+    ly = None
+    if s.lyapunov:
+        from .classify import DYNAMICS_NAMES, classify_dynamics, still_settling
+        from .lyapunov import lyapunov_continued
+
+        ly = lyapunov_continued(sim, exp.params, s.lyapunov, exact)
+        settling = orbit.periodic and still_settling(r.u, r.v, orbit.period, s.tol)
+        dynamics = DYNAMICS_NAMES[classify_dynamics(orbit.period, settling, ly.largest, ly.largest_uncertainty)]
     attrs = provenance(exp.as_attrs(), exp.model, "serial", time.perf_counter() - t_start, _command_line(args))
     ds = strobe_dataset(r, orbit, attrs)
+    if ly is not None:
+        ds = ds.assign_coords(exponent=[1, 2])
+        ds["lyapunov"] = ("exponent", ly.exponents, {"long_name": "Lyapunov exponents of the stroboscopic map",
+                                                     "units": "1/forcing period", "method": ly.method,
+                                                     "comment": f"QR method over {ly.periods} periods after the samples"})
+        ds["lyapunov_err"] = ("exponent", ly.uncertainty, {"long_name": "standard error (batch means of 10 blocks)"})
+        ds.attrs["dynamics"] = dynamics
     write_netcdf(ds, out)
-    print(f"{orbit.label} (residual {orbit.residual:.2e}); wrote {out}")
+    print(f"{orbit.label} (residual {orbit.residual:.2e})"
+          + ("" if ly is None else f"; Lyapunov exponents {ly} per period ({ly.method}): {dynamics}")
+          + f"; wrote {out}")
     if plot:
         print(f"plot: {poincare_section(ds, plot)}")
     return 0

@@ -33,7 +33,7 @@ from .sampling import check_count, check_theta
 from .simulator import Simulator, has_derivatives, tracking_derivatives
 
 __all__ = ["LyapunovResult", "qr_logs", "lyapunov_from_jacobians", "orbit_jacobians", "lyapunov_exponents",
-           "DEFAULT_BLOCKS", "FD_STEP"]
+           "lyapunov_continued", "DEFAULT_BLOCKS", "FD_STEP"]
 
 #: Blocks of the batch-means uncertainty.
 DEFAULT_BLOCKS = 10
@@ -235,3 +235,27 @@ def lyapunov_exponents(sim: Simulator, params: Mapping[str, Any], state0: Sequen
         impacts = sim.read()[2] - n0
         Js = orbit_jacobians(sim, params, t, xs[:, 0], xs[:, 1], h)
     return lyapunov_from_jacobians(Js, blocks, "fd", impacts)
+
+
+def lyapunov_continued(sim: Simulator, params: Mapping[str, Any], n_periods: int, exact: bool,
+                       blocks: int = DEFAULT_BLOCKS) -> LyapunovResult:
+    """Lyapunov exponents over the next ``n_periods`` periods from where ``sim`` stands (a
+    section time); the run goes on from their end, so a continuation carries that state.
+
+    ``exact``: ``sim`` was started with derivatives tracked.  Otherwise differences: the orbit
+    first, then the Jacobians at its points by restarts, then a restart at its end (equivalent:
+    the state at a section time fixes the future).  ``params`` are those in force now.
+    """
+    n0 = sim.read()[2]
+    if exact:
+        Js, _ = period_jacobians(sim, n_periods)
+        return lyapunov_from_jacobians(Js, blocks, "exact", sim.read()[2] - n0)
+    from .sampling import sample_periods
+
+    t0 = sim.time
+    u0, v0, _ = sim.read()
+    r = sample_periods(sim, 0, n_periods)
+    t = np.concatenate(([t0], r.t[:-1]))
+    Js = orbit_jacobians(sim, params, t, np.concatenate(([u0], r.u[:-1])), np.concatenate(([v0], r.v[:-1])))
+    sim.start(params, float(r.t[-1]), r.final_state)
+    return lyapunov_from_jacobians(Js, blocks, "fd", int(r.impacts.sum()))

@@ -96,27 +96,6 @@ def execute(task: SweepTask, sim: Any, report: Callable[[str, int, dict], None] 
     return out
 
 
-def _lyapunov_here(sim: Any, params: dict[str, Any], n_periods: int, exact: bool) -> Any:
-    """Lyapunov exponents over the next ``n_periods`` periods from where ``sim`` stands; the
-    run goes on from their end (a continuation carries that state)."""
-    from .lyapunov import lyapunov_from_jacobians, orbit_jacobians, period_jacobians
-
-    n0 = sim.read()[2]
-    if exact:
-        Js, _ = period_jacobians(sim, n_periods)
-        return lyapunov_from_jacobians(Js, method="exact", impacts=sim.read()[2] - n0)
-    # differences: the orbit first, then the Jacobians at its points by restarts, then a
-    # restart at its end (equivalent: the state at a section time fixes the future)
-    t0 = sim.time
-    u0, v0, _ = sim.read()
-    r = sample_periods(sim, 0, n_periods)
-    impacts = int(r.impacts.sum())
-    t = np.concatenate(([t0], r.t[:-1]))
-    Js = orbit_jacobians(sim, params, t, np.concatenate(([u0], r.u[:-1])), np.concatenate(([v0], r.v[:-1])))
-    sim.start(params, float(r.t[-1]), r.final_state)
-    return lyapunov_from_jacobians(Js, method="fd", impacts=impacts)
-
-
 def _run_points(task: SweepTask, sim: Any, params: dict[str, Any], state0: tuple[float, float], exact: bool,
                 out: dict[str, np.ndarray], report: Callable[[str, int, dict], None] | None) -> None:
     s = task.sampling
@@ -158,7 +137,9 @@ def _run_points(task: SweepTask, sim: Any, params: dict[str, Any], state0: tuple
         lam = err = float("nan")
         if s.lyapunov:
             now = dict(params) if task.param in INITIAL_STATE else {**params, task.param: value}
-            ly = _lyapunov_here(sim, now, s.lyapunov, exact)
+            from .lyapunov import lyapunov_continued
+
+            ly = lyapunov_continued(sim, now, s.lyapunov, exact)
             out["lyapunov"][i], out["lyapunov_err"][i] = ly.exponents, ly.uncertainty
             lam, err = ly.largest, ly.largest_uncertainty
         out["dynamics"][i] = classify_dynamics(orbit.period, settling, lam, err)
@@ -221,6 +202,16 @@ def init_pool_worker(progress_queue: Any, parent_pid: int | None = None) -> None
     signal.signal(signal.SIGTERM, _exit_on_signal)
     _POOL_PROGRESS_QUEUE = progress_queue
     _IN_POOL = True
+    die_with_parent(parent_pid)
+
+
+def init_child_process(parent_pid: int | None = None) -> None:
+    """Initializer of any other process pool of the harness (e.g. parallel shooting): the
+    process dies with its parent, SIGKILL included, and SIGTERM removes its temporary folder.
+    Ctrl-C is left as it is."""
+    import signal
+
+    signal.signal(signal.SIGTERM, _exit_on_signal)
     die_with_parent(parent_pid)
 
 

@@ -117,3 +117,114 @@ def test_fmi3_closed_form_equals_fmi2():
     finally:
         f2.close()
         f3.close()
+
+
+# (wall, sigma, Gamma, r, F_ext, u_wall, start): the ports shift the equilibrium and the wall
+PORT_CASES = [
+    ("compliant", FIG9, 0.5, 10.0, 0.9, 0.02, -0.1, (-0.4, 0.0)),
+    ("rigid", FIG9, 0.5, 10.0, 0.9, 0.02, -0.1, (-0.4, 0.0)),
+    ("compliant", UNDERDAMPED, 0.1, 1000.0, 0.9, 5.0, 0.2, (-0.5, 1.0)),
+    ("rigid", UNDERDAMPED, 0.1, 1000.0, 0.7, -3.0, 0.3, (-0.5, 1.0)),
+]
+
+
+@pytest.mark.parametrize("wall,lin,sigma,Gamma,r,F,w,start", PORT_CASES)
+def test_constant_ports_match_the_oracle(wall, lin, sigma, Gamma, r, F, w, start):
+    from mapcheck.exact import ExactOscillator
+    from tests.fmu_support import WALLS, LoggedSlave
+    f = LoggedSlave(name="cf-ports")
+    try:
+        lin = {k: lin[k] for k in ("nu", "Omega")}
+        f.start(wall=WALLS[wall], sigma=sigma, Gamma=Gamma, r=r, u0=start[0], v0=start[1],
+                F_ext=F, u_wall=w, solver=1, **lin)
+        ex = ExactOscillator(sigma=sigma, r=r, Gamma=Gamma, wall=wall, F_ext=F, u_wall=w, **lin)
+        times = np.arange(1.0, 21.0)
+        want, impacts = ex.strobe(start[0], start[1], times)
+        got = []
+        for t in times:
+            f.step_to(t)
+            got.append(f.state())
+        assert np.max(np.abs(np.array(got) - want)) < 1e-10
+        assert f.impacts() == impacts[-1] > 0
+    finally:
+        f.close()
+
+
+@pytest.mark.parametrize("wall", ["compliant", "rigid"])
+def test_ramped_ports_closed_form_equals_cvode(wall):
+    """F_ext and u_wall as ramps (values and first derivatives per step, FMI 2.0): a moving
+    wall, with contacts; the closed form against CVODE mode step by step."""
+    from tests.fmu_support import WALLS, LoggedSlave
+    runs = {}
+    for solver in (0, 1):
+        f = LoggedSlave(name=f"ramp{solver}")
+        try:
+            f.start(wall=WALLS[wall], sigma=0.1, Gamma=100.0, r=0.8, u0=-0.5, v0=1.0,
+                    nu=UNDERDAMPED["nu"], Omega=UNDERDAMPED["Omega"], solver=solver)
+            out, h = [], 0.5
+            for k in range(12):
+                t = k * h
+                F0, F1, w0, w1 = 2.0 + 0.4 * t, 0.4, -0.05 + 0.02 * t, 0.02
+                f.set(F_ext=F0, u_wall=w0)
+                f.slave.setRealInputDerivatives([f.vr["F_ext"], f.vr["u_wall"]], [1, 1], [F1, w1])
+                f.step_to(t + h)
+                out.append((*f.state(), f.impacts()))
+            runs[solver] = np.array(out)
+        finally:
+            f.close()
+    assert runs[1][-1, 2] > 2 and np.array_equal(runs[0][:, 2], runs[1][:, 2])
+    assert np.max(np.abs(runs[0][:, :2] - runs[1][:, :2])) < 1e-8
+
+
+@pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
+@pytest.mark.parametrize("wall,sigma", [("compliant", 0.5), ("rigid", 0.3)])
+def test_fmi3_early_return_at_every_event_in_closed_form(wall, sigma):
+    """FMI 3.0 event mode with early return: the closed form stops at each wall event (the jump
+    left to the importer's event mode) at the oracle's crossing times."""
+    from fmpy import simulate_fmu
+
+    from tests.fmu_support import WALLS
+    lin = {k: FIG9[k] for k in ("nu", "Omega")}
+    start = dict(wall=WALLS[wall], sigma=sigma, Gamma=10.0, **on_orbit(sigma, 0.5), **lin, solver=1)
+    res = simulate_fmu(str(FMU3_PATH), fmi_type="CoSimulation", start_time=0.5, stop_time=10.5,
+                       output_interval=1.0, start_values=start, output=["u", "v", "impacts"],
+                       use_event_mode=True, early_return_allowed=True)
+    t = res["time"]
+    got = t[1:][np.diff(t) == 0.0]
+    osc = oracle(dict(FIG9, sigma=sigma, wall=WALLS[wall]))
+    events = osc.crossings(start["u0"], start["v0"], 0.5, 10.5)
+    want = np.array([te for te, kind in events if kind in ("enter", "exit", "impact")])
+    assert len(want) >= 1 and len(got) == len(want)
+    assert np.abs(got - want).max() < 1e-11
+    assert res["impacts"][-1] == sum(1 for _, kind in events if kind in ("enter", "impact"))
+
+
+def test_bare_c_driver_runs_the_fmus_code(tmp_path, fmu2):
+    """bench/cf_driver.c (the benchmark's bare C closed form) and the FMU in closed-form mode
+    compute the same orbit bit for bit: the benchmark's ratio compares the same code."""
+    import shutil
+    import subprocess
+
+    from tests.fmu_support import ROOT
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    src = ROOT / "fmu_src"
+    exe = tmp_path / "cf_driver"
+    subprocess.run([cc, "-O2", "-I", str(src), str(ROOT / "bench" / "cf_driver.c"),
+                    *(str(src / f) for f in ("closed_form.c", "sens.c", "model.c")), "-lm", "-o",
+                    str(exe)], check=True)
+    p = dict(UNDERDAMPED, wall=2, sigma=0.05)
+    x0 = {"u0": -0.5, "v0": 1.0}
+    out = tmp_path / "o.bin"
+    args = [str(exe), "0", "30", "1", "1", str(out)] + [f"{k}={float(v)!r}" for k, v in
+                                                         dict(p, **x0).items()]
+    subprocess.run(args, check=True, capture_output=True)
+    rec = np.fromfile(out).reshape(-1, 9)
+    assert rec[-1, 2] > 0  # impacts happened
+    fmu2.start(0.0, **p, **x0, solver=1, sensitivities=True)
+    for k in range(30):
+        fmu2.step(k + 1.0)
+        J, S = fmu2.jac()
+        assert np.array_equal(rec[k, :2], fmu2.state()) and rec[k, 2] == fmu2.impacts()
+        assert np.array_equal(rec[k, 3:7], J.ravel()) and np.array_equal(rec[k, 7:], S)

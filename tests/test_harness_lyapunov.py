@@ -191,3 +191,17 @@ def test_closed_form_solver_gives_the_same_exponents(model, sim) -> None:
     np.testing.assert_allclose(res[(1, 0.5)].exponents, res[(0, 0.5)].exponents, atol=1e-6)
     a, b = res[(0, 0.03)], res[(1, 0.03)]
     assert abs(a.largest - b.largest) < 3.0 * math.hypot(a.largest_uncertainty, b.largest_uncertainty)
+
+
+def test_strobe_reports_exponents(tmp_path, capsys) -> None:
+    from harness import read_netcdf
+
+    out = tmp_path / "st.nc"
+    code, stdout, err = _run_main(["strobe", "--set", "sigma=0.5", "--theta", "0.5", "--transient", "300",
+                                   "--samples", "8", "--lyapunov", "60", "--out", str(out), "--no-plot",
+                                   "--no-progress"], capsys)
+    assert code == 0, err
+    assert "Lyapunov exponents" in stdout and ": periodic" in stdout
+    ds = read_netcdf(out)
+    assert float(ds["lyapunov"].values[0]) == pytest.approx(-0.5007, abs=1e-3)
+    assert ds.attrs["dynamics"] == "periodic"
