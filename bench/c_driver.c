@@ -9,7 +9,7 @@
  * Built by bench/run.py at benchmark time:
  *   cc -O2 -I fmu_src/include/fmi2 bench/c_driver.c -o c_driver -ldl
  * Usage:
- *   c_driver LIB.so GUID RESOURCE_URI T0 PERIODS REPEAT OUT.bin [r:VR=VALUE | i:VR=VALUE]...
+ *   c_driver LIB.so GUID RESOURCE_URI T0 PERIODS REPEAT OUT.bin [r:VR=VALUE | i:VR=VALUE | b:VR=0|1]...
  * The parameters are set in the order given. The timed loop (PERIODS periods from T0) is run
  * REPEAT times, each from a fresh fmi2Reset + initialization; for each run the wall and CPU
  * seconds of the loop are printed as "run WALL CPU". OUT.bin receives, for the last run,
@@ -56,7 +56,7 @@ static double now(clockid_t clock) {
 
 int main(int argc, char **argv) {
     if (argc < 8) {
-        fprintf(stderr, "usage: %s LIB GUID RESOURCE_URI T0 PERIODS REPEAT OUT.bin [r:VR=X|i:VR=N]...\n",
+        fprintf(stderr, "usage: %s LIB GUID RESOURCE_URI T0 PERIODS REPEAT OUT.bin [r:VR=X|i:VR=N|b:VR=0|1]...\n",
                 argv[0]);
         return 2;
     }
@@ -66,7 +66,9 @@ int main(int argc, char **argv) {
     const int repeat = atoi(argv[6]);
     const char *outpath = argv[7];
 
-    fmi2ValueReference rvr[MAX_VARS], ivr[MAX_VARS];
+    fmi2ValueReference rvr[MAX_VARS], ivr[MAX_VARS], bvr[MAX_VARS];
+    fmi2Boolean bval[MAX_VARS];
+    size_t nb = 0;
     fmi2Real rval[MAX_VARS];
     fmi2Integer ival[MAX_VARS];
     size_t nr = 0, ni = 0;
@@ -74,7 +76,8 @@ int main(int argc, char **argv) {
         char kind;
         unsigned vr;
         char value[128];
-        if (sscanf(argv[k], "%c:%u=%127s", &kind, &vr, value) != 3 || nr >= MAX_VARS || ni >= MAX_VARS) {
+        if (sscanf(argv[k], "%c:%u=%127s", &kind, &vr, value) != 3 || nr >= MAX_VARS || ni >= MAX_VARS ||
+            nb >= MAX_VARS) {
             fprintf(stderr, "bad variable argument %s\n", argv[k]);
             return 2;
         }
@@ -84,6 +87,9 @@ int main(int argc, char **argv) {
         } else if (kind == 'i') {
             ivr[ni] = vr;
             ival[ni++] = atoi(value);
+        } else if (kind == 'b') {
+            bvr[nb] = vr;
+            bval[nb++] = atoi(value) ? fmi2True : fmi2False;
         } else {
             fprintf(stderr, "bad variable kind in %s\n", argv[k]);
             return 2;
@@ -104,6 +110,7 @@ int main(int argc, char **argv) {
     fmi2TerminateTYPE *terminate = (fmi2TerminateTYPE *)sym(lib, "fmi2Terminate");
     fmi2SetRealTYPE *set_real = (fmi2SetRealTYPE *)sym(lib, "fmi2SetReal");
     fmi2SetIntegerTYPE *set_integer = (fmi2SetIntegerTYPE *)sym(lib, "fmi2SetInteger");
+    fmi2SetBooleanTYPE *set_boolean = (fmi2SetBooleanTYPE *)sym(lib, "fmi2SetBoolean");
     fmi2GetRealTYPE *get_real = (fmi2GetRealTYPE *)sym(lib, "fmi2GetReal");
     fmi2GetIntegerTYPE *get_integer = (fmi2GetIntegerTYPE *)sym(lib, "fmi2GetInteger");
     fmi2DoStepTYPE *do_step = (fmi2DoStepTYPE *)sym(lib, "fmi2DoStep");
@@ -124,7 +131,8 @@ int main(int argc, char **argv) {
         const double w0 = now(CLOCK_MONOTONIC), c0 = now(CLOCK_PROCESS_CPUTIME_ID);
         if (setup(c, fmi2False, 0.0, t0, fmi2False, 0.0) > fmi2Warning || enter(c) > fmi2Warning ||
             (nr && set_real(c, rvr, nr, rval) > fmi2Warning) ||
-            (ni && set_integer(c, ivr, ni, ival) > fmi2Warning) || exit_init(c) > fmi2Warning) {
+            (ni && set_integer(c, ivr, ni, ival) > fmi2Warning) ||
+            (nb && set_boolean(c, bvr, nb, bval) > fmi2Warning) || exit_init(c) > fmi2Warning) {
             fprintf(stderr, "initialization failed\n");
             return 1;
         }

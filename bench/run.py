@@ -34,6 +34,7 @@ import json
 import math
 import os
 import platform
+import re
 import shlex
 import subprocess
 import sys
@@ -211,6 +212,8 @@ def c_driver_args(driver: Path, case: Case, x0, periods: int, repeat: int, out: 
         var = model.variables[name]
         if var.type == "Real":
             args.append(f"r:{var.value_reference}={float(value)!r}")
+        elif var.type == "Boolean":
+            args.append(f"b:{var.value_reference}={int(bool(value))}")
         else:
             args.append(f"i:{var.value_reference}={int(value)}")
     return args
@@ -606,11 +609,25 @@ def report(res: dict, command: str) -> str:
           ".venv/bin/python bench/run.py --quick      # smoke test: table only, < 1 min",
           ".venv/bin/python bench/fmu_long_run.py     # 10^6 periods through fmpy, error after 10 and 10^6",
           ".venv/bin/python bench/map_speed.py        # map iterations per second, all variants",
+          ".venv/bin/python bench/sens_bench.py       # solver modes and sensitivities (its own section)",
           "```", ""]
     notes = ROOT / "bench" / "analysis.md"
     if notes.exists():
         L += [notes.read_text().rstrip(), ""]
     return "\n".join(L)
+
+
+_SECTION = re.compile(r"<!-- (\w+):begin -->.*?<!-- \1:end -->", re.S)
+
+
+def keep_sections(path: Path, text: str) -> str:
+    """`text` with the marked sections (<!-- NAME:begin --> ... <!-- NAME:end -->) that other
+    benchmark scripts wrote into the existing `path` appended, so that a rewrite keeps them."""
+    if not path.exists():
+        return text
+    found = [m.group(0) for m in _SECTION.finditer(path.read_text())]
+    kept = [sec for sec in found if sec not in text]
+    return text.rstrip() + ("\n\n" + "\n\n".join(kept) + "\n" if kept else "\n")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -625,7 +642,8 @@ def main(argv: list[str] | None = None) -> int:
     if args.from_json:
         res = json.loads(Path(args.from_json).read_text())
         text = report(res, "python bench/run.py" + (" --quick" if res["quick"] else ""))
-        Path(args.out or ROOT / "BENCHMARKS.md").write_text(text)
+        path = Path(args.out or ROOT / "BENCHMARKS.md")
+        path.write_text(keep_sections(path, text))
         return 0
     S = dict(SETTINGS[args.quick])
     if args.long_periods:
@@ -697,7 +715,7 @@ def main(argv: list[str] | None = None) -> int:
     print(goals_table(res)[0])
     out = args.out or (None if args.quick else str(ROOT / "BENCHMARKS.md"))
     if out:
-        Path(out).write_text(text)
+        Path(out).write_text(keep_sections(Path(out), text))
         print(f"wrote {out}", file=sys.stderr)
     if args.json:
         Path(args.json).write_text(json.dumps(res, indent=1, default=float))

@@ -1,7 +1,7 @@
 /*
  * ImpactOscillator physics: parameters, right-hand side, Jacobian, event indicators and the
  * jumps at the wall. Equation numbers refer to Molenaar, de Weger & van de Water (2001) and to
- * ../shared/paper/FORMULAS.md.
+ * docs/theory.md.
  */
 #include "model.h"
 
@@ -23,16 +23,6 @@ static const double STICK_VELOCITY = 1e-9;
  * (chatter, grazing) would be stepped over. */
 static const double ON_WALL = 1e-300;
 
-static const char *const NAMES[VR_COUNT] = {
-    "nu", "Omega", "sigma", "r", "Gamma", "wall", "u0", "v0", "rtol", "atol",
-    "F_g", "phi", "kappa", "u", "v", "impacts", "in_contact",
-    "contact", "alpha_hc", "der(u)", "der(v)", "wall_indicator", "time",
-};
-
-const char *model_variable_name(int vr) {
-    return (vr >= 0 && vr < VR_COUNT) ? NAMES[vr] : "?";
-}
-
 void model_set_defaults(ModelData *m) {
     /* The paper's Figure 9 case: (alpha, gamma) = (0.99, 0.01), r = 0.9, Gamma = 10. */
     m->nu = 4.605170185988091;
@@ -52,6 +42,17 @@ void model_set_defaults(ModelData *m) {
     m->alpha_hc = 0.15;
     m->mode = MODE_FREE;
     m->impacts = 0;
+    m->F_ext = m->u_wall = m->dF_ext = m->du_wall = m->in_tau = 0.0;
+    m->v_impact = m->t_impact = 0.0;
+    m->origin = 0.0;
+    /* CVODE needs >= 20 steps per unit time (its maximal step 0.05) and ~100-1000 at the
+     * defaults; chatter ends in sticking after ~100 impacts. */
+    m->max_events_per_time = 1e5;
+    m->max_steps_per_time = 2e5;
+    m->sensitivities = 0;
+    m->solver = SOLVER_CVODE;
+    m->sJ[0][0] = m->sJ[1][1] = 1.0; /* J = I, S = 0: nothing integrated yet */
+    m->sJ[0][1] = m->sJ[1][0] = m->sS[0] = m->sS[1] = 0.0;
     model_update_derived(m);
     m->u = m->u0;
     m->v = m->v0;
@@ -67,39 +68,34 @@ void model_update_derived(ModelData *m) {
     m->kappa = sqrt(fabs(m->kappa2));
 }
 
-const char *model_check_real(int vr, double x) {
-    if (!isfinite(x)) return "must be a finite number";
-    switch (vr) {
-    case VR_NU: return x < 0.0 ? "must be >= 0 (damping)" : NULL;
-    case VR_OMEGA: return x <= 0.0 ? "must be > 0" : NULL;
-    case VR_SIGMA: return x <= -1.0 ? "must be > -1 (forcing amplitude (1+sigma) F_g > 0)" : NULL;
-    case VR_R: return (x < 0.0 || x > 1.0) ? "must lie in [0, 1]" : NULL;
-    case VR_GAMMA: return x < 0.0 ? "must be >= 0" : NULL;
-    case VR_U0: case VR_V0: return NULL;
-    case VR_RTOL: return (x <= 0.0 || x >= 1.0) ? "must lie in (0, 1)" : NULL;
-    case VR_ATOL: return x <= 0.0 ? "must be > 0" : NULL;
-    case VR_HC_ALPHA: return x < 0.0 ? "must be >= 0 (dissipation)" : NULL;
-    default: return "is not a settable Real variable";
-    }
-}
-
-const char *model_check_integer(int vr, int x) {
-    if (vr == VR_CONTACT)
-        return (x < CONTACT_LINEAR || x > CONTACT_HUNT_CROSSLEY)
-                   ? "must be 0 (linear), 1 (Hertz) or 2 (Hunt-Crossley)" : NULL;
-    if (vr != VR_WALL) return "is not a settable Integer variable";
-    return (x < WALL_NONE || x > WALL_RIGID) ? "must be 0 (none), 1 (compliant) or 2 (rigid)"
-                                             : NULL;
-}
-
 const char *model_check_consistency(const ModelData *m, char *buf, size_t n) {
     if (m->wall == WALL_COMPLIANT && !(m->Gamma > 0.0)) {
         snprintf(buf, n, "Gamma = %g: a compliant wall needs Gamma > 0", m->Gamma);
         return buf;
     }
-    if (m->wall == WALL_RIGID && (m->u0 > 0.0 || (m->u0 == 0.0 && m->v0 > 0.0))) {
-        snprintf(buf, n, "u0 = %g, v0 = %g starts inside the rigid wall (need u0 < 0, or u0 = 0 "
-                 "with v0 <= 0)", m->u0, m->v0);
+    if (m->solver == SOLVER_CLOSED_FORM && m->wall == WALL_COMPLIANT &&
+        m->contact != CONTACT_LINEAR) {
+        snprintf(buf, n, "solver = 1 (closed form) needs the linear contact law, not contact = %d "
+                 "(%s): use solver = 0 (CVODE)", m->contact,
+                 m->contact == CONTACT_HERTZ ? "Hertz" : "Hunt-Crossley");
+        return buf;
+    }
+    const double w = m->u_wall;
+    if (m->wall == WALL_RIGID && (m->u0 > w || (m->u0 == w && m->v0 > m->du_wall))) {
+        snprintf(buf, n, "u0 = %g, v0 = %g starts inside the rigid wall at u_wall = %g (need "
+                 "u0 < u_wall, or u0 = u_wall moving away from it)", m->u0, m->v0, w);
+        return buf;
+    }
+    /* derived quantities that could overflow although each parameter is in its range */
+    if (!(m->kappa <= 1e8)) {
+        snprintf(buf, n, "kappa = sqrt(Gamma) Omega = %g exceeds 1e8 (Gamma = %g, Omega = %g)",
+                 m->kappa, m->Gamma, m->Omega);
+        return buf;
+    }
+    const double amp = (1.0 + m->sigma) * m->F_g;
+    if (!isfinite(m->F_g) || !isfinite(m->phi) || !(fabs(amp) <= 1e15)) {
+        snprintf(buf, n, "forcing amplitude (1 + sigma) F_g = %g out of range (|.| <= 1e15)",
+                 amp);
         return buf;
     }
     return NULL;
@@ -110,43 +106,85 @@ static double forcing(const ModelData *m, double tau) {
     return (1.0 + m->sigma) * m->F_g * cos(2.0 * M_PI * tau + m->phi);
 }
 
+/* --- ports ------------------------------------------------------------------------------- */
+/* With held inputs (no input derivatives) every formula below reduces, bit for bit, to the
+ * wall at 0 and no external force: w = 0.0 and F = 0.0 enter as exact additions of zero. */
+
+double model_wall_position(const ModelData *m, double tau) {
+    return m->du_wall == 0.0 ? m->u_wall : m->u_wall + m->du_wall * (tau - m->in_tau);
+}
+
+double model_wall_velocity(const ModelData *m) { return m->du_wall; }
+
+double model_external_force(const ModelData *m, double tau) {
+    return m->dF_ext == 0.0 ? m->F_ext : m->F_ext + m->dF_ext * (tau - m->in_tau);
+}
+
+void model_shift_time(ModelData *m, double k) {
+    m->origin += k;
+    m->in_tau -= k;
+}
+
+/* A point a hair on one side of the wall at w: ON_WALL away from 0, the next double away from
+ * any other w (w + 1e-300 would round back to w, and the wall indicator would be exactly 0). */
+static double beside_wall(double w, double side) {
+    if (w == 0.0) return side * ON_WALL;
+    return nextafter(w, side > 0.0 ? INFINITY : -INFINITY);
+}
+
 double model_wall_force(const ModelData *m, double tau) {
-    /* u = v = 0: the spring pulls back with Omega^2, the drive pushes with forcing(tau) */
-    return forcing(m, tau) - m->Omega2;
+    /* On the wall (u = w, v = w', w'' = 0): the spring pulls back with Omega^2 (w + 1), the drive
+     * and F_ext push, the damper acts on v = w'. With w = w' = F_ext = 0: forcing - Omega^2. */
+    return forcing(m, tau) + model_external_force(m, tau) - m->nu * m->du_wall -
+           m->Omega2 * (model_wall_position(m, tau) + 1.0);
 }
 
 void model_initialize_state(ModelData *m, double tau0) {
+    const double w = model_wall_position(m, tau0), dw = m->du_wall;
     m->u = m->u0;
     m->v = m->v0;
     m->impacts = 0;
+    m->v_impact = 0.0;
+    m->t_impact = 0.0;
     m->mode = MODE_FREE;
-    if (m->wall == WALL_COMPLIANT && (m->u0 > 0.0 || (m->u0 == 0.0 && m->v0 > 0.0)))
+    /* at rest on the wall (relative to it) the net force decides, as in mapcheck.exact */
+    const int rest_pushed = m->u0 == w && m->v0 == dw && model_wall_force(m, tau0) > 0.0;
+    if (m->wall == WALL_COMPLIANT && (m->u0 > w || (m->u0 == w && m->v0 > dw) || rest_pushed))
         m->mode = MODE_CONTACT; /* a start inside the wall is a state, not an entry: no jump */
-    else if (m->wall == WALL_RIGID && m->u0 == 0.0 && m->v0 == 0.0 &&
-             model_wall_force(m, tau0) > 0.0)
+    else if (m->wall == WALL_RIGID && rest_pushed)
         m->mode = MODE_STICK;
 }
 
-double model_contact_force(const ModelData *m, double u, double v) {
-    if (m->contact == CONTACT_LINEAR) return m->kappa2 * u; /* (40); smooth across u = 0 */
-    if (!(u > 0.0)) return 0.0; /* Hertz laws: C^1 continuation by 0 outside the wall */
-    const double h = m->kappa2 * u * sqrt(u); /* kappa^2 u^{3/2} */
-    return m->contact == CONTACT_HERTZ ? h : h * (1.0 + m->alpha_hc * v);
+double model_contact_force(const ModelData *m, double d, double dv) {
+    if (m->contact == CONTACT_LINEAR) return m->kappa2 * d; /* (40); smooth across d = 0 */
+    if (!(d > 0.0)) return 0.0; /* Hertz laws: C^1 continuation by 0 outside the wall */
+    const double h = m->kappa2 * d * sqrt(d); /* kappa^2 d^{3/2} */
+    return m->contact == CONTACT_HERTZ ? h : h * (1.0 + m->alpha_hc * dv);
+}
+
+double model_contact_output(const ModelData *m, double tau) {
+    switch (m->mode) {
+    case MODE_CONTACT:
+        return model_contact_force(m, m->u - model_wall_position(m, tau), m->v - m->du_wall);
+    case MODE_STICK: return model_wall_force(m, tau); /* what holds the mass on the wall */
+    default: return 0.0;
+    }
 }
 
 void model_derivatives(const ModelData *m, double tau, const double y[2], double dy[2]) {
     if (m->mode == MODE_STICK) {
-        dy[0] = 0.0;
+        dy[0] = m->du_wall; /* carried by the wall */
         dy[1] = 0.0;
         return;
     }
     double k = m->Omega2 * (y[0] + 1.0);
-    if (m->mode == MODE_CONTACT) k += model_contact_force(m, y[0], y[1]); /* the wall */
+    if (m->mode == MODE_CONTACT) /* the wall */
+        k += model_contact_force(m, y[0] - model_wall_position(m, tau), y[1] - m->du_wall);
     dy[0] = y[1];
-    dy[1] = forcing(m, tau) - m->nu * y[1] - k;
+    dy[1] = forcing(m, tau) - m->nu * y[1] - k + model_external_force(m, tau);
 }
 
-void model_jacobian(const ModelData *m, const double y[2], double J[2][2]) {
+void model_jacobian(const ModelData *m, double tau, const double y[2], double J[2][2]) {
     if (m->mode == MODE_STICK) {
         J[0][0] = J[0][1] = J[1][0] = J[1][1] = 0.0;
         return;
@@ -156,13 +194,14 @@ void model_jacobian(const ModelData *m, const double y[2], double J[2][2]) {
     J[1][0] = -m->Omega2;
     J[1][1] = -m->nu;
     if (m->mode != MODE_CONTACT) return;
+    const double d = y[0] - model_wall_position(m, tau), dv = y[1] - m->du_wall;
     if (m->contact == CONTACT_LINEAR) {
         J[1][0] -= m->kappa2;
-    } else if (y[0] > 0.0) {
-        const double s = sqrt(y[0]);
+    } else if (d > 0.0) {
+        const double s = sqrt(d);
         const double damp = m->contact == CONTACT_HUNT_CROSSLEY ? m->alpha_hc : 0.0;
-        J[1][0] -= 1.5 * m->kappa2 * s * (1.0 + damp * y[1]);
-        J[1][1] -= m->kappa2 * y[0] * s * damp;
+        J[1][0] -= 1.5 * m->kappa2 * s * (1.0 + damp * dv);
+        J[1][1] -= m->kappa2 * d * s * damp;
     }
 }
 
@@ -177,10 +216,10 @@ void model_event_indicators(const ModelData *m, double tau, const double y[2],
         g[1] = 1.0;
         return;
     }
-    g[0] = y[0]; /* the wall u = 0 */
-    /* The grazing guard: a contact that enters and leaves within one solver step leaves u < 0
-     * at both step ends, but its turning point (v = 0) is still bracketed. */
-    g[1] = y[1];
+    g[0] = y[0] - model_wall_position(m, tau); /* the wall u = w */
+    /* The grazing guard: a contact that enters and leaves within one solver step leaves u < w
+     * at both step ends, but its turning point (relative velocity 0) is still bracketed. */
+    g[1] = y[1] - m->du_wall;
 }
 
 void model_root_directions(const ModelData *m, int dir[MODEL_N_EVENTS]) {
@@ -191,10 +230,11 @@ void model_root_directions(const ModelData *m, int dir[MODEL_N_EVENTS]) {
     }
 }
 
-int model_missed_crossing(const ModelData *m, const double y[2]) {
+int model_missed_crossing(const ModelData *m, double tau, const double y[2]) {
     if (m->wall == WALL_NONE) return 0;
-    if (m->mode == MODE_FREE) return y[0] > 0.0;
-    if (m->mode == MODE_CONTACT) return y[0] < 0.0;
+    const double d = y[0] - model_wall_position(m, tau);
+    if (m->mode == MODE_FREE) return d > 0.0;
+    if (m->mode == MODE_CONTACT) return d < 0.0;
     return 0;
 }
 
@@ -206,140 +246,102 @@ int model_release_now(ModelData *m, double tau) {
     return 0;
 }
 
+/* The rigid wall's impact at relative velocity vc (v - w' before the jump): (11) in the wall's
+ * frame, and sticking when the rebound is negligible while the net force pushes in. */
+static void rigid_impact(ModelData *m, double tau, double y[2], double w, double dw) {
+    const double vc = y[1] - dw;
+    y[0] = beside_wall(w, -1.0);
+    y[1] = dw == 0.0 ? -m->r * vc : dw - m->r * vc; /* (11) */
+    if (fabs(y[1] - dw) <= STICK_VELOCITY * fmax(1.0, fabs(vc)) &&
+        model_wall_force(m, tau) > 0.0) {
+        y[0] = w;
+        y[1] = dw;
+        m->mode = MODE_STICK;
+    }
+}
+
 EventResult model_event_update(ModelData *m, double tau, double y[2], int which) {
     if (which == 1) return EVENT_NONE; /* a turning point on the right side: nothing happens */
+    const double w = model_wall_position(m, tau), dw = m->du_wall;
 
     switch (m->mode) {
     case MODE_FREE:
-        /* entering the wall: u = 0 (the root), v > 0 */
+        /* entering the wall: u = w (the root), v > w' */
         m->impacts += 1;
+        m->v_impact = y[1] - dw;
+        m->t_impact = m->origin + tau;
         if (m->wall == WALL_COMPLIANT) {
-            /* footnote 2: the linear wall passes the mass on with v -> r v. The Hertz laws
-             * enter continuously (Hunt-Crossley dissipates inside the wall instead). */
-            if (m->contact == CONTACT_LINEAR) y[1] *= m->r;
-            y[0] = ON_WALL;
+            /* footnote 2: the linear wall passes the mass on with v -> r v (relative to the
+             * wall). The Hertz laws enter continuously (Hunt-Crossley dissipates inside). */
+            if (m->contact == CONTACT_LINEAR)
+                y[1] = dw == 0.0 ? y[1] * m->r : dw + m->r * (y[1] - dw);
+            y[0] = beside_wall(w, +1.0);
             m->mode = MODE_CONTACT;
         } else {
-            const double vc = y[1];
-            y[0] = -ON_WALL;
-            y[1] = -m->r * vc; /* (11) */
-            if (fabs(y[1]) <= STICK_VELOCITY * fmax(1.0, fabs(vc)) &&
-                model_wall_force(m, tau) > 0.0) {
-                y[0] = 0.0;
-                y[1] = 0.0;
-                m->mode = MODE_STICK;
-            }
+            rigid_impact(m, tau, y, w, dw);
         }
         return EVENT_JUMP;
     case MODE_CONTACT:
-        y[0] = -ON_WALL; /* leaving the compliant wall: no jump in v */
+        y[0] = beside_wall(w, -1.0); /* leaving the compliant wall: no jump in v */
         m->mode = MODE_FREE;
         return EVENT_JUMP;
     case MODE_STICK:
-        y[0] = -ON_WALL;
-        y[1] = 0.0;
+        y[0] = beside_wall(w, -1.0);
+        y[1] = dw;
         m->mode = MODE_FREE;
         return EVENT_JUMP;
     }
     return EVENT_NONE;
 }
 
-int model_is_tunable(int vr) { return vr == VR_SIGMA; }
-
-const char *model_get_real(const ModelData *m, int vr, double *x) {
-    switch (vr) {
-    case VR_NU: *x = m->nu; break;
-    case VR_OMEGA: *x = m->Omega; break;
-    case VR_SIGMA: *x = m->sigma; break;
-    case VR_R: *x = m->r; break;
-    case VR_GAMMA: *x = m->Gamma; break;
-    case VR_U0: *x = m->u0; break;
-    case VR_V0: *x = m->v0; break;
-    case VR_RTOL: *x = m->rtol; break;
-    case VR_ATOL: *x = m->atol; break;
-    case VR_F_G: *x = m->F_g; break;
-    case VR_PHI: *x = m->phi; break;
-    case VR_KAPPA: *x = m->kappa; break;
-    case VR_HC_ALPHA: *x = m->alpha_hc; break;
-    case VR_U: *x = m->u; break;
-    case VR_V: *x = m->v; break;
-    default: return "is not a Real variable";
+/* The inputs jumped between two steps (a new u_wall, F_ext or derivative). The rule, per wall:
+ * - compliant: the mode follows the side of the wall the mass is now on; the state is kept (the
+ *   mass is inside the wall as after a start inside it: no entry jump, no impact counted);
+ * - rigid, mass beyond the new wall position: it is placed on the wall and, if it moves towards
+ *   the wall, the impact rule applies to its velocity relative to the wall (an impact, counted,
+ *   with v_impact and t_impact); if it already moves away, it is placed without a rebound;
+ * - rigid, sticking: the mass stays with the wall if the wall moved into it, and is released
+ *   (at rest, in flight) if the wall moved away; then the holding force is checked again.
+ * Never a silent penetration of the rigid wall, never a crossing the solver cannot locate. */
+int model_input_jump(ModelData *m, double tau, double y[2]) {
+    if (m->wall == WALL_NONE) return 0;
+    const double w = model_wall_position(m, tau), dw = m->du_wall;
+    const double y0 = y[0], y1 = y[1];
+    const int mode = m->mode;
+    if (m->wall == WALL_COMPLIANT) {
+        if (m->mode == MODE_FREE && y[0] > w) m->mode = MODE_CONTACT;
+        else if (m->mode == MODE_CONTACT && y[0] < w) m->mode = MODE_FREE;
+    } else if (m->mode == MODE_STICK) {
+        if (y[0] >= w) {
+            y[0] = w; /* pushed along (or not moved) */
+            y[1] = dw;
+            if (model_wall_force(m, tau) <= 0.0) {
+                y[0] = beside_wall(w, -1.0);
+                m->mode = MODE_FREE;
+            }
+        } else {
+            y[1] = 0.0; /* the wall went away: the mass is left at rest */
+            m->mode = MODE_FREE;
+        }
+    } else if (y[0] > w || (y[0] == w && y[1] > dw)) {
+        if (y[1] - dw > 0.0) model_event_update(m, tau, y, 0); /* an impact */
+        else y[0] = beside_wall(w, -1.0); /* already moving away: placed, no rebound */
     }
-    return NULL;
-}
-
-const char *model_get_integer(const ModelData *m, int vr, int *x) {
-    switch (vr) {
-    case VR_WALL: *x = m->wall; break;
-    case VR_CONTACT: *x = m->contact; break;
-    case VR_IMPACTS: *x = m->impacts; break;
-    default: return "is not an Integer variable";
-    }
-    return NULL;
-}
-
-const char *model_get_boolean(const ModelData *m, int vr, int *x) {
-    if (vr != VR_IN_CONTACT) return "is not a Boolean variable";
-    *x = m->mode != MODE_FREE;
-    return NULL;
-}
-
-const char *model_set_real(ModelData *m, int vr, double x) {
-    const char *why = model_check_real(vr, x);
-    if (why) return why;
-    switch (vr) {
-    case VR_NU: m->nu = x; break;
-    case VR_OMEGA: m->Omega = x; break;
-    case VR_SIGMA: m->sigma = x; break;
-    case VR_R: m->r = x; break;
-    case VR_GAMMA: m->Gamma = x; break;
-    case VR_U0: m->u0 = x; break;
-    case VR_V0: m->v0 = x; break;
-    case VR_RTOL: m->rtol = x; break;
-    case VR_ATOL: m->atol = x; break;
-    case VR_HC_ALPHA: m->alpha_hc = x; break;
-    }
-    model_update_derived(m);
-    return NULL;
-}
-
-const char *model_set_integer(ModelData *m, int vr, int x) {
-    const char *why = model_check_integer(vr, x);
-    if (why) return why;
-    if (vr == VR_CONTACT) m->contact = x;
-    else m->wall = x;
-    return NULL;
+    return m->mode != mode || y[0] != y0 || y[1] != y1;
 }
 
 int model_me_event_update(ModelData *m, double tau, double y[2]) {
     if (model_release_now(m, tau)) { /* sticking: the holding force has gone */
-        y[0] = 0.0;
-        y[1] = 0.0;
+        y[0] = model_wall_position(m, tau);
+        y[1] = m->du_wall;
         return 1;
     }
     if (m->wall == WALL_NONE || m->mode == MODE_STICK) return 0;
-    /* the importer stops on the far side of g0 = u = 0 (or on it) */
-    const int crossed = m->mode == MODE_FREE ? (y[0] > 0.0 || (y[0] == 0.0 && y[1] > 0.0))
-                                             : (y[0] < 0.0 || (y[0] == 0.0 && y[1] < 0.0));
+    /* the importer stops on the far side of g0 = u - w = 0 (or on it) */
+    const double d = y[0] - model_wall_position(m, tau), dv = y[1] - m->du_wall;
+    const int crossed = m->mode == MODE_FREE ? (d > 0.0 || (d == 0.0 && dv > 0.0))
+                                             : (d < 0.0 || (d == 0.0 && dv < 0.0));
     if (!crossed) return 0;
     model_event_update(m, tau, y, 0);
     return 1;
-}
-
-const char *model_get_real_at(const ModelData *m, double tau, int vr, double *x) {
-    if (vr == VR_DER_U || vr == VR_DER_V) {
-        const double y[2] = {m->u, m->v};
-        double dy[2];
-        model_derivatives(m, tau, y, dy);
-        *x = dy[vr == VR_DER_V];
-        return NULL;
-    }
-    if (vr == VR_WALL_INDICATOR) {
-        const double y[2] = {m->u, m->v};
-        double g[MODEL_N_EVENTS];
-        model_event_indicators(m, tau, y, g);
-        *x = g[0];
-        return NULL;
-    }
-    return model_get_real(m, vr, x);
 }

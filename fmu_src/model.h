@@ -48,6 +48,23 @@ typedef enum {
     VR_DER_V = 20,         /* der(v) (Model Exchange) */
     VR_WALL_INDICATOR = 21, /* the event indicator g0 (FMI 3.0 Model Exchange) */
     VR_TIME = 22,          /* FMI 3.0 independent variable (handled by the FMI glue) */
+    /* ports (issue 14) and limits (issue 13) */
+    VR_F_EXT = 23,         /* input: external force added to the right-hand side */
+    VR_U_WALL = 24,        /* input: wall position (contact when u > u_wall) */
+    VR_F_CONTACT = 25,     /* output: the wall's force on the mass, repulsive positive */
+    VR_V_IMPACT = 26,      /* output: relative velocity at the last wall entry, before the jump */
+    VR_T_IMPACT = 27,      /* output: time of the last wall entry */
+    VR_MAX_EVENTS = 28,    /* parameter: wall events allowed per unit of time */
+    VR_MAX_STEPS = 29,     /* parameter: CVODE steps allowed per unit of time */
+    /* issue 11: sensitivities and the closed-form solver (23..29: ports and limits, fmu_core) */
+    VR_SENSITIVITIES = 30, /* Boolean parameter */
+    VR_SOLVER = 31,        /* Integer parameter: 0 CVODE, 1 closed form */
+    VR_J_UU = 32,          /* outputs: d(u, v)(end of doStep)/d(u, v)(its start) */
+    VR_J_UV = 33,
+    VR_J_VU = 34,
+    VR_J_VV = 35,
+    VR_S_U = 36,           /* outputs: d(u, v)(end of doStep)/d sigma */
+    VR_S_V = 37,
     VR_COUNT
 } ValueReference;
 
@@ -80,7 +97,26 @@ typedef struct {
     /* discrete state */
     int mode;
     int impacts;
+    /* Inputs (ports): F_ext and u_wall are the values at local time in_tau; dF_ext and du_wall
+     * their time derivatives (FMI 2.0 Co-Simulation input derivatives, 0 = held over the step):
+     * F(tau) = F_ext + dF_ext (tau - in_tau), w(tau) = u_wall + du_wall (tau - in_tau). */
+    double F_ext, u_wall, dF_ext, du_wall, in_tau;
+    /* The last wall entry: velocity relative to the wall before the jump, and absolute time. */
+    double v_impact, t_impact;
+    /* Integer origin of local time (absolute t = origin + tau), kept equal to the solver's. */
+    double origin;
+    /* Bounds on the work of one doStep, per unit of time advanced (at least one unit; issue
+     * 13.3); the solver also caps a doStep at SOLVER_MAX_STEPS_PER_CALL steps (solver.h). */
+    double max_events_per_time, max_steps_per_time;
+    /* Sensitivities (sens.h) and the solver (closed_form.h), issue 11: parameters, and the
+     * derivatives of the state w.r.t. the state at the start of the current doStep (sJ) and
+     * w.r.t. sigma (sS). Part of the FMU state. */
+    int sensitivities; /* Boolean: integrate sJ, sS */
+    int solver;        /* SOLVER_CVODE or SOLVER_CLOSED_FORM */
+    double sJ[2][2], sS[2];
 } ModelData;
+
+typedef enum { SOLVER_CVODE = 0, SOLVER_CLOSED_FORM = 1 } SolverKind;
 
 /* What an event did, so that the solver knows whether to re-initialise. */
 typedef enum { EVENT_NONE = 0, EVENT_JUMP = 1 } EventResult;
@@ -88,9 +124,6 @@ typedef enum { EVENT_NONE = 0, EVENT_JUMP = 1 } EventResult;
 void model_set_defaults(ModelData *m);
 void model_update_derived(ModelData *m);
 
-/* Checks one value before it is stored; returns NULL if fine, else why not. */
-const char *model_check_real(int vr, double value);
-const char *model_check_integer(int vr, int value);
 /* Checks the parameters together (e.g. Gamma with a compliant wall), at the end of
  * initialisation; returns NULL if fine. */
 const char *model_check_consistency(const ModelData *m, char *buf, size_t n);
@@ -102,7 +135,7 @@ void model_initialize_state(ModelData *m, double tau0);
 double model_wall_force(const ModelData *m, double tau);
 
 void model_derivatives(const ModelData *m, double tau, const double y[2], double dy[2]);
-void model_jacobian(const ModelData *m, const double y[2], double J[2][2]);
+void model_jacobian(const ModelData *m, double tau, const double y[2], double J[2][2]);
 void model_event_indicators(const ModelData *m, double tau, const double y[2],
                             double g[MODEL_N_EVENTS]);
 void model_root_directions(const ModelData *m, int dir[MODEL_N_EVENTS]);
@@ -112,22 +145,11 @@ EventResult model_event_update(ModelData *m, double tau, double y[2], int which)
 
 /* True when, at a turning point (g[1] = 0) reached at state y, the wall indicator has the sign
  * of the other side: a crossing pair was stepped over and must be located. */
-int model_missed_crossing(const ModelData *m, const double y[2]);
+int model_missed_crossing(const ModelData *m, double tau, const double y[2]);
 
 /* True where the mode must change at once, without a crossing (a sticking mass whose
  * holding force has vanished, e.g. after sigma was changed). */
 int model_release_now(ModelData *m, double tau);
-
-/* Typed access by value reference (fmi2GetReal & co.). Return NULL or an error message. */
-const char *model_get_real(const ModelData *m, int vr, double *value);
-/* As model_get_real, and also der(u), der(v) and the wall indicator at local time tau. */
-const char *model_get_real_at(const ModelData *m, double tau, int vr, double *value);
-const char *model_get_integer(const ModelData *m, int vr, int *value);
-const char *model_get_boolean(const ModelData *m, int vr, int *value);
-const char *model_set_real(ModelData *m, int vr, double value);
-const char *model_set_integer(ModelData *m, int vr, int value);
-/* Whether a variable may be set after initialisation (variability tunable). */
-int model_is_tunable(int vr);
 
 /* Model Exchange: the importer integrates (u, v) and watches MODEL_N_ME_EVENTS indicators (the
  * wall indicator g0 only: the grazing guard g1 is the importer's business in ME). At an event
@@ -135,8 +157,21 @@ int model_is_tunable(int vr);
  * sign of g0 calls for; returns 1 if the mode or the state changed. */
 #define MODEL_N_ME_EVENTS 1
 int model_me_event_update(ModelData *m, double tau, double y[2]);
-/* Contact force of the compliant wall at depth u (> 0), velocity v (0 for u <= 0). */
-double model_contact_force(const ModelData *m, double u, double v);
-const char *model_variable_name(int vr);
+/* Contact force of the compliant wall at depth d = u - w (> 0) and velocity d' relative to the
+ * wall (0 for d <= 0 with the Hertz laws). */
+double model_contact_force(const ModelData *m, double d, double dv);
+
+/* Ports. The wall position w(tau), its velocity, and the external force at local time tau. */
+double model_wall_position(const ModelData *m, double tau);
+double model_wall_velocity(const ModelData *m);
+double model_external_force(const ModelData *m, double tau);
+/* The wall's force on the mass (output F_contact), repulsive positive: the spring (contact law)
+ * inside the compliant wall, the holding force while sticking on the rigid wall, 0 in flight. */
+double model_contact_output(const ModelData *m, double tau);
+/* Moves the local-time origin by k (an integer): the solver calls this when it re-origins. */
+void model_shift_time(ModelData *m, double k);
+/* Applies the documented rule after the inputs jumped between steps (state y at local time tau,
+ * updated in place): see model.c. Returns 1 if the mode or the state changed. */
+int model_input_jump(ModelData *m, double tau, double y[2]);
 
 #endif

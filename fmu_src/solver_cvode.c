@@ -8,8 +8,22 @@
  * step ends, so CVODE cannot see it; its turning point, however, changes the sign of v and is
  * found. If the wall indicator has the wrong sign at that turning point, the crossing lies in the
  * last step, and is located on CVODE's interpolant.
+ *
+ * Totality. CVODE runs in one-step mode, so every step end is seen: the wall indicator is
+ * checked there (and at every turning point and communication point), and a state on the wrong
+ * side of the wall is never returned: the crossing is located between the last point known to
+ * be on the right side (at latest the start of the step) and the offending point.
+ *
+ * Time grid. CVODE's steps never depend on the communication points: it steps past them and
+ * the state at a communication point is read from its interpolant (CVodeGetDky). Setting each
+ * communication point as a stop time instead made the result depend on the importer's time
+ * arithmetic: a point a few ulps past a step end gave a ~1e-14 "sliver" step, after which the
+ * variable-step Adams history (step ratios ~1e-12) lost up to 1e-4 in u.
  */
 #include "solver.h"
+
+#include "closed_form.h"
+#include "sens.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -21,30 +35,47 @@
 #include <sunlinsol/sunlinsol_dense.h>
 #include <sunmatrix/sunmatrix_dense.h>
 
-/* Re-origin the local time once it passes this, so that tau stays O(1) (the forcing phase and
- * the root-finding tolerance both scale with |tau|). Each re-origin is one CVODE restart. */
-static const double REORIGIN_AFTER = 64.0;
+/* Re-origin the local time at this (integer, so exact) local time, so that tau stays O(1)
+ * (the forcing phase and the root-finding tolerance both scale with |tau|). It is a stop
+ * time of CVODE's own, the same for every communication grid; each one is a restart. */
+static const double REORIGIN_AT = 64.0;
 /* Solver steps must not straddle two turning points of u, or the guard's sign change on v is
  * lost too; a fifth of the shortest period in the problem (forcing: 1) is safe. */
 static const double MAX_STEP = 0.05;
-/* Bounds on the work of one doStep (per unit of time advanced): errors, never hangs. */
-static const double MAX_STEPS_PER_UNIT_TIME = 2e5;
-static const double MAX_EVENTS_PER_UNIT_TIME = 1e5;
+/* SUNDIALS 6.4.1 decides "sign change" in its root finding by the product glo*ghi < 0, which
+ * underflows to 0 for |glo ghi| < 1e-324: a mass restarted ON_WALL = 1e-300 off the wall
+ * (model.c) that crosses by 1e-24 was not seen (r = 0 and chatter failures; LLNL/sundials#57).
+ * Root values are therefore floored to this magnitude, keeping their sign: the products stay
+ * >= 1e-300 and the located times are unchanged (the search works on signs). */
+static const double ROOT_FLOOR = 1e-150;
+
+_Static_assert(SENS_NEQ <= 8, "Solver.y_next and y_stop hold SENS_NEQ components");
 
 #define CV(s) ((s)->cvode)
 #define YV(s) ((N_Vector)(s)->y)
 
+/* With sensitivities the state is (u, v, J, S) of sens.h (SENS_NEQ components), else (u, v). */
 static int rhs(realtype t, N_Vector y, N_Vector ydot, void *user_data) {
-    model_derivatives((const ModelData *)user_data, t, N_VGetArrayPointer(y),
-                      N_VGetArrayPointer(ydot));
+    if (N_VGetLength(y) == SENS_NEQ)
+        sens_rhs((const ModelData *)user_data, t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+    else
+        model_derivatives((const ModelData *)user_data, t, N_VGetArrayPointer(y),
+                          N_VGetArrayPointer(ydot));
     return 0;
 }
 
 static int jac(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *user_data, N_Vector t1,
                N_Vector t2, N_Vector t3) {
-    (void)t; (void)fy; (void)t1; (void)t2; (void)t3;
+    (void)fy; (void)t1; (void)t2; (void)t3;
+    if (N_VGetLength(y) == SENS_NEQ) {
+        double big[SENS_NEQ][SENS_NEQ];
+        sens_jacobian((const ModelData *)user_data, t, N_VGetArrayPointer(y), big);
+        for (int i = 0; i < SENS_NEQ; ++i)
+            for (int j = 0; j < SENS_NEQ; ++j) SM_ELEMENT_D(J, i, j) = big[i][j];
+        return 0;
+    }
     double a[2][2];
-    model_jacobian((const ModelData *)user_data, N_VGetArrayPointer(y), a);
+    model_jacobian((const ModelData *)user_data, t, N_VGetArrayPointer(y), a);
     SM_ELEMENT_D(J, 0, 0) = a[0][0];
     SM_ELEMENT_D(J, 0, 1) = a[0][1];
     SM_ELEMENT_D(J, 1, 0) = a[1][0];
@@ -52,8 +83,13 @@ static int jac(realtype t, N_Vector y, N_Vector fy, SUNMatrix J, void *user_data
     return 0;
 }
 
+static double floored(double g) {
+    return (g != 0.0 && fabs(g) < ROOT_FLOOR) ? copysign(ROOT_FLOOR, g) : g;
+}
+
 static int roots(realtype t, N_Vector y, realtype *g, void *user_data) {
     model_event_indicators((const ModelData *)user_data, t, N_VGetArrayPointer(y), g);
+    for (int i = 0; i < MODEL_N_EVENTS; ++i) g[i] = floored(g[i]);
     return 0;
 }
 
@@ -63,20 +99,21 @@ static void error_handler(int code, const char *module, const char *function, ch
     snprintf(s->msg, sizeof s->msg, "%s/%s (flag %d): %s", module, function, code, msg);
 }
 
-int solver_create(Solver *s, ModelData *m) {
-    memset(s, 0, sizeof *s);
-    SUNContext ctx;
-    if (SUNContext_Create(NULL, &ctx) != 0) goto fail;
-    s->ctx = ctx;
-    s->y = N_VNew_Serial(2, ctx);
+/* Allocates CVODE for n equations in the existing context. */
+static int create_cvode(Solver *s, ModelData *m, int n) {
+    SUNContext ctx = (SUNContext)s->ctx;
+    s->n = n;
+    s->y = N_VNew_Serial(n, ctx);
+    s->tmp = N_VNew_Serial(n, ctx);
     s->cvode = CVodeCreate(CV_ADAMS, ctx);
-    if (!s->y || !s->cvode) goto fail;
+    if (!s->y || !s->tmp || !s->cvode) goto fail;
     CVodeSetErrHandlerFn(CV(s), error_handler, s);
+    N_VConst(0.0, YV(s));
     NV_Ith_S(YV(s), 0) = m->u;
     NV_Ith_S(YV(s), 1) = m->v;
     if (CVodeInit(CV(s), rhs, 0.0, YV(s)) != CV_SUCCESS) goto fail;
     if (CVodeRootInit(CV(s), MODEL_N_EVENTS, roots) != CV_SUCCESS) goto fail;
-    s->A = SUNDenseMatrix(2, 2, ctx);
+    s->A = SUNDenseMatrix(n, n, ctx);
     s->LS = SUNLinSol_Dense(YV(s), (SUNMatrix)s->A, ctx);
     if (!s->A || !s->LS) goto fail;
     if (CVodeSetLinearSolver(CV(s), (SUNLinearSolver)s->LS, (SUNMatrix)s->A) != CV_SUCCESS) goto fail;
@@ -87,107 +124,179 @@ int solver_create(Solver *s, ModelData *m) {
     s->needs_reinit = 1;
     return 0;
 fail:
-    if (!s->msg[0]) snprintf(s->msg, sizeof s->msg, "could not allocate CVODE");
-    solver_free(s);
     return -1;
 }
 
-void solver_free(Solver *s) {
+static void free_cvode(Solver *s) {
     if (s->cvode) CVodeFree(&s->cvode);
     if (s->LS) SUNLinSolFree((SUNLinearSolver)s->LS);
     if (s->A) SUNMatDestroy((SUNMatrix)s->A);
     if (s->y) N_VDestroy(YV(s));
+    if (s->tmp) N_VDestroy((N_Vector)s->tmp);
+    s->cvode = s->LS = s->A = s->y = s->tmp = NULL;
+}
+
+int solver_create(Solver *s, ModelData *m) {
+    memset(s, 0, sizeof *s);
+    SUNContext ctx;
+    if (SUNContext_Create(NULL, &ctx) != 0 || (s->ctx = ctx, create_cvode(s, m, 2) != 0)) {
+        if (!s->msg[0]) snprintf(s->msg, sizeof s->msg, "could not allocate CVODE");
+        solver_free(s);
+        return -1;
+    }
+    return 0;
+}
+
+void solver_free(Solver *s) {
+    free_cvode(s);
     if (s->ctx) {
         SUNContext ctx = (SUNContext)s->ctx;
         SUNContext_Free(&ctx);
     }
-    s->cvode = s->LS = s->A = s->y = s->ctx = NULL;
+    s->cvode = s->LS = s->A = s->y = s->tmp = s->ctx = NULL;
 }
 
 void solver_start(Solver *s, double t) {
     s->origin = floor(t);
     s->tau = t - s->origin;
     s->needs_reinit = 1;
+    s->pending = 0;
+    s->continuing = 0;
 }
 
 double solver_time(const Solver *s) { return s->origin + s->tau; }
 
+/* True where the wall indicator at (tau, y) lies on the far side of its mode's root direction:
+ * the model must not be left there (a free mass inside the rigid wall, ...). */
+static int wrong_side(const ModelData *m, double tau, const double y[2]) {
+    if (m->wall == WALL_NONE) return 0;
+    double g[MODEL_N_EVENTS];
+    int dir[MODEL_N_EVENTS];
+    model_event_indicators(m, tau, y, g);
+    model_root_directions(m, dir);
+    return dir[0] > 0 ? g[0] > 0.0 : g[0] < 0.0;
+}
+
 /* Restarts CVODE at (tau, m->u, m->v) in the model's current mode, moving the integer time
  * origin up to the current period first. */
 static int reinit(Solver *s, ModelData *m) {
+    /* the variational equations ride along only when asked for (no cost otherwise) */
+    const int n = m->sensitivities ? SENS_NEQ : 2;
+    if (n != s->n) {
+        free_cvode(s);
+        if (create_cvode(s, m, n) != 0) {
+            snprintf(s->msg, sizeof s->msg, "could not allocate CVODE for %d equations", n);
+            return -1;
+        }
+    }
     const double k = floor(s->tau);
     s->origin += k;
     s->tau -= k;
+    model_shift_time(m, k); /* the model's input ramps and impact times follow the origin */
     if (model_release_now(m, s->tau)) s->events++;
-    NV_Ith_S(YV(s), 0) = m->u;
-    NV_Ith_S(YV(s), 1) = m->v;
+    if (s->n == SENS_NEQ) {
+        sens_pack(m, N_VGetArrayPointer(YV(s)));
+    } else {
+        NV_Ith_S(YV(s), 0) = m->u;
+        NV_Ith_S(YV(s), 1) = m->v;
+    }
     if (CVodeReInit(CV(s), s->tau, YV(s)) != CV_SUCCESS ||
-        CVodeSStolerances(CV(s), m->rtol, m->atol) != CV_SUCCESS) {
+        CVodeSStolerances(CV(s), m->rtol, m->atol) != CV_SUCCESS ||
+        CVodeSetStopTime(CV(s), REORIGIN_AT) != CV_SUCCESS) {
+        if (!s->msg[0]) snprintf(s->msg, sizeof s->msg, "could not restart CVODE");
         return -1;
     }
     int dir[MODEL_N_EVENTS];
     model_root_directions(m, dir);
     CVodeSetRootDirection(CV(s), dir);
-    s->tau_good = s->tau;
+    s->tn = s->tau_good = s->tau;
+    s->has_next = 0;
+    s->at_stop = 0;
     s->needs_reinit = 0;
     return 0;
 }
 
-/* The wall indicator g0 along CVODE's interpolant of the last step. */
-static int indicator_at(Solver *s, const ModelData *m, double t, double y[2], double *g0) {
-    N_Vector tmp = N_VNew_Serial(2, (SUNContext)s->ctx);
-    int flag = CVodeGetDky(CV(s), t, 0, tmp);
-    y[0] = NV_Ith_S(tmp, 0);
-    y[1] = NV_Ith_S(tmp, 1);
-    N_VDestroy(tmp);
-    double g[MODEL_N_EVENTS];
-    model_event_indicators(m, t, y, g);
-    *g0 = g[0];
-    return flag;
+/* The state on CVODE's interpolant of its last step, at local time t (all s->n components). */
+static int interpolate(Solver *s, double t, double y[SENS_NEQ]) {
+    N_Vector tmp = (N_Vector)s->tmp;
+    if (CVodeGetDky(CV(s), t, 0, tmp) != CV_SUCCESS) return -1;
+    for (int i = 0; i < s->n; ++i) y[i] = NV_Ith_S(tmp, i);
+    return 0;
 }
 
-/* A turning point (time t_turn) showed that the wall was crossed and re-crossed inside the last
- * step. Locates the first crossing by Illinois regula falsi on the interpolant; on return *tc and
- * yc hold the crossing (on the far side of the wall, so the event applies). */
-static int locate_missed_crossing(Solver *s, const ModelData *m, double t_turn, double *tc,
-                                  double yc[2]) {
-    realtype tn, hu;
-    CVodeGetCurrentTime(CV(s), &tn);
-    CVodeGetLastStep(CV(s), &hu);
-    double lo = fmax(s->tau_good, tn - hu), hi = t_turn;
-    double ylo[2], yhi[2], glo, ghi;
-    if (indicator_at(s, m, lo, ylo, &glo) != CV_SUCCESS ||
-        indicator_at(s, m, hi, yhi, &ghi) != CV_SUCCESS)
-        return -1;
-    /* g0 keeps its mode's sign before the crossing: compare against the far side's sign */
-    const double far = ghi;
-    if (glo * far > 0.0) return -1; /* not bracketed: should not happen */
+/* Copies the s->n components of a state. */
+static void copy_state(const Solver *s, double *dst, const double *src) {
+    memcpy(dst, src, sizeof(double) * (size_t)s->n);
+}
+
+/* Puts the state y (s->n components) into the model. */
+static void set_model_state(const Solver *s, ModelData *m, const double *y) {
+    if (s->n == SENS_NEQ) sens_unpack(m, y);
+    m->u = y[0];
+    m->v = y[1];
+}
+
+/* The wall indicator lies on its mode's side at lo and on the far side at hi (both in CVODE's
+ * last step). Locates the crossing by Illinois regula falsi on the interpolant, deciding by
+ * signs (never by products, which underflow); stores it as the next event, on the far side of
+ * the wall so that the event applies. */
+static int locate_crossing(Solver *s, const ModelData *m, double lo, double hi) {
+    double ylo[SENS_NEQ], yhi[SENS_NEQ], g[MODEL_N_EVENTS];
+    if (interpolate(s, lo, ylo) != 0 || interpolate(s, hi, yhi) != 0) return -1;
+    if (!wrong_side(m, hi, yhi)) return -1; /* not bracketed */
+    model_event_indicators(m, hi, yhi, g);
+    double ghi = g[0];
+    model_event_indicators(m, lo, ylo, g);
+    /* lo was seen on the right side (a step end or a restart); the interpolant may put it a
+     * round-off across (a start at rest on the wall): its sign is the right side's, then */
+    double glo = wrong_side(m, lo, ylo) ? copysign(0.0, -ghi) : g[0];
     int side = 0;
-    for (int it = 0; it < 200 && hi - lo > 4e-16 * fmax(1.0, fabs(hi)); ++it) {
-        double t = (lo * ghi - hi * glo) / (ghi - glo);
-        if (!(t > lo && t < hi)) t = 0.5 * (lo + hi);
-        double y[2], g;
-        indicator_at(s, m, t, y, &g);
-        if (g * far > 0.0) {
-            hi = t; ghi = g; yhi[0] = y[0]; yhi[1] = y[1];
+    for (int it = 0; it < 400 && hi - lo > 4e-16 * fmax(1.0, fabs(hi)); ++it) {
+        double t = lo + (hi - lo) * (glo / (glo - ghi)); /* glo, ghi of opposite signs */
+        if (!(t > lo && t < hi)) t = lo + 0.5 * (hi - lo);
+        double y[SENS_NEQ];
+        if (interpolate(s, t, y) != 0) return -1;
+        model_event_indicators(m, t, y, g);
+        if (wrong_side(m, t, y)) {
+            hi = t; ghi = g[0];
+            copy_state(s, yhi, y);
             if (side == +1) glo *= 0.5;
             side = +1;
         } else {
-            lo = t; glo = g;
+            lo = t; glo = g[0];
             if (side == -1) ghi *= 0.5;
             side = -1;
         }
     }
-    *tc = hi;
-    yc[0] = yhi[0];
-    yc[1] = yhi[1];
+    s->has_next = 1;
+    s->t_next = hi;
+    copy_state(s, s->y_next, yhi);
+    return 0;
+}
+
+/* The latest point known to be on the right side, in CVODE's last step and not after t. */
+static double last_good_before(Solver *s, double t) {
+    realtype hu = 0.0;
+    CVodeGetLastStep(CV(s), &hu);
+    const double start = s->tn - hu;
+    return (s->tau_good <= t && s->tau_good >= start) ? s->tau_good : start;
+}
+
+static int rescue(Solver *s, const ModelData *m, double t) {
+    if (locate_crossing(s, m, last_good_before(s, t), t) != 0) {
+        snprintf(s->msg, sizeof s->msg,
+                 "could not locate a wall crossing stepped over before t = %.17g",
+                 s->origin + t);
+        return -1;
+    }
+    s->guard_hits++;
     return 0;
 }
 
 int solver_apply_pending(Solver *s, ModelData *m) {
     if (!s->pending) return 0;
     double y[2] = {m->u, m->v};
-    model_event_update(m, s->tau, y, 0);
+    sens_event_update(m, s->tau, y);
     m->u = y[0];
     m->v = y[1];
     s->events++;
@@ -200,73 +309,139 @@ int solver_advance(Solver *s, ModelData *m, double t_end) {
     return solver_advance_ex(s, m, t_end, 0);
 }
 
+/* Sets the work bound of a doStep from `now` to t_end, in double (a span of 1e300 must not
+ * overflow a long: the bound saturates at the per-call cap). */
+static void begin_budget(Solver *s, const ModelData *m, double t_end) {
+    const double per = fmax(1.0, t_end - solver_time(s));
+    s->budget_end = t_end;
+    s->steps_bound = fmin(SOLVER_MAX_STEPS_PER_CALL, m->max_steps_per_time * per);
+    s->events_bound = fmin(SOLVER_MAX_STEPS_PER_CALL, m->max_events_per_time * per);
+    s->steps_used = s->events_used = 0.0;
+}
+
+static int over_budget(Solver *s, const ModelData *m, int events) {
+    if (events ? s->events_used <= s->events_bound : s->steps_used <= s->steps_bound) return 0;
+    const double bound = events ? s->events_bound : s->steps_bound;
+    const char *what = events ? "wall events" : "CVODE steps";
+    if (bound >= SOLVER_MAX_STEPS_PER_CALL)
+        snprintf(s->msg, sizeof s->msg,
+                 "more than %.0f %s in this doStep (before t = %.17g): the cap of %.0f per doStep "
+                 "(split the step)", bound, what, s->origin + s->tn, SOLVER_MAX_STEPS_PER_CALL);
+    else
+        snprintf(s->msg, sizeof s->msg,
+                 "more than %.0f %s in this doStep (before t = %.17g): the limit %s = %g per unit "
+                 "time%s", bound, what, s->origin + s->tn,
+                 events ? "max_events_per_time" : "max_steps_per_time",
+                 events ? m->max_events_per_time : m->max_steps_per_time,
+                 events ? " (chatter that does not end?)" : " (a stiff or extreme parameter?)");
+    return 1;
+}
+
+/* Applies the event stored by locate_crossing or CVODE's root return, at its time. */
+static int take_event(Solver *s, ModelData *m, int stop_at_event) {
+    s->tau = s->t_next;
+    set_model_state(s, m, s->y_next); /* J, S at the crossing too */
+    s->has_next = 0;
+    s->needs_reinit = 1;
+    if (stop_at_event) { /* FMI 3.0 early return: the jump is the importer's event mode */
+        s->pending = 1;
+        return 1;
+    }
+    double y[2] = {m->u, m->v};
+    sens_event_update(m, s->tau, y);
+    m->u = y[0];
+    m->v = y[1];
+    s->events++;
+    s->events_used += 1.0;
+    if (over_budget(s, m, 1)) return -1;
+    return reinit(s, m);
+}
+
 int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) {
     s->msg[0] = '\0';
+    if (m->solver == SOLVER_CLOSED_FORM) return closed_form_advance(s, m, t_end, stop_at_event);
+    if (!(s->continuing && t_end == s->budget_end)) begin_budget(s, m, t_end);
+    s->continuing = 0;
     solver_apply_pending(s, m);
-    if (s->needs_reinit || s->tau > REORIGIN_AFTER) {
-        if (reinit(s, m) != 0) return -1;
-    }
-    double tau_end = t_end - s->origin;
-    if (tau_end < s->tau) {
+    if (t_end < solver_time(s)) {
         snprintf(s->msg, sizeof s->msg, "cannot integrate backwards to t = %.17g", t_end);
         return -1;
     }
-    const double span = fmax(1.0, ceil(tau_end - s->tau));
-    const long max_events = (long)(MAX_EVENTS_PER_UNIT_TIME * span);
-    CVodeSetMaxNumSteps(CV(s), (long)(MAX_STEPS_PER_UNIT_TIME * span));
-    long events = 0;
+    if (s->needs_reinit && reinit(s, m) != 0) return -1;
 
-    while (s->tau < tau_end) {
-        CVodeSetStopTime(CV(s), tau_end);
-        realtype tret;
-        const int flag = CVode(CV(s), tau_end, YV(s), &tret, CV_NORMAL);
+    for (;;) {
+        const double tau_end = t_end - s->origin; /* the origin moves at restarts */
+        if (s->has_next && s->t_next <= tau_end) { /* an event before the end */
+            const int rc = take_event(s, m, stop_at_event);
+            if (rc != 0) {
+                s->continuing = rc == 1;
+                return rc;
+            }
+            continue;
+        }
+        if (tau_end <= s->tau) return 0; /* h = 0, or below the resolution of t */
+        /* CVODE's last step covers the end: interpolate */
+        if (s->tn >= tau_end || (s->at_stop && tau_end < s->t_stop)) {
+            double y[SENS_NEQ];
+            if (interpolate(s, tau_end, y) != 0) {
+                snprintf(s->msg, sizeof s->msg, "could not interpolate at t = %.17g", t_end);
+                return -1;
+            }
+            if (wrong_side(m, tau_end, y)) { /* never returned: find the crossing before it */
+                if (rescue(s, m, tau_end) != 0) return -1;
+                continue;
+            }
+            s->tau = tau_end;
+            set_model_state(s, m, y);
+            return 0;
+        }
+        if (s->at_stop) { /* the re-origin time: restart there, the same for every grid */
+            s->tau = s->t_stop;
+            set_model_state(s, m, s->y_stop);
+            if (reinit(s, m) != 0) return -1;
+            continue;
+        }
+        s->steps_used += 1.0;
+        if (over_budget(s, m, 0)) return -1;
+        realtype tret, tn;
+        /* tout only sets the first step size after a restart: keep it off the grid too */
+        const int flag = CVode(CV(s), s->tn + 1.0, YV(s), &tret, CV_ONE_STEP);
         if (flag < 0) {
             if (!s->msg[0]) snprintf(s->msg, sizeof s->msg, "CVode failed with flag %d", flag);
             return -1;
         }
-        double *y = N_VGetArrayPointer(YV(s));
-        s->tau = tret;
-        m->u = y[0];
-        m->v = y[1];
-        if (flag != CV_ROOT_RETURN) continue; /* CV_TSTOP_RETURN: tret == tau_end */
-
-        int info[MODEL_N_EVENTS];
-        CVodeGetRootInfo(CV(s), info);
-        if (info[0] == 0 && !model_missed_crossing(m, y)) {
-            s->tau_good = tret; /* a turning point on the right side of the wall */
-            continue;
+        CVodeGetCurrentTime(CV(s), &tn);
+        s->tn = tn;
+        const double *y = N_VGetArrayPointer(YV(s));
+        if (flag == CV_TSTOP_RETURN) { /* y = y(tstop), tn within round-off of it */
+            s->at_stop = 1;
+            s->t_stop = tret;
+            copy_state(s, s->y_stop, y);
         }
-        double yc[2] = {y[0], y[1]}, tc = tret;
-        if (info[0] == 0) {
-            if (locate_missed_crossing(s, m, tret, &tc, yc) != 0) {
-                snprintf(s->msg, sizeof s->msg,
-                         "could not locate a wall crossing stepped over before t = %.17g",
-                         s->origin + tret);
-                return -1;
-            }
-            s->guard_hits++;
-        }
-        if (stop_at_event) { /* FMI 3.0 early return: the jump is the importer's event mode */
-            s->tau = tc;
-            m->u = yc[0];
-            m->v = yc[1];
-            s->pending = 1;
-            s->needs_reinit = 1;
-            return 1;
-        }
-        model_event_update(m, tc, yc, 0);
-        s->tau = tc;
-        m->u = yc[0];
-        m->v = yc[1];
-        s->events++;
-        if (++events > max_events) {
-            snprintf(s->msg, sizeof s->msg,
-                     "more than %ld wall events before t = %.17g (chatter that does not end?)",
-                     max_events, s->origin + tc);
+        if (!isfinite(y[0]) || !isfinite(y[1])) {
+            snprintf(s->msg, sizeof s->msg, "the state is no longer finite at t = %.17g",
+                     s->origin + tret);
             return -1;
         }
-        if (reinit(s, m) != 0) return -1;
-        tau_end = t_end - s->origin; /* the origin may have moved */
+        if (flag == CV_ROOT_RETURN) {
+            int info[MODEL_N_EVENTS];
+            CVodeGetRootInfo(CV(s), info);
+            if (info[0] != 0) { /* CVODE located the crossing: y is on the far side */
+                s->has_next = 1;
+                s->t_next = tret;
+                copy_state(s, s->y_next, y);
+            } else if (wrong_side(m, tret, y)) { /* a turning point beyond the wall */
+                if (rescue(s, m, tret) != 0) return -1;
+            } else {
+                s->tau_good = tret; /* a turning point on the right side of the wall */
+            }
+            continue;
+        }
+        /* a step end: CVODE's root finding may not see a crossing of a few ulps */
+        if (wrong_side(m, tret, y)) {
+            if (rescue(s, m, tret) != 0) return -1;
+        } else {
+            s->tau_good = tret;
+        }
     }
-    return 0;
 }

@@ -1,23 +1,76 @@
 """harness: the grazing impact oscillator FMU as a dynamicist's object.
 
 Stroboscopic Poincare maps, orbit classification, bifurcation sweeps (fresh starts and
-quasi-static continuation up/down, 1D and 2D), map Jacobians near grazing, on a local
-process pool or a Dask cluster, with results as NetCDF (xarray) and PNG plots.
+quasi-static continuation up/down, 1D and 2D), Newton shooting of periodic orbits and window
+edges, map Jacobians near grazing, on a local process pool or a Dask cluster, with results as
+NetCDF (xarray) and PNG plots.  The theory (model, maps, corrections, how window edges are
+found) is in ``docs/theory.md``; the command line (``impact-harness --help``) covers the same
+ground as this API.
 
-Typical use::
+The public entry points, grouped as you look for them:
 
-    from harness import FmuModel, FmuSimulator, strobe, classify_orbit
-    model = FmuModel("build/fmu/ImpactOscillator.fmu")
-    sim = FmuSimulator(model.source())
-    params = {**model.defaults(), "sigma": 0.5}
-    r = strobe(sim, params, (-1.0, 0.0), theta=0.0, n_transient=200, n_samples=40)
-    print(classify_orbit(r.u, r.v, r.impacts).label)
+# FMU driving
 
-    from harness import SweepSpec, SamplingSpec, run_sweep
-    spec = SweepSpec("sigma", np.linspace(0.15, 1.0, 35), ("up", "down"))
-    ds = run_sweep(model, spec, sampling=SamplingSpec(n_transient=300, n_samples=40))
+* `FmuModel` -- an FMU file: defaults, parameter checks, a picklable `FmuSource` for workers;
+* `FmuSimulator` -- one reusable FMU instance: ``start``, ``advance``, ``read``;
+  `MappingSimulator` -- any one-period map given as a Python function; `Simulator` -- the protocol;
+* `simulate` -- a time series u(t), v(t), impacts.
 
-The command line (``impact-harness --help``) covers the same ground.
+# Sampling
+
+* `strobe` -> `StrobeResult` -- samples at t = n + theta after a transient;
+* `SamplingSpec` -- transient, samples, tolerance, section phase;
+* `classify_orbit` -> `OrbitClass`, `classify_samples` -- period and impacts per period (codes in
+  `harness.classify`: period > 0 periodic, <= 0 not periodic or not converged);
+* `windows` -- runs of equal period along a scan.
+
+# Sweeps
+
+* `SweepSpec`, `run_sweep` -> xarray Dataset (`SweepStats`) -- fresh starts or continuation
+  up/down, 1D or 2D, serial / processes / Dask; `Experiment` -- a TOML run description;
+* `write_netcdf`, `read_netcdf`.
+
+# Shooting
+
+* `harness.shooting.StroboscopicMap` -- the FMU's one-period map in coordinates relative to the
+  wall-free orbit;
+* `map_guided_windows` -- ODE window edges of maximal period-M orbits, started in a map's
+  windows; each edge the midpoint of a bracket the shooting bisected, or unresolved;
+* `harness.shooting.window_edges`, `harness.shooting.Edge`.
+
+# Jacobians
+
+* `map_jacobian` -> `JacobianResult`, `jacobian_vs_x` -> `JacobianScan` -- the one-period map's
+  Jacobian, and along the grazing family.
+
+# Comparison with the maps
+
+* `compare_windows` (``impact-harness windows``) -- for any (alpha, gamma) or (nu, Omega), r and
+  wall: window edges of (64), the 2D map, the A~ map and the ODE, with report.md, JSON and plots;
+* `harness.reproduce` -- the paper's figures (``impact-harness reproduce FIG``);
+* `mapcheck.compare` -- the generic comparison logic (coordinates, window tables, fits).
+
+# Maps
+
+* `mapcheck` -- the paper's maps and coefficients (`mapcheck.coefficients`, `mapcheck.natural_map`,
+  `mapcheck.physical_map`), windows (`mapcheck.window_1d`, `mapcheck.windows`), the closed-form
+  solution of the ODE (`mapcheck.ExactOscillator`).
+
+# Example
+
+Run from the repository root after ``bash scripts/setup.sh`` (these lines are run by the tests):
+
+>>> from harness import FmuModel, FmuSimulator, strobe, classify_orbit
+>>> model = FmuModel("build/fmu/ImpactOscillator.fmu")
+>>> sim = FmuSimulator(model.source())
+>>> params = {**model.defaults(), "sigma": 0.5}
+>>> r = strobe(sim, params, (-1.0, 0.0), theta=0.0, n_transient=300, n_samples=40)
+>>> classify_orbit(r.u, r.v, r.impacts).label
+'P2, 1 impact'
+
+Sweeps and `compare_windows` use worker processes, which re-import the main module: in a
+script, call them under ``if __name__ == "__main__":`` (``examples/sweep.py``,
+``examples/windows.py``).
 """
 from importlib import metadata as _metadata
 
@@ -34,10 +87,14 @@ _EXPORTS = {
     "FmuError": "errors", "HarnessInputError": "errors",
     "FmuModel": "fmi", "FmuSource": "fmi",
     "JacobianResult": "jacobian", "JacobianScan": "jacobian", "jacobian_vs_x": "jacobian", "map_jacobian": "jacobian",
+    "LyapunovResult": "lyapunov", "lyapunov_exponents": "lyapunov", "lyapunov_from_jacobians": "lyapunov",
+    "classify_dynamics": "classify",
     "read_netcdf": "results", "write_netcdf": "results",
     "StrobeResult": "sampling", "simulate": "sampling", "strobe": "sampling",
     "FmuSimulator": "simulator", "MappingSimulator": "simulator", "Simulator": "simulator",
     "SweepStats": "sweeps", "run_sweep": "sweeps",
+    "StroboscopicMap": "shooting", "map_guided_windows": "shooting",
+    "compare_windows": "reproduce.windows",
 }
 
 __all__ = sorted(_EXPORTS) + ["__version__"]

@@ -15,6 +15,7 @@ Fault tolerance:
 from __future__ import annotations
 
 import multiprocessing
+import os
 import threading
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -39,7 +40,8 @@ def _task_result(key: Hashable, get: Callable[[], Any], where: str) -> Any:
         raise
     except Exception as exc:
         raise SweepTaskError(f"task {key} failed {where}: {type(exc).__name__}: {exc}") from exc
-#: ``on_progress(key, points_done)``: a task reports how far it got (long chains).
+#: ``on_progress(key, points_done, row)``: a task reports how far it got and the results of
+#: the point it just finished (long chains: progress bar and checkpoint inside the chain).
 ProgressCallback = Callable[[Hashable, int], None]
 
 
@@ -51,7 +53,7 @@ class Backend(Protocol):
     def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback,
             on_progress: ProgressCallback | None = None) -> None:
         """Run ``func(task, source, progress=...)`` for each task; call ``on_result(key, result)``
-        as they finish and ``on_progress(key, points_done)`` as tasks report."""
+        as they finish and ``on_progress(key, points_done, row)`` as tasks report."""
 
     def describe(self) -> str:
         """One line for the results' attributes (backend, workers, address)."""
@@ -105,7 +107,7 @@ class ProcessBackend:
         ctx = multiprocessing.get_context("spawn")
         self._queue = ctx.Queue()
         return ProcessPoolExecutor(self.workers, mp_context=ctx, initializer=init_pool_worker,
-                                   initargs=(self._queue,))
+                                   initargs=(self._queue, os.getpid()))
 
     def _drain(self, on_progress: ProgressCallback, stop: threading.Event) -> None:
         """Forward the workers' progress reports to ``on_progress`` (a helper thread)."""
@@ -113,10 +115,10 @@ class ProcessBackend:
 
         while not stop.is_set():
             try:
-                key, n = self._queue.get(timeout=0.2)
+                item = self._queue.get(timeout=0.2)
             except (_queue.Empty, OSError, EOFError, ValueError):
                 continue
-            on_progress(key, n)
+            on_progress(*item)
 
     def run(self, func: Callable, tasks: Mapping[Hashable, Any], source: Any, on_result: ResultCallback,
             on_progress: ProgressCallback | None = None) -> None:

@@ -62,8 +62,12 @@ class Checkpoint:
                     "delete it or choose another directory",
                 )
         else:
-            self.directory.mkdir(parents=True, exist_ok=True)
-            manifest.write_text(json.dumps({"fingerprint": run_fingerprint}))
+            try:
+                self.directory.mkdir(parents=True, exist_ok=True)
+                manifest.write_text(json.dumps({"fingerprint": run_fingerprint}))
+            except OSError as exc:
+                raise HarnessInputError(argument, f"cannot create the checkpoint {str(self.directory)!r}: "
+                                        f"{exc.strerror or exc}") from None
 
     def _file(self, key: str) -> Path:
         safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in key)
@@ -79,6 +83,30 @@ class Checkpoint:
         tmp = target.with_suffix(".tmp.npz")
         np.savez(tmp, **arrays)
         os.replace(tmp, target)
+
+    # -- unfinished chains ------------------------------------------------------------------
+    def _partial_file(self, key: str) -> Path:
+        return self._file(key).with_suffix(".partial.npz")
+
+    def save_partial(self, key: str, arrays: dict[str, np.ndarray]) -> None:
+        """Store the finished leading points of an unfinished chain (rows of each array),
+        atomically, replacing the previous ones."""
+        target = self._partial_file(key)
+        tmp = target.with_suffix(".tmp.npz")
+        np.savez(tmp, **arrays)
+        os.replace(tmp, target)
+
+    def load_partial(self, key: str) -> dict[str, np.ndarray] | None:
+        """The stored leading points of chain ``key`` (None if there are none)."""
+        f = self._partial_file(key)
+        if not f.exists():
+            return None
+        with np.load(f) as data:
+            return {k: data[k] for k in data.files}
+
+    def remove_partial(self, key: str) -> None:
+        """Forget the leading points of ``key`` (its whole result is stored now)."""
+        self._partial_file(key).unlink(missing_ok=True)
 
     def load(self, key: str) -> dict[str, np.ndarray]:
         """The stored arrays of task ``key``."""

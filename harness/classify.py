@@ -2,14 +2,17 @@
 
 A sampled orbit x_0 .. x_{N-1} (x = (u, v) at t = n + theta) has period M when
 x_{k+M} = x_k for every k (within a tolerance) and the impact counts per period repeat
-with period M too; M is the smallest such shift.  "Not periodic" (period 0) covers
-chaotic orbits, quasi-periodic ones and orbits that have not converged in the transient.
+with period M too; M is the smallest such shift.  Period 0 means "no period found"; it
+covers chaotic orbits, quasi-periodic ones and orbits that have not converged in the
+transient, which :func:`classify_dynamics` tells apart (the sweeps' ``dynamics`` variable:
+-1 unclassified, 0 not converged, 1 periodic, 2 quasi-periodic, 3 chaotic).
 
 The period-adding windows of the paper's Figure 9 are maximal orbits: period M with one
 impact per M periods, M = 1, 2, 3 as sigma decreases.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -170,3 +173,53 @@ def windows(values: np.ndarray, period: np.ndarray, impacts: np.ndarray | None =
         out.append((int(period[k]), lo, hi))
         k = j + 1
     return out
+
+
+# ----------------------------------------------------------------------------------------
+# Dynamics: periodic, quasi-periodic, chaotic, not converged (with Lyapunov exponents)
+# ----------------------------------------------------------------------------------------
+#: Codes of :func:`classify_dynamics` (the NetCDF variable ``dynamics``).
+UNCLASSIFIED, NOT_CONVERGED, PERIODIC, QUASI_PERIODIC, CHAOTIC = -1, 0, 1, 2, 3
+DYNAMICS_NAMES = {UNCLASSIFIED: "unclassified", NOT_CONVERGED: "not converged", PERIODIC: "periodic",
+                  QUASI_PERIODIC: "quasi-periodic", CHAOTIC: "chaotic"}
+#: An exponent is called positive / negative when it is this many standard errors from 0.
+SIGMAS = 3.0
+#: Largest 3-sigma band around 0 that still counts as "lambda_1 = 0" (per forcing period):
+#: a wider band cannot tell a torus from slow convergence or weak chaos.
+ZERO_BAND = 0.02
+
+
+def classify_dynamics(period: int, settling: bool, largest: float, uncertainty: float,
+                      sigmas: float = SIGMAS, zero_band: float = ZERO_BAND) -> int:
+    """Periodic, quasi-periodic, chaotic or not (yet) converged.
+
+    Parameters
+    ----------
+    period : int
+        From :func:`classify_orbit` (0: not periodic within the tolerance).
+    settling : bool
+        From :func:`still_settling`: the samples look periodic but still converge.
+    largest, uncertainty : float
+        lambda_1 of the stroboscopic map and its standard error (NaN: not computed).
+
+    Returns
+    -------
+    int
+        :data:`PERIODIC` (periodic samples, converged); :data:`CHAOTIC` (lambda_1 > 0 by more
+        than ``sigmas`` standard errors); :data:`QUASI_PERIODIC` (lambda_1 = 0 within
+        ``sigmas`` standard errors, and that band narrower than ``zero_band``: motion on an
+        invariant circle of the map); :data:`NOT_CONVERGED` (lambda_1 < 0 beyond its
+        uncertainty -- an attracting orbit not reached yet, or periodic beyond the largest
+        period tried -- or still settling, or undecided: a band too wide to tell);
+        :data:`UNCLASSIFIED` (not periodic and no exponent).
+    """
+    if period > 0 and not settling:
+        return PERIODIC
+    if not (math.isfinite(largest) and math.isfinite(uncertainty)):
+        return NOT_CONVERGED if settling else UNCLASSIFIED
+    band = sigmas * uncertainty
+    if largest - band > 0:
+        return CHAOTIC
+    if largest + band < 0 or settling:
+        return NOT_CONVERGED
+    return QUASI_PERIODIC if band <= zero_band else NOT_CONVERGED

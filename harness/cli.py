@@ -2,17 +2,19 @@
 
 Subcommands are registered by modules: :mod:`harness.commands` provides simulate, strobe,
 sweep and jacobian; further modules listed in :data:`OPTIONAL_COMMAND_MODULES` (e.g. a
-later ``harness/reproduce.py``) are picked up when they exist.  A command module exposes
+later ``harness/reproduce/``) are picked up when they exist.  A command module exposes
 ``register(subparsers, parents)``, which adds its parser(s) with ``set_defaults(func=...)``;
 ``func(args)`` returns the exit status.
 
 Exit status: 0 success, 1 the FMU failed during a run, 2 bad input (a one-line message
 naming the argument, or quoting the FMU when it refuses the settings at initialization;
-never a traceback), 130 interrupted.
+also broken FMU binaries, unreadable files, unwritable outputs, runs over the memory or work
+limits of :mod:`harness.budget`; never a traceback), 130 interrupted, 143 terminated.
 """
 from __future__ import annotations
 
 import argparse
+import builtins
 import importlib
 import os
 import shlex
@@ -36,6 +38,39 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 
+def count(text: str) -> int:
+    """argparse type of counts: an integer, also written like ``1e9`` (so that a huge count
+    reaches the memory and work check and is refused with an estimate, not as a typo)."""
+    try:
+        return builtins.int(text)
+    except ValueError:
+        value = float(text)  # ValueError -> argparse's "invalid int value"
+        if not value.is_integer():
+            raise
+        return builtins.int(value)
+
+
+count.__name__ = "int"  # argparse names the type in its message: "invalid int value: 'abc'"
+
+
+def size(text: str) -> int:
+    """argparse type of memory sizes (``512M``, ``8G``)."""
+    from .budget import parse_size
+
+    return parse_size(text)
+
+
+def positive(text: str) -> float:
+    """argparse type of a finite number > 0."""
+    value = float(text)
+    if not (0 < value < float("inf")):
+        raise ValueError(text)
+    return value
+
+
+positive.__name__ = "positive number"
+
+
 def common_parent() -> argparse.ArgumentParser:
     """Options shared by every subcommand that runs the FMU."""
     p = OneLineParser(add_help=False)
@@ -47,11 +82,20 @@ def common_parent() -> argparse.ArgumentParser:
                    help="set an FMU parameter, e.g. --set sigma=0.3 --set wall=rigid (repeatable)")
     g.add_argument("--u0", dest="initial__u0", type=float, metavar="U", help="initial displacement")
     g.add_argument("--v0", dest="initial__v0", type=float, metavar="V", help="initial velocity")
+    g.add_argument("--solver", choices=("cvode", "closed-form"),
+                   help="the FMU's integrator: cvode (default) or closed-form (exact propagation of the linear "
+                   "contact law; an FMU without the parameter 'solver' has CVODE only)")
     o = p.add_argument_group("output")
     o.add_argument("--out", "-o", dest="run__out", metavar="FILE.nc", help="NetCDF result file")
     o.add_argument("--plot", dest="run__plot", metavar="FILE.png", help="PNG plot (default: next to --out)")
     o.add_argument("--no-plot", action="store_true", help="do not draw a plot")
     o.add_argument("--no-progress", action="store_true", help="no progress bar")
+    b = p.add_argument_group("limits (checked before anything is allocated or run)")
+    b.add_argument("--max-memory", type=size, metavar="SIZE",
+                   help="largest memory a run may plan for, e.g. 2G (default: half the RAM)")
+    b.add_argument("--max-work", type=positive, metavar="N",
+                   help="largest number of FMU periods a run may integrate (default 1e8, ~8 CPU hours)")
+    b.add_argument("--force", action="store_true", help="run even beyond --max-work")
     return p
 
 
@@ -61,16 +105,21 @@ def sampling_parent() -> argparse.ArgumentParser:
     g = p.add_argument_group("stroboscopic sampling")
     g.add_argument("--theta", dest="sampling__theta", type=float, metavar="PHASE",
                    help="section phase in [0, 1): samples at t = n + theta (default 0)")
-    g.add_argument("--transient", dest="sampling__transient", type=int, metavar="N",
+    g.add_argument("--transient", dest="sampling__transient", type=count, metavar="N",
                    help="periods discarded before sampling (default 300)")
-    g.add_argument("--samples", dest="sampling__samples", type=int, metavar="N",
+    g.add_argument("--samples", dest="sampling__samples", type=count, metavar="N",
                    help="periods sampled (default 40)")
     g.add_argument("--tol", dest="sampling__tol", type=float, metavar="TOL", help="periodicity tolerance, relative (default 1e-5)")
-    g.add_argument("--max-period", dest="sampling__max_period", type=int, metavar="M",
+    g.add_argument("--max-period", dest="sampling__max_period", type=count, metavar="M",
                    help="largest period tried (default samples/2)")
-    g.add_argument("--extend", dest="sampling__extend", type=int, metavar="N",
+    g.add_argument("--extend", dest="sampling__extend", type=count, metavar="N",
                    help="sweeps: up to N more periods for points not yet periodic (slow convergence "
                    "near window edges; default 0)")
+    g.add_argument("--lyapunov", dest="sampling__lyapunov", type=count, metavar="N",
+                   help="Lyapunov exponents of the stroboscopic map over N periods after the samples, with "
+                   "their uncertainty, and the classification periodic / quasi-periodic / chaotic / not "
+                   "converged (exact with an FMU that reports its derivatives, else by differences at ~5x "
+                   "the cost; default 0: none)")
     return p
 
 
@@ -86,6 +135,8 @@ def overrides_from_args(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
         if not sep or not name.strip():
             raise HarnessInputError("--set", f"expected NAME=VALUE, got {item!r}")
         layer.setdefault("model", {})[name.strip()] = value.strip()
+    if getattr(args, "solver", None):
+        layer.setdefault("model", {})["solver"] = args.solver
     if getattr(args, "no_progress", False):
         layer.setdefault("run", {})["progress"] = False
     return layer
@@ -154,8 +205,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     # recorded in the results' attributes
     args.command_line = " ".join([PROG, *(shlex.quote(a) for a in argv)])
     prog = f"{PROG} {args.command}"
+    restore = _terminate_like_interrupt()
     try:
         return int(args.func(args) or 0)
+    except Terminated:
+        print(f"{prog}: terminated", file=sys.stderr)
+        return 143
     except HarnessInputError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
@@ -171,7 +226,35 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130
-    except BrokenPipeError:
-        # stdout closed early (e.g. piped into `head`): the results are written; stay quiet
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
+    except MemoryError:
+        print(f"{prog}: error: out of memory (lower the grid, samples or --dt, or --max-memory)", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        if isinstance(exc, BrokenPipeError):
+            # stdout closed early (e.g. piped into `head`): the results are written; stay quiet
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+            return 0
+        # files the user named (unreadable, unwritable, vanished): one line, not a traceback
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    finally:
+        restore()  # the extraction folder goes at exit (harness.tempdirs), SIGTERM included
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, handled like Ctrl-C (workers stopped, checkpoint kept, temp folder removed)."""
+
+
+def _terminate_like_interrupt() -> Any:
+    """Raise :class:`Terminated` on SIGTERM in the main thread; returns the undo function."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+
+    def handler(signum: int, frame: Any) -> None:
+        raise Terminated()
+
+    previous = signal.signal(signal.SIGTERM, handler)
+    return lambda: signal.signal(signal.SIGTERM, previous)

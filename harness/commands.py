@@ -16,9 +16,11 @@ from typing import Any
 import numpy as np
 
 from .classify import classify_orbit, windows
-from .cli import overrides_from_args
+from .budget import Budget, grid_count, jacobian_estimate, simulate_estimate, strobe_estimate, sweep_estimate
+from .cli import count, overrides_from_args
 from .config import Experiment, parameter_values
-from .errors import HarnessInputError
+from .errors import FmuRejectedInput, HarnessInputError
+from .outputs import check_output, check_plot
 from .progress import progress_bar
 
 
@@ -41,21 +43,23 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
 
     p = sub.add_parser("sweep", parents=[common, sampling], help="bifurcation sweep (fresh / up / down / both), 1D or 2D",
                        description="Sweep an FMU parameter (sigma by default): fresh starts from the same state, or "
-                       "quasi-static continuation up and/or down carrying the state. Draws the bifurcation diagram.")
+                       "quasi-static continuation up and/or down carrying the state (both: one hysteresis loop, the down "
+                       "scan starting where the up scan ended). Draws the bifurcation diagram.")
     g = p.add_argument_group("sweep")
     g.add_argument("--param", dest="sweep__param", metavar="NAME", help="swept FMU parameter (default sigma)")
     g.add_argument("--start", dest="sweep__start", type=float, metavar="X", help="first value (default 1.0)")
     g.add_argument("--stop", dest="sweep__stop", type=float, metavar="X", help="last value (default 0.1)")
-    g.add_argument("--num", dest="sweep__num", type=int, metavar="N", help="number of values (default 91)")
+    g.add_argument("--num", dest="sweep__num", type=count, metavar="N", help="number of values (default 91)")
     g.add_argument("--values", dest="sweep__values", metavar="V1,V2,...", help="explicit values (instead of start/stop/num)")
     g.add_argument("--mode", dest="sweep__mode", metavar="MODE",
-                   help="fresh, up, down or both (= up and down); comma-separated list allowed (default both)")
+                   help="fresh, up, down, or both: a hysteresis loop, up and then down from the state where the "
+                   "up scan ended (up,down: two independent scans); comma-separated list allowed (default both)")
     g.add_argument("--scan", metavar="NAME=V1,V2,...|NAME=START:STOP:NUM",
                    help="second axis of a 2D scan, e.g. --scan Gamma=10,100,1000")
     b = p.add_argument_group("execution")
     b.add_argument("--backend", dest="run__backend", choices=["serial", "processes", "dask"],
                    help="where to run (default processes, or dask with --scheduler)")
-    b.add_argument("--workers", "-j", dest="run__workers", type=int, metavar="N",
+    b.add_argument("--workers", "-j", dest="run__workers", type=count, metavar="N",
                    help="local worker processes (default: all cores)")
     b.add_argument("--scheduler", dest="run__scheduler", metavar="tcp://HOST:PORT", help="run on this Dask scheduler")
     b.add_argument("--checkpoint", dest="run__checkpoint", metavar="DIR",
@@ -74,8 +78,11 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
                    help="phase where J is measured, away from the impact (default 0.5)")
     g.add_argument("--x-start", dest="jacobian__x_start", type=float, metavar="X", help="smallest x (default 1e-6)")
     g.add_argument("--x-stop", dest="jacobian__x_stop", type=float, metavar="X", help="largest x (default 1e-2)")
-    g.add_argument("--x-num", dest="jacobian__x_num", type=int, metavar="N", help="number of x values, log-spaced (default 25)")
+    g.add_argument("--x-num", dest="jacobian__x_num", type=count, metavar="N", help="number of x values, log-spaced (default 25)")
     g.add_argument("--state", dest="jacobian__state", metavar="U,V", help="J at this state at t = theta instead of a scan")
+    g.add_argument("--method", dest="jacobian__method", choices=("auto", "exact", "fd"),
+                   help="exact: the FMU's own derivatives (variational equations); fd: central differences; "
+                   "auto (default): exact when the FMU reports them")
     p.set_defaults(func=cmd_jacobian)
 
 
@@ -88,15 +95,25 @@ def _experiment(args: argparse.Namespace, extra: dict[str, dict[str, Any]] | Non
 
 
 def _outputs(args: argparse.Namespace, exp: Experiment, default_stem: str) -> tuple[Path, Path | None]:
-    out = Path(exp.run.out or f"results/{default_stem}.nc")
+    """The result and plot files, checked writable before any work is done."""
+    out = check_output(exp.run.out or f"results/{default_stem}.nc", exp.layers.arg("run", "out"))
     if args.no_plot:
         return out, None
-    return out, Path(exp.run.plot) if exp.run.plot else out.with_suffix(".png")
+    if exp.run.plot:
+        return out, check_plot(exp.run.plot, exp.layers.arg("run", "plot"))
+    return out, check_plot(out.with_suffix(".png"), "--out")  # OUT.png may be a directory
 
 
 def _command_line(args: argparse.Namespace | None = None) -> str:
     line = getattr(args, "command_line", None)
     return line if line else " ".join(["impact-harness", *sys.argv[1:]])
+
+
+def _finite(layers: Any, section: str, key: str) -> float:
+    """A finite number from the settings, or a one-line error naming the flag or file key."""
+    from .config import _number
+
+    return _number(layers, section, key)
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
@@ -107,10 +124,15 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from .simulator import FmuSimulator
 
     exp = _experiment(args)
-    t0 = float(exp.layers.get("simulate", "t0"))
-    t_end = float(exp.layers.get("simulate", "t_end"))
-    dt = float(exp.layers.get("simulate", "dt"))
+    L = exp.layers
+    t0, t_end = _finite(L, "simulate", "t0"), _finite(L, "simulate", "t_end")
+    dt = _finite(L, "simulate", "dt")
     out, plot = _outputs(args, exp, "simulate")
+    if not dt > 0:
+        raise HarnessInputError(L.arg("simulate", "dt"), f"the output step must be > 0, got {dt}")
+    if not t_end > t0:
+        raise HarnessInputError(L.arg("simulate", "t_end"), f"must be greater than the start time {t0}, got {t_end}")
+    Budget.from_args(args).check(simulate_estimate(t0, t_end, dt, L.arg("simulate", "dt")))
     t_start = time.perf_counter()
     sim = FmuSimulator(exp.model.source())
     n = max(1, int((t_end - t0) / dt)) if dt > 0 else 1
@@ -135,15 +157,38 @@ def cmd_strobe(args: argparse.Namespace) -> int:
     exp = _experiment(args)
     s = exp.sampling
     out, plot = _outputs(args, exp, "strobe")
+    L = exp.layers
+    blame = L.arg("sampling", "transient") if s.n_transient > s.n_samples else L.arg("sampling", "samples")
+    # a Lyapunov period costs up to 5 runs (differences when the FMU has no derivatives)
+    Budget.from_args(args).check(strobe_estimate(s.n_transient, s.n_samples + 5 * s.lyapunov, blame))
     t_start = time.perf_counter()
     sim = FmuSimulator(exp.model.source())
+    exact = bool(s.lyapunov) and sim.derivatives_available
+    sim.track_derivatives(exact)
     with progress_bar(total=s.n_transient + s.n_samples, desc="strobe", unit="period", disable=not exp.run.progress) as bar:
         r = strobe(sim, exp.params, exp.state0, s.theta, s.n_transient, s.n_samples, progress=bar)
     orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
+    ly = None
+    if s.lyapunov:
+        from .classify import DYNAMICS_NAMES, classify_dynamics, still_settling
+        from .lyapunov import lyapunov_continued
+
+        ly = lyapunov_continued(sim, exp.params, s.lyapunov, exact)
+        settling = orbit.periodic and still_settling(r.u, r.v, orbit.period, s.tol)
+        dynamics = DYNAMICS_NAMES[classify_dynamics(orbit.period, settling, ly.largest, ly.largest_uncertainty)]
     attrs = provenance(exp.as_attrs(), exp.model, "serial", time.perf_counter() - t_start, _command_line(args))
     ds = strobe_dataset(r, orbit, attrs)
+    if ly is not None:
+        ds = ds.assign_coords(exponent=[1, 2])
+        ds["lyapunov"] = ("exponent", ly.exponents, {"long_name": "Lyapunov exponents of the stroboscopic map",
+                                                     "units": "1/forcing period", "method": ly.method,
+                                                     "comment": f"QR method over {ly.periods} periods after the samples"})
+        ds["lyapunov_err"] = ("exponent", ly.uncertainty, {"long_name": "standard error (batch means of 10 blocks)"})
+        ds.attrs["dynamics"] = dynamics
     write_netcdf(ds, out)
-    print(f"{orbit.label} (residual {orbit.residual:.2e}); wrote {out}")
+    print(f"{orbit.label} (residual {orbit.residual:.2e})"
+          + ("" if ly is None else f"; Lyapunov exponents {ly} per period ({ly.method}): {dynamics}")
+          + f"; wrote {out}")
     if plot:
         print(f"plot: {poincare_section(ds, plot)}")
     return 0
@@ -166,18 +211,56 @@ def _scan_option(text: str | None) -> dict[str, Any]:
     return {"scan_param": name.strip(), "scan_values": [float(v) for v in values]}
 
 
+def _scan_count(text: str) -> float:
+    """Points of the ``--scan`` grid, read from its text without building it."""
+    spec = text.partition("=")[2]
+    if ":" in spec:
+        parts = spec.split(":")
+        return grid_count(parts[-1], None) if len(parts) == 3 else 0.0
+    return grid_count(None, spec)
+
+
+def _check_sweep_budget(args: argparse.Namespace, exp: Experiment) -> None:
+    """Refuse a sweep whose grid, samples or periods exceed the limits, before any grid
+    array exists (``np.linspace(0, 1, 10**9)`` alone is 8 GB)."""
+    from .config import parse_modes, sweep_directions
+
+    L, s = exp.layers, exp.sampling
+    if args.scan:
+        n_scan = _scan_count(args.scan)
+    elif L.get("sweep", "scan_param") is not None:
+        n_scan = grid_count(None, L.get("sweep", "scan_values"))
+    else:
+        n_scan = 0.0
+    n_values = grid_count(L.get("sweep", "num"), L.get("sweep", "values"))
+    modes = parse_modes(L.get("sweep", "mode"), L.arg("sweep", "mode"))
+    # blame the largest factor: the flag the user most likely mistyped
+    grid_arg = L.arg("sweep", "values") if L.get("sweep", "values") is not None else L.arg("sweep", "num")
+    factors = {grid_arg: n_values, "--scan" if args.scan else L.arg("sweep", "scan_values"): n_scan,
+               L.arg("sampling", "transient"): s.n_transient, L.arg("sampling", "samples"): s.n_samples,
+               L.arg("sampling", "extend"): s.extend, L.arg("sampling", "lyapunov"): s.lyapunov}
+    blame = max(factors, key=lambda k: factors[k])
+    # a Lyapunov period costs up to 5 runs (central differences when the FMU has no derivatives)
+    Budget.from_args(args).check(
+        sweep_estimate(n_values, len(sweep_directions(modes)), n_scan, s.n_transient, s.n_samples, s.extend + 5 * s.lyapunov, blame))
+
+
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``sweep``: 1D/2D sweep on the chosen backend, resumable; NetCDF + diagram."""
     from .results import write_netcdf
     from .sweeps import SweepStats, run_sweep
 
-    exp = _experiment(args, {"sweep": _scan_option(args.scan)})
+    exp = _experiment(args)
+    _check_sweep_budget(args, exp)
+    if args.scan:
+        exp.layers.merge({"sweep": _scan_option(args.scan)}, "cli")
     spec = exp.sweep_spec()
     out, plot = _outputs(args, exp, f"sweep-{spec.param}")
     explicit = exp.run.checkpoint is not None
     ckpt = Path(exp.run.checkpoint) if explicit else out.with_name(out.name + ".partial")
     if args.no_resume and ckpt.exists():
         shutil.rmtree(ckpt)
+    ckpt_is_new = not ckpt.exists()
     stats = SweepStats()
 
     def sweep() -> Any:
@@ -199,16 +282,37 @@ def cmd_sweep(args: argparse.Namespace) -> int:
             shutil.rmtree(ckpt)
             ds = sweep()
     except KeyboardInterrupt:
-        print(f"interrupted: finished points are kept in {ckpt}; rerun the same command to resume", file=sys.stderr)
+        # say what is really on disk: whole tasks and the leading points of chains
+        if stats.kept_points:
+            print(f"interrupted: {stats.kept_points} of {stats.total_points} points are kept in {ckpt}; "
+                  "rerun the same command to resume", file=sys.stderr)
+        else:
+            print("interrupted before any point finished; nothing kept", file=sys.stderr)
+            if ckpt_is_new:
+                shutil.rmtree(ckpt, ignore_errors=True)
+        raise
+    except (HarnessInputError, FmuRejectedInput):
+        # Rejected input: a rerun needs other settings, which could not resume this
+        # checkpoint anyway; one made by this run goes (else the next run notes discarding it).
+        if ckpt_is_new:
+            shutil.rmtree(ckpt, ignore_errors=True)
         raise
     write_netcdf(ds, out)
     shutil.rmtree(ckpt, ignore_errors=True)  # the NetCDF file now holds everything
     print(f"{spec.param}: {len(spec.values)} values x {', '.join(spec.modes)}"
           + (f" x {spec.scan_param} ({len(spec.scan_values)} values)" if spec.scan_param else "")
-          + f"; {stats.computed} tasks computed, {stats.resumed} resumed; "
+          + f"; {stats.computed} tasks computed, {stats.resumed} resumed"
+          + (f" ({stats.resumed_points} points of unfinished chains resumed)" if stats.resumed_points else "")
+          + "; "
           f"wall time {stats.wall_time:.2f} s on {ds.attrs['backend']} "
           f"(tasks used {ds.attrs['tasks_cpu_time_s']:.1f} CPU s)")
     grid = ds[spec.param].values
+    if "lyapunov" in ds:
+        from .classify import DYNAMICS_NAMES
+
+        codes, counts = np.unique(ds["dynamics"].values, return_counts=True)
+        print("  dynamics (Lyapunov exponents over " f"{exp.sampling.lyapunov} periods): "
+              + ", ".join(f"{DYNAMICS_NAMES[int(c)]} {n}" for c, n in zip(codes, counts)))
     if spec.scan_param is None:
         for direction in ds["direction"].values:
             sel = ds.sel(direction=direction)
@@ -250,12 +354,14 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
             u, v = (float(s) for s in str(state).replace(" ", "").split(","))
         except ValueError:
             raise HarnessInputError(L.arg("jacobian", "state"), f"expected U,V, got {state!r}") from None
-        res = map_jacobian(sim, params, (u, v), theta=theta)
+        res = map_jacobian(sim, params, (u, v), theta=theta, method=str(L.get("jacobian", "method")))
         print(f"J at (u, v) = ({u}, {v}), t = {theta}:")
         print(np.array2string(res.J, precision=8))
-        print(f"image {res.image}, step {res.step:.2e}, estimated error {res.error:.1e}")
+        print(f"image {res.image}; " + ("exact (the FMU's derivatives)" if res.method == "exact" else
+                                         f"central differences, step {res.step:.2e}, estimated error {res.error:.1e}"))
         return 0
     n = check_count(L.get("jacobian", "x_num"), L.arg("jacobian", "x_num"), minimum=1)
+    Budget.from_args(args).check(jacobian_estimate(n, L.arg("jacobian", "x_num")))
     lo, hi = float(L.get("jacobian", "x_start")), float(L.get("jacobian", "x_stop"))
     if not (0 < lo and 0 < hi):
         raise HarnessInputError(L.arg("jacobian", "x_start"), f"x values must be > 0 (log-spaced), got {lo}, {hi}")
@@ -264,7 +370,8 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
     x = np.geomspace(lo, hi, n)
     out, plot = _outputs(args, exp, "jacobian")
     with progress_bar(total=n, desc="jacobian", unit="x", disable=not exp.run.progress) as bar:
-        scan = jacobian_vs_x(sim, params, x, theta, float(L.get("jacobian", "measure_theta")), progress=bar)
+        scan = jacobian_vs_x(sim, params, x, theta, float(L.get("jacobian", "measure_theta")), progress=bar,
+                             method=str(L.get("jacobian", "method")))
     settings = {**exp.as_attrs(), **{f"model.{k}": v for k, v in params.items()},
                 **{f"jacobian.{k}": v for k, v in L.values["jacobian"].items()}}
     ds = jacobian_dataset(scan, provenance(settings, exp.model, "serial", time.perf_counter() - t_start, _command_line(args)))
@@ -273,7 +380,7 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
     ok = (dJ[:, 0, 0] > 0)
     if ok.sum() >= 2:
         slope = np.polyfit(np.log(x[ok]), np.log(dJ[ok, 0, 0]), 1)[0]
-        print(f"log-log slope of |J11 - P11| against x: {slope:+.3f}")
+        print(f"log-log slope of |J11 - P11| against x ({scan.method}): {slope:+.3f}")
     print(f"wrote {out}")
     if plot:
         print(f"plot: {jacobian_plot(ds, plot)}")

@@ -20,6 +20,7 @@ An experiment file holds every parameter of a run::
     samples = 40       # periods sampled
     tol = 1e-5         # periodicity tolerance (relative)
     extend = 0         # extra periods for points not yet periodic (slow near window edges)
+    lyapunov = 0       # periods of Lyapunov exponents after the samples (0: none)
 
     [sweep]
     param = "sigma"
@@ -72,7 +73,7 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-SWEEP_MODES = ("fresh", "up", "down")
+SWEEP_MODES = ("fresh", "up", "down", "both")
 BACKENDS = ("serial", "processes", "dask")
 
 
@@ -104,7 +105,8 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "initial": {"u0": None, "v0": None},
     # 300 transient periods: the slow free-flight mode decays like 0.98^n at Figure 9's
     # parameters, and orbits near window edges converge slowly.
-    "sampling": {"theta": 0.0, "transient": 300, "samples": 40, "tol": 1e-5, "max_period": None, "extend": 0},
+    "sampling": {"theta": 0.0, "transient": 300, "samples": 40, "tol": 1e-5, "max_period": None, "extend": 0,
+                 "lyapunov": 0},
     # Default sweep: Figure 9 from period 1 (sigma > ~0.85) down through period 2 and 3.
     "sweep": {
         "param": "sigma",
@@ -123,6 +125,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
         "x_stop": 1e-2,
         "x_num": 25,
         "state": None,
+        "method": "auto",  # exact (the FMU's derivatives), fd (differences), auto (exact when available)
         "rtol": None,  # None: the FMU's own (tight) default tolerances
         "atol": None,
     },
@@ -149,6 +152,7 @@ CLI_FLAGS: dict[tuple[str, str], str] = {
     ("sampling", "tol"): "--tol",
     ("sampling", "max_period"): "--max-period",
     ("sampling", "extend"): "--extend",
+    ("sampling", "lyapunov"): "--lyapunov",
     ("sweep", "param"): "--param",
     ("sweep", "start"): "--start",
     ("sweep", "stop"): "--stop",
@@ -163,6 +167,7 @@ CLI_FLAGS: dict[tuple[str, str], str] = {
     ("jacobian", "x_stop"): "--x-stop",
     ("jacobian", "x_num"): "--x-num",
     ("jacobian", "state"): "--state",
+    ("jacobian", "method"): "--method",
     ("simulate", "t0"): "--t0",
     ("simulate", "t_end"): "--t-end",
     ("simulate", "dt"): "--dt",
@@ -228,8 +233,14 @@ def load_toml(path: str | os.PathLike, argument: str = "--config") -> dict[str, 
             return tomllib.load(fh)
     except FileNotFoundError:
         raise HarnessInputError(argument, f"no such file: {str(path)!r}") from None
+    except IsADirectoryError:
+        raise HarnessInputError(argument, f"{str(path)!r} is a directory, not an experiment file") from None
+    except UnicodeDecodeError as exc:  # TOML is UTF-8 by definition
+        raise HarnessInputError(argument, f"{path} is not UTF-8 text (byte {exc.start}: {exc.reason})") from None
     except tomllib.TOMLDecodeError as exc:
         raise HarnessInputError(argument, f"{path} is not valid TOML: {exc}") from None
+    except OSError as exc:  # permission denied, I/O errors
+        raise HarnessInputError(argument, f"cannot read {str(path)!r}: {exc.strerror or exc}") from None
 
 
 # ----------------------------------------------------------------------------------------
@@ -271,6 +282,9 @@ class SamplingSpec:
     #: extra periods a point may run when its samples are not yet periodic (0: none);
     #: sampled in windows of ``n_samples``, the last window is kept
     extend: int = 0
+    #: periods after the samples over which the Lyapunov exponents of the stroboscopic map
+    #: are averaged (0: none); the FMU's own derivatives when it has them, else differences
+    lyapunov: int = 0
 
     def __post_init__(self) -> None:
         from .sampling import check_count, check_theta
@@ -283,6 +297,8 @@ class SamplingSpec:
         if self.max_period is not None:
             check_count(self.max_period, "max_period", minimum=1)
         check_count(self.extend, "extend")
+        if self.lyapunov:
+            check_count(self.lyapunov, "lyapunov", minimum=2)
 
     @classmethod
     def from_layers(cls, layers: Layered) -> "SamplingSpec":
@@ -298,6 +314,7 @@ class SamplingSpec:
             tol=_number(layers, "sampling", "tol", positive=True),
             max_period=None if mp is None else _count(layers, "sampling", "max_period", minimum=1),
             extend=_count(layers, "sampling", "extend"),
+            lyapunov=_count(layers, "sampling", "lyapunov"),
         )
 
 
@@ -379,20 +396,33 @@ class SweepSpec:
 
 
 def parse_modes(mode: Any, argument: str) -> tuple[str, ...]:
-    """``"both"`` -> ``("up", "down")``; a list or comma string of fresh/up/down/both."""
+    """A list or comma string of fresh/up/down/both, checked and without repeats.
+
+    ``both`` is the hysteresis loop (up, then down from the state where the up scan ended);
+    ``up,down`` are two independent scans, each from the initial state.
+    """
     items = mode.replace(",", " ").split() if isinstance(mode, str) else list(mode)
     out: list[str] = []
     for m in items:
         m = str(m).lower()
-        expanded = ("up", "down") if m == "both" else (m,)
-        for e in expanded:
-            if e not in SWEEP_MODES:
-                raise HarnessInputError(argument, f"unknown sweep mode {m!r}; choose from fresh, up, down, both")
-            if e not in out:
-                out.append(e)
+        if m not in SWEEP_MODES:
+            raise HarnessInputError(argument, f"unknown sweep mode {m!r}; choose from fresh, up, down, both")
+        if m not in out:
+            out.append(m)
     if not out:
         raise HarnessInputError(argument, "no sweep mode given")
+    if "both" in out and ("up" in out or "down" in out):
+        raise HarnessInputError(argument, "'both' is the up-then-down loop already; give it alone, or "
+                                "'up,down' for two independent scans from the initial state")
     return tuple(out)
+
+
+def sweep_directions(modes: tuple[str, ...] | list[str]) -> list[str]:
+    """The directions of a sweep's results: ``both`` stands for up and down."""
+    out: list[str] = []
+    for m in modes:
+        out.extend(("up", "down") if m == "both" else (m,))
+    return out
 
 
 @dataclass(frozen=True)
@@ -470,7 +500,7 @@ class Experiment:
         model : FmuModel, optional
             Already opened FMU (otherwise opened from ``fmu.path``).
         """
-        from .fmi import FmuModel, INITIAL_STATE
+        from .fmi import FmuModel, INITIAL_STATE, SOLVER_PARAMETER
 
         layers = Layered()
         if config is not None:
@@ -484,6 +514,14 @@ class Experiment:
         for name, value in layers.values["model"].items():
             arg = (f"--set {name}" if layers.origin.get(("model", name)) == "cli"
                    else layers.arg("model", name))
+            if name == SOLVER_PARAMETER and layers.origin.get(("model", name)) == "cli":
+                arg = "--solver"
+            if name == SOLVER_PARAMETER and name not in model.variables:
+                # an FMU without the parameter integrates with CVODE: that choice is a no-op
+                if str(value).lower() in ("cvode", "0"):
+                    continue
+                raise HarnessInputError(arg, f"{model.path.name} has no closed-form solver mode (no parameter "
+                                        f"{SOLVER_PARAMETER!r}); it integrates with CVODE only")
             params[name] = model.coerce(name, value, arg)
         state = []
         for key in INITIAL_STATE:

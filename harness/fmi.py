@@ -17,12 +17,9 @@ never to fmpy directly.  This module is the only place that knows about fmpy and
 """
 from __future__ import annotations
 
-import atexit
 import collections
 import hashlib
 import os
-import shutil
-import tempfile
 import threading
 import zipfile
 from dataclasses import dataclass, field
@@ -41,6 +38,17 @@ REQUIRED_VARIABLES = (*STATE_OUTPUTS, IMPACT_COUNTER, *INITIAL_STATE)
 #: Symbolic values accepted for the Integer parameter ``wall``.
 WALL_NAMES = {"none": 0, "compliant": 1, "rigid": 2}
 
+#: The FMU's derivatives of its last ``doStep`` (issue 11): a Boolean parameter switches the
+#: variational equations on, six outputs give d(u, v)_end/d(u, v)_start (J_uv = du/dv_start)
+#: and d(u, v)_end/d sigma.  An FMU that has all of them gets exact map Jacobians; one
+#: without falls back to finite differences (feature detection by name, no version check).
+SENSITIVITY_SWITCH = "sensitivities"
+SENSITIVITY_OUTPUTS = ("J_uu", "J_uv", "J_vu", "J_vv", "S_u", "S_v")
+
+#: Integer parameter choosing the FMU's integrator, and the names the CLI accepts for it.
+SOLVER_PARAMETER = "solver"
+SOLVER_NAMES = {"cvode": 0, "closed-form": 1}
+
 _SETTABLE_CAUSALITIES = {"parameter", "input"}
 
 #: FMI 2 and FMI 3 type names, by family.
@@ -56,6 +64,21 @@ def sha256_of(path: str | os.PathLike) -> str:
         for block in iter(lambda: fh.read(1 << 20), b""):
             digest.update(block)
     return digest.hexdigest()
+
+
+def check_archive(path: str | os.PathLike, argument: str = "--fmu") -> None:
+    """Read every member of the FMU's zip archive once (CRC checked; ~1 ms for this FMU).
+
+    A damaged archive (a bit flipped in the binary) is bad input found here, in one line,
+    rather than as a ``BadZipFile`` traceback when a worker extracts it.
+    """
+    try:
+        with zipfile.ZipFile(path) as archive:
+            bad = archive.testzip()
+    except (zipfile.BadZipFile, OSError, EOFError, RuntimeError, NotImplementedError) as exc:
+        raise HarnessInputError(argument, f"{str(path)!r} is a damaged FMU archive: {exc}") from None
+    if bad is not None:
+        raise HarnessInputError(argument, f"{str(path)!r} is a damaged FMU archive: bad CRC-32 for {bad!r}")
 
 
 @dataclass(frozen=True)
@@ -105,9 +128,12 @@ class FmuModel:
         self.argument = argument
         self.path = Path(path).expanduser().resolve()
         if not self.path.is_file():
-            raise HarnessInputError(argument, f"no such file: {str(path)!r}")
+            what = "is a directory, not an FMU file" if self.path.is_dir() else "no such file"
+            raise HarnessInputError(argument, f"{what}: {str(path)!r}" if what == "no such file"
+                                    else f"{str(path)!r} {what}")
         if not zipfile.is_zipfile(self.path):
             raise HarnessInputError(argument, f"{str(path)!r} is not an FMU (not a zip archive)")
+        check_archive(self.path, argument)
         try:
             md = read_model_description(str(self.path), validate=False)
         except Exception as exc:  # fmpy raises plain Exceptions with useful text
@@ -148,6 +174,11 @@ class FmuModel:
                 f"{self.path.name} lacks the oscillator variable(s) {', '.join(map(repr, missing))}",
             )
         self._sha256: str | None = None
+
+    @property
+    def has_sensitivities(self) -> bool:
+        """True when the FMU can report the derivatives of its map (:data:`SENSITIVITY_OUTPUTS`)."""
+        return all(n in self.variables for n in (SENSITIVITY_SWITCH, *SENSITIVITY_OUTPUTS))
 
     # -- identity ------------------------------------------------------------------------
     @property
@@ -214,6 +245,8 @@ def coerce_value(var: VariableInfo, value: Any, argument: str) -> float | int | 
         if var.type in INTEGER_TYPES:
             if var.name == "wall" and isinstance(value, str) and value.lower() in WALL_NAMES:
                 return WALL_NAMES[value.lower()]
+            if var.name == SOLVER_PARAMETER and isinstance(value, str) and value.lower() in SOLVER_NAMES:
+                return SOLVER_NAMES[value.lower()]
             if isinstance(value, bool):
                 raise ValueError
             f = float(value)
@@ -229,7 +262,8 @@ def coerce_value(var: VariableInfo, value: Any, argument: str) -> float | int | 
                 raise ValueError
             return bool(value)
     except (TypeError, ValueError):
-        hint = " (or one of none, compliant, rigid)" if var.name == "wall" else ""
+        hint = {"wall": " (or one of none, compliant, rigid)",
+                SOLVER_PARAMETER: " (or one of " + ", ".join(SOLVER_NAMES) + ")"}.get(var.name, "")
         raise HarnessInputError(
             argument, f"{value!r} is not a valid {var.type} value for FMU variable {var.name!r}{hint}"
         ) from None
@@ -255,15 +289,13 @@ class FmuSource:
 
 _EXTRACT_LOCK = threading.Lock()
 _EXTRACTED: dict[str, tuple[str, "FmuModel"]] = {}
-_TMP_ROOT: str | None = None
 
 
 def _tmp_root() -> str:
-    global _TMP_ROOT
-    if _TMP_ROOT is None:
-        _TMP_ROOT = tempfile.mkdtemp(prefix="impact-harness-")
-        atexit.register(shutil.rmtree, _TMP_ROOT, True)
-    return _TMP_ROOT
+    # one folder per process, removed on exit, SIGTERM, or by the next run after a SIGKILL
+    from . import tempdirs
+
+    return tempdirs.root()
 
 
 def open_source(source: FmuSource) -> tuple[str, FmuModel]:
@@ -291,8 +323,11 @@ def open_source(source: FmuSource) -> tuple[str, FmuModel]:
             path = os.path.join(_tmp_root(), source.sha256 + ".fmu")
             with open(path, "wb") as fh:
                 fh.write(source.data)
-        unzipdir = extract(path, unzipdir=os.path.join(_tmp_root(), source.sha256))
-        model = FmuModel(path)
+        model = FmuModel(path, argument="--fmu")  # checks the archive before extracting it
+        try:
+            unzipdir = extract(path, unzipdir=os.path.join(_tmp_root(), source.sha256))
+        except (zipfile.BadZipFile, OSError, EOFError) as exc:
+            raise HarnessInputError("--fmu", f"cannot extract {path}: {exc}") from None
         _EXTRACTED[source.sha256] = (unzipdir, model)
         return unzipdir, model
 
@@ -545,6 +580,16 @@ def make_slave(model: FmuModel, unzipdir: str, instance_name: str,
             "--fmu", f"recording wall-event times needs an FMI 3.0 FMU with event mode and early "
             f"return; {model.path} is FMI {model.fmi_version}")
     with _INSTANTIATE_LOCK:
-        if record_events:
-            return cls(model, unzipdir, instance_name, record_events=True)
-        return cls(model, unzipdir, instance_name)
+        try:
+            if record_events:
+                return cls(model, unzipdir, instance_name, record_events=True)
+            return cls(model, unzipdir, instance_name)
+        except Exception as exc:
+            # fmpy raises a plain Exception when the shared library cannot be loaded (not an
+            # ELF file, wrong architecture, missing symbols) or instantiate returns NULL: a
+            # broken FMU is bad input, told in one line naming the file, never a traceback
+            reason = " ".join(str(exc).split()) or type(exc).__name__
+            if str(unzipdir) in reason:
+                reason = reason.replace(str(unzipdir) + os.sep, "")
+            raise HarnessInputError(
+                "--fmu", f"cannot load the binary of {model.path.name}: {reason}") from None

@@ -1,8 +1,11 @@
-"""Jacobian of the stroboscopic map, measured on the FMU by central differences.
+"""Jacobian of the stroboscopic map: the FMU's own derivatives, or central differences.
 
-The map F takes the state at t0 = n + theta to the state one period later.  Its Jacobian
-is measured by restarting the simulator from perturbed states (no directional derivatives
-are needed from the FMU).  Saving and restoring the FMU state is not needed either: (u, v)
+The map F takes the state at t0 = n + theta to the state one period later.  When the FMU
+reports the derivatives of its map (the variational equations with saltation matrices at
+the wall events, issue 11: outputs ``J_uu`` ... ``S_v``, detected by name) one run gives J
+exactly, down to any distance from grazing (``method="exact"``).  Otherwise, or with
+``method="fd"`` (the cross-check), J is measured by restarting the simulator from perturbed
+states.  Saving and restoring the FMU state is not needed either: (u, v)
 at a section time determine the future completely, the FMU takes them as its start values
 ``u0``/``v0``, and a reset + re-initialization costs ~20 us against ~300 us per period.  Near grazing F has a square-root singularity, so the step must
 be small against the distance to the grazing set but large against the integrator's noise;
@@ -10,7 +13,7 @@ be small against the distance to the grazing set but large against the integrato
 agree best (the classical step selection for noisy differences), and reports that
 disagreement as the error estimate.
 
-For the map near grazing (FORMULAS.md section 8) :func:`jacobian_vs_x` follows the
+For the map near grazing (docs/theory.md section 8) :func:`jacobian_vs_x` follows the
 family of orbits whose wall-free continuation at t = n is (u, v) = (x, 0): J is measured at
 the section phase ``measure_theta`` (default 1/2, far from the impact near t = n, where
 every element is generic) and expressed in the coordinates of the section phase ``theta``
@@ -30,12 +33,34 @@ import scipy.linalg
 
 from .errors import HarnessInputError
 from .sampling import check_theta
-from .simulator import Simulator
+from .simulator import Simulator, has_derivatives, tracking_derivatives
 
 TWO_PI = 2.0 * math.pi
 
 #: Steps tried, as multiples of the state scale: 1e-2 down to ~1e-9 in factors of 4.
 DEFAULT_STEPS = tuple(1e-2 * 4.0 ** -k for k in range(15))
+
+#: How a Jacobian is obtained: "exact" (the FMU's variational equations), "fd" (central
+#: differences), "auto" (exact when the simulator has derivatives, else fd).
+METHODS = ("auto", "exact", "fd")
+
+
+def resolve_method(sim: Any, method: str, argument: str = "method") -> str:
+    """"exact" or "fd" for ``method`` on ``sim`` ("auto": exact when available).
+
+    Raises
+    ------
+    HarnessInputError
+        For an unknown method, or "exact" on a simulator without derivatives.
+    """
+    if method not in METHODS:
+        raise HarnessInputError(argument, f"unknown Jacobian method {method!r}; one of {', '.join(METHODS)}")
+    if method == "auto":
+        return "exact" if has_derivatives(sim) else "fd"
+    if method == "exact" and not has_derivatives(sim):
+        raise HarnessInputError(argument, "exact derivatives requested, but the FMU does not report them "
+                                "(no sensitivity outputs J_uu ... S_v); use the finite differences (fd)")
+    return method
 
 
 @dataclass(frozen=True)
@@ -51,13 +76,20 @@ class JacobianResult:
     step : float
         The smaller of the two difference steps chosen (one per column).
     error : float
-        max |J(step) - J(previous step)|: the estimated absolute error.
+        max |J(step) - J(previous step)|: the estimated absolute error (fd); 0 for "exact"
+        (the variational equations' error is the integrator's, not estimated here).
+    method : str
+        "exact" or "fd".
+    S : ndarray, shape (2,) or None
+        d(u, v)_{n+1} / d sigma (exact method only).
     """
 
     J: np.ndarray
     image: np.ndarray
     step: float
     error: float
+    method: str = "fd"
+    S: np.ndarray | None = None
 
 
 def one_period(sim: Simulator, params: Mapping[str, Any], state: Sequence[float], t0: float) -> np.ndarray:
@@ -68,6 +100,16 @@ def one_period(sim: Simulator, params: Mapping[str, Any], state: Sequence[float]
     return np.array([u, v])
 
 
+def exact_jacobian(sim: Simulator, params: Mapping[str, Any], state: Sequence[float],
+                   theta: float = 0.0) -> JacobianResult:
+    """J and dF/d sigma of the one-period map from the FMU's variational equations (one run)."""
+    theta = check_theta(theta)
+    with tracking_derivatives(sim, True):
+        image = one_period(sim, params, state, theta)
+        J, S = sim.derivatives()  # type: ignore[attr-defined]
+    return JacobianResult(J=J, image=image, step=0.0, error=0.0, method="exact", S=S)
+
+
 def map_jacobian(
     sim: Simulator,
     params: Mapping[str, Any],
@@ -75,6 +117,7 @@ def map_jacobian(
     theta: float = 0.0,
     steps: Sequence[float] = DEFAULT_STEPS,
     scale: Sequence[float] = (1.0, TWO_PI),
+    method: str = "auto",
 ) -> JacobianResult:
     """Jacobian of the one-period map at ``state`` (taken at t = theta).
 
@@ -91,15 +134,23 @@ def map_jacobian(
         Candidate relative steps, decreasing.
     scale : (float, float)
         Step in u is ``h * scale[0]``, in v ``h * scale[1]`` (v ~ 2 pi u along orbits).
+    method : str
+        "auto" (the FMU's derivatives when it reports them, else differences), "exact" or
+        "fd" (``steps`` and ``scale`` apply to "fd" only).
 
     Returns
     -------
     JacobianResult
     """
     theta = check_theta(theta)
+    if resolve_method(sim, method) == "exact":
+        return exact_jacobian(sim, params, state, theta)
     if len(steps) < 2:
         raise HarnessInputError("steps", "need at least two candidate steps")
     x = np.asarray(state, dtype=float)
+    if getattr(sim, "tracking", False):
+        with tracking_derivatives(sim, False):  # no variational equations behind the differences
+            return map_jacobian(sim, params, x, theta, steps, scale, "fd")
     image = one_period(sim, params, x, theta)
     # One ladder per column (perturbation direction): u and v perturbations reach the
     # grazing set at different steps, so each column gets its own best step.
@@ -151,6 +202,8 @@ class JacobianScan:
         Free-flight Jacobian P(1) (same in every phase's coordinates).
     step, error : ndarray (K,)
     theta, measure_theta : float
+    method : str
+        "exact" or "fd".
     """
 
     x: np.ndarray
@@ -161,6 +214,7 @@ class JacobianScan:
     error: np.ndarray
     theta: float
     measure_theta: float
+    method: str = "fd"
 
 
 def jacobian_vs_x(
@@ -170,6 +224,7 @@ def jacobian_vs_x(
     theta: float = 0.0,
     measure_theta: float = 0.5,
     progress: Any = None,
+    method: str = "auto",
 ) -> JacobianScan:
     """J(x) near grazing for the family with wall-free state (x, 0) at t = n.
 
@@ -185,7 +240,11 @@ def jacobian_vs_x(
     measure_theta : float
         Section phase where J is measured; it must not be within the impact, so 1/2.
     progress : tqdm-like, optional
+    method : str
+        "auto", "exact" or "fd" (see :func:`map_jacobian`).  With exact derivatives the scan
+        reaches x = 1e-9 and below; differences stop being usable near x ~ 1e-5.
     """
+    method = resolve_method(sim, method, "--method")
     theta = check_theta(theta, "--theta")
     measure_theta = check_theta(measure_theta, "--measure-theta")
     for name in ("nu", "Omega", "sigma"):
@@ -202,7 +261,7 @@ def jacobian_vs_x(
     Js, Jm, hs, errs = [], [], [], []
     for xi in x:
         state = grazing_family_state(float(xi), t_meas, nu, Om, sigma)
-        res = map_jacobian(sim, params, state, theta=measure_theta)
+        res = map_jacobian(sim, params, state, theta=measure_theta, method=method)
         Jm.append(res.J)
         Js.append(T @ res.J @ Tinv)
         hs.append(res.step)
@@ -211,5 +270,5 @@ def jacobian_vs_x(
             progress.update(1)
     return JacobianScan(
         x=x, J=np.array(Js), J_measured=np.array(Jm), P1=free_propagator(nu, Om, 1.0),
-        step=np.array(hs), error=np.array(errs), theta=theta, measure_theta=measure_theta,
+        step=np.array(hs), error=np.array(errs), theta=theta, measure_theta=measure_theta, method=method,
     )

@@ -121,24 +121,41 @@ def settings_of(ds: xr.Dataset) -> dict[str, Any]:
     return json.loads(ds.attrs["settings_json"])
 
 
-def write_netcdf(ds: xr.Dataset, path: str | os.PathLike) -> Path:
+def write_netcdf(ds: xr.Dataset, path: str | os.PathLike, argument: str = "--out") -> Path:
     """Write ``ds`` to ``path`` (directories created), atomically.
 
     Written to a temporary name first, so that an interruption never leaves a truncated
     file under the final name.
     """
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(path.name + ".tmp")
-    ds.to_netcdf(tmp, engine="netcdf4")
-    os.replace(tmp, path)
-    return path
+    from .outputs import atomic_write
+
+    # a unique temporary name in the target's directory, removed on failure
+    # (OUT + ".tmp" left "/tmp.tmp" behind for --out /tmp)
+    with atomic_write(path, argument) as tmp:
+        ds.to_netcdf(tmp, engine="netcdf4")
+    return Path(path)
 
 
 def read_netcdf(path: str | os.PathLike) -> xr.Dataset:
     """Load a result written by :func:`write_netcdf` fully into memory."""
     with xr.open_dataset(path, engine="netcdf4") as ds:
         return ds.load()
+
+
+#: Attributes of the ``period`` variable (sweeps and strobe runs).
+PERIOD_ATTRS = {
+    "long_name": "orbit period in forcing periods",
+    "units": "forcing periods",
+    "comment": "M > 0: the samples repeat after M forcing periods (within sampling.tol) with the same wall "
+               "entries; 0: no period found up to sampling.max_period -- why (not converged, quasi-periodic, "
+               "chaotic, unclassified) is in the variable dynamics where present",
+}
+#: Attributes of the ``orbit_impacts`` variable.
+ORBIT_IMPACTS_ATTRS = {
+    "long_name": "wall entries per orbit period (M forcing periods)",
+    "comment": "-1 when period = 0 (no orbit period, so no count); a maximal period-M orbit of the paper's "
+               "period adding has period = M, orbit_impacts = 1",
+}
 
 
 def strobe_dataset(result: Any, orbit: Any, attrs: Mapping[str, Any]) -> xr.Dataset:
@@ -150,8 +167,8 @@ def strobe_dataset(result: Any, orbit: Any, attrs: Mapping[str, Any]) -> xr.Data
             "v": ("sample", result.v, {"long_name": "velocity at t = n + theta"}),
             "impacts": ("sample", result.impacts, {"long_name": "wall entries in the period ending at the sample"}),
             "t": ("sample", result.t, {"long_name": "sample time"}),
-            "period": ((), orbit.period, {"long_name": "orbit period in forcing periods (0: not periodic)"}),
-            "orbit_impacts": ((), orbit.impacts, {"long_name": "wall entries per orbit period (-1: not periodic)"}),
+            "period": ((), orbit.period, PERIOD_ATTRS),
+            "orbit_impacts": ((), orbit.impacts, ORBIT_IMPACTS_ATTRS),
         },
         coords={"sample": np.arange(n)},
         attrs=dict(attrs),

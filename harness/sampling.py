@@ -59,8 +59,8 @@ def check_count(value: Any, argument: str, minimum: int = 0) -> int:
         as_float = float(value)
     except (TypeError, ValueError):
         raise HarnessInputError(argument, f"expected an integer, got {value!r}") from None
-    if as_float != int(as_float):
-        raise HarnessInputError(argument, f"expected an integer, got {value!r}")
+    if not np.isfinite(as_float) or as_float != int(as_float):
+        raise HarnessInputError(argument, f"expected a finite integer, got {value!r}")
     n = int(as_float)
     if n < minimum:
         what = "negative" if n < 0 else "too small"

@@ -14,13 +14,22 @@ Edges of a stable window of maximal period-M orbits (one impact per period):
   reaches 0), detected by the FMU's impact counter.
 
 Both are bracketed by marching in sigma from inside the window and bisected on "Newton
-converges to a stable maximal orbit" (:func:`window_edges`).  Newton itself is
-:func:`mapcheck.orbits.solve_periodic_orbit` (finite-difference Jacobian, restarts of the
-FMU from perturbed states).
+converges to a stable maximal orbit" (:func:`window_edges`).  An edge is *measured*: it is
+reported as the midpoint of a bracket [last good sigma, first bad sigma] that the shooting
+itself found and bisected to ``xtol``; the march step is set by the window's width, never
+by ``xtol``, and is an irrational fraction of it, so the march does not land on the
+guiding map's own edges.  An edge with no bracket (the search range ended first, or no
+orbit was found to start from) is reported as unresolved (``sigma`` None, with the
+interval searched), never as a number.  See docs/theory.md, "How window edges are found".  Newton itself is
+:func:`mapcheck.orbits.solve_periodic_orbit`: with the FMU's own derivatives when it reports
+them (one run per period gives the state and the chained exact Jacobian, so the multipliers
+that decide the lower edges carry no difference error), else by central differences
+(restarts of the FMU from perturbed states: ~5 times the runs per Newton iteration).
 """
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
@@ -28,11 +37,15 @@ import numpy as np
 
 from mapcheck.orbits import PeriodicOrbit, edge_kind, solve_periodic_orbit
 
+from .jacobian import resolve_method
 from .simulator import Simulator
 
-__all__ = ["StroboscopicMap", "Edge", "NEWTON", "good_orbit", "window_edges", "map_guided_windows", "newton_for"]
+__all__ = ["StroboscopicMap", "Edge", "NEWTON", "MARCH_STEPS", "good_orbit", "window_edges", "map_guided_windows", "newton_for"]
 
 TWO_PI = 2.0 * math.pi
+
+#: Width of a guide window in march steps (the step is width / MARCH_STEPS).
+MARCH_STEPS = 6.3
 
 #: Newton settings for the FMU map in w coordinates.  Scale (1e-2, 1e-1): the size of the
 #: impacting orbit's offset from p.  rel_h = 1e-4 -> difference steps (1e-6, 1e-5): the
@@ -54,13 +67,21 @@ class StroboscopicMap:
         FMU parameters (sigma is set per call of :meth:`at`).
     theta : float
         Section phase; keep it away from the impacts (1/2).
+    derivatives : str
+        "auto" (the FMU's exact derivatives when it reports them), "exact" or "fd" (central
+        differences, the fallback and cross-check).
     """
 
-    def __init__(self, sim: Simulator, params: Mapping[str, Any], theta: float = 0.5) -> None:
+    def __init__(self, sim: Simulator, params: Mapping[str, Any], theta: float = 0.5,
+                 derivatives: str = "auto") -> None:
         self.sim = sim
         self.params = {k: v for k, v in params.items() if k not in ("u0", "v0")}
         self.theta = float(theta)
         self.evaluations = 0
+        self.derivatives = resolve_method(sim, derivatives, "derivatives")
+        if hasattr(sim, "track_derivatives"):
+            # variational equations only where they are used
+            sim.track_derivatives(self.derivatives == "exact")
 
     def offset(self, sigma: float) -> np.ndarray:
         """p(theta) of (4) at this sigma."""
@@ -82,6 +103,19 @@ class StroboscopicMap:
 
         return step
 
+    def at_with_jacobian(self, sigma: float) -> Callable[[float, float], tuple[float, float, int, np.ndarray]] | None:
+        """The map at ``sigma`` with its exact Jacobian, ``dstep(wu, wv) -> (wu1, wv1, n, J)``
+        (J in w coordinates = J in z: a translation), or None with finite differences."""
+        if self.derivatives != "exact":
+            return None
+        step = self.at(sigma)
+
+        def dstep(wu: float, wv: float) -> tuple[float, float, int, np.ndarray]:
+            u, v, n = step(wu, wv)
+            return u, v, n, self.sim.derivatives()[0]  # type: ignore[attr-defined]
+
+        return dstep
+
     def iterate(self, sigma: float, w: np.ndarray, n: int) -> tuple[np.ndarray, int]:
         """n periods in one run (no restarts) from w; returns (w_n, wall entries)."""
         off = self.offset(sigma)
@@ -98,20 +132,34 @@ class Edge:
     Attributes
     ----------
     sigma : float or None
-        Last sigma with a stable maximal orbit (None: the search range was reached).
+        The edge: midpoint of the final bracket [``good``, ``bad``] (width <= xtol).  None
+        when the edge is unresolved (no bracket: ``kind`` "range" or "unresolved").
     kind : str
         "flip"/"fold"/"torus" (stability), "graze" (extra contact), "no-impact", "lost"
-        (Newton found nothing), "range".
+        (Newton found nothing beyond), "range" (no edge inside the search range),
+        "unresolved" (no stable maximal orbit to start from).
     bracket : float
-        Width of the final bracket (the edge lies in [sigma, sigma +- bracket]).
+        Width of the final bracket, |bad - good| (for "range": the distance from ``good``
+        to the end of the range).
     multipliers : ndarray
-        Of the orbit at ``sigma``.
+        Of the orbit at ``good``.
+    good : float or None
+        Last sigma where the shooting found a stable maximal orbit.
+    bad : float or None
+        First sigma beyond it where it did not (None: not bracketed).
     """
 
     sigma: float | None
     kind: str
     bracket: float
     multipliers: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
+    good: float | None = None
+    bad: float | None = None
+
+    @property
+    def resolved(self) -> bool:
+        """True when the edge was bracketed and bisected (``sigma`` is a number)."""
+        return self.sigma is not None
 
 
 def _rotate_to_impact(orb: PeriodicOrbit, M: int) -> np.ndarray:
@@ -124,11 +172,12 @@ def good_orbit(smap: StroboscopicMap, M: int, sigma: float, guesses: list[np.nda
     """Try Newton from each guess; True with the orbit if one converges to a stable maximal
     period-M orbit, else False with the most informative failed orbit (a converged one)."""
     step = smap.at(sigma)
+    dstep = smap.at_with_jacobian(sigma)
     failed: PeriodicOrbit | None = None
     for g in guesses:
         if g is None:
             continue
-        orb = solve_periodic_orbit(step, g, M, **(newton or NEWTON))
+        orb = solve_periodic_orbit(step, g, M, **(newton or NEWTON), dstep=dstep)
         if orb.maximal and orb.stable:
             return True, orb
         if failed is None or (orb.converged and not failed.converged):
@@ -155,9 +204,10 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
     sigma_range : (float, float)
         Search limits; an edge not found inside is reported as ``Edge(None, "range")``.
     dp : float
-        Marching step (smaller than the window).
+        Marching step (smaller than the window; choose it from the window's width, not from
+        ``xtol``).
     xtol : float
-        Bisection tolerance in sigma.
+        Bisection tolerance in sigma: every bracket is bisected until narrower than this.
     newton : mapping, optional
         Settings of :func:`mapcheck.orbits.solve_periodic_orbit` (default :data:`NEWTON`).
     geometric : bool
@@ -202,7 +252,8 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
             else:
                 s_bad, o_bad = s, o
         if s_bad is None:
-            edges.append(Edge(None, "range", abs(limit - s_good), o_good.multipliers))
+            # no bracket inside the range: unresolved, never a number
+            edges.append(Edge(None, "range", abs(limit - s_good), o_good.multipliers, float(s_good), None))
             continue
         while abs(s_bad - s_good) > xtol:
             s = 0.5 * (s_good + s_bad)
@@ -218,7 +269,10 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
             # look at its contacts (an extra one in a non-impacting period: a graze)
             _, n = smap.iterate(s_bad, _rotate_to_impact(o_good, M), M)
             kind = "graze" if n > 1 else ("no-impact" if n == 0 else "lost")
-        edges.append(Edge(float(s_good), kind, abs(s_bad - s_good), o_good.multipliers))
+        # the edge lies in [s_good, s_bad] (either order): report the bracket's midpoint, a
+        # number the bisection produced, not a march point (which could be a guide's edge)
+        edges.append(Edge(0.5 * (s_good + s_bad), kind, abs(s_bad - s_good), o_good.multipliers,
+                          float(s_good), float(s_bad)))
     return edges[0], edges[1]
 
 
@@ -247,28 +301,36 @@ def _shoot_window(smap: StroboscopicMap, c: Any, M: int, w: tuple[float, float |
         return None if z is None else z - smap.offset(s)
 
     s0 = 0.5 * (lo + hi)
+    # The march step is set by the guide's window alone (several steps inside even a narrow
+    # window), never by xtol.  MARCH_STEPS is not a half-integer, so s0 +- k dp never lands on
+    # the guide's own edge (with 6 steps, s0 +- 3 dp was exactly lo or hi, and an edge that
+    # the bisection never moved off that point was the map's number echoed).
     if relative:  # geometric: windows accumulating at sigma -> 0
         s0 = math.sqrt(lo * hi)
-        # 6.3 steps to an edge: the march does not land on the map's edge itself
-        dp, tol = math.log(hi / lo) / 6.3, xtol * lo
+        dp, tol = math.log(hi / lo) / MARCH_STEPS, xtol * lo
     else:
-        dp, tol = min(0.02, (hi - lo) / 6.0), xtol  # several steps inside even a narrow window
-    return window_edges(smap, M, s0, guess(s0), guess, sigma_range, dp, tol, newton_for(s0), relative)
+        dp, tol = min(0.02, (hi - lo) / MARCH_STEPS), xtol
+    try:
+        return window_edges(smap, M, s0, guess(s0), guess, sigma_range, dp, tol, newton_for(s0), relative)
+    except ValueError:
+        # no stable maximal orbit at the guide's window centre: both edges unresolved
+        return (Edge(None, "unresolved", float("nan"), good=None, bad=None),
+                Edge(None, "unresolved", float("nan"), good=None, bad=None))
 
 
 def _shoot_window_task(source: Any, params: Mapping[str, Any], theta: float, c: Any, M: int,
                        w: tuple[float, float | None], sigma_range: tuple[float, float], xtol: float,
-                       relative: bool) -> tuple[int, Edge, Edge, int]:
+                       relative: bool, derivatives: str = "auto") -> tuple[int, Edge, Edge, int]:
     """:func:`_shoot_window` in a worker process, on an FMU instance of its own."""
     from .simulator import FmuSimulator
 
-    smap = StroboscopicMap(FmuSimulator(source, instance_name=f"shoot-M{M}"), params, theta)
+    smap = StroboscopicMap(FmuSimulator(source, instance_name=f"shoot-M{M}"), params, theta, derivatives)
     e_lo, e_hi = _shoot_window(smap, c, M, w, sigma_range, xtol, relative)
     return M, e_lo, e_hi, smap.evaluations
 
 
 def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], sigma_range: tuple[float, float],
-                       xtol: float, relative: bool = False, workers: int = 1) -> dict[str, Any]:
+                       xtol: float | Mapping[int, float], relative: bool = False, workers: int = 1) -> dict[str, Any]:
     """ODE windows on the FMU for every period in ``guide`` (the map's windows).
 
     Newton shooting starts inside each map window from the map's own maximal orbit
@@ -276,17 +338,24 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
     ``c``, the state at the FMU's section after the impact), and follows the orbit to both
     edges (:func:`window_edges`).  ``relative``: ``xtol`` is relative to the map window's
     lower edge and the marching is geometric (windows that accumulate at sigma -> 0, as in
-    Figure 1).  ``workers`` > 1 shoots the windows in that many processes (the windows are
+    Figure 1).  ``xtol`` may be a mapping {M: xtol} (one tolerance per window, e.g. a
+    fraction of its width).  ``workers`` > 1 shoots the windows in that many processes (the windows are
     independent; each process opens the FMU of ``smap``'s simulator).
 
     Returns
     -------
     dict
-        ``windows`` {M: (lo, hi or None)}, ``kinds`` {M: (kind_lo, kind_hi)}, ``brackets``,
-        ``multipliers_at_lower_edge``, ``fmu_periods`` (one-period FMU runs used).
+        ``windows`` {M: (lo, hi)} with each edge the midpoint of its bisected bracket, or
+        None where unresolved (``windows[M]`` is None when neither edge is resolved);
+        ``kinds`` {M: (kind_lo, kind_hi)}; ``brackets`` {M: (width_lo, width_hi)};
+        ``intervals`` {M: ((good, bad), (good, bad))} the brackets themselves (bad None:
+        not bracketed, the edge lies beyond ``good``); ``unresolved`` {M: [which edges]};
+        ``multipliers_at_lower_edge``; ``fmu_periods`` (one-period FMU runs used).
     """
-    out: dict[str, Any] = {"windows": {}, "kinds": {}, "brackets": {}, "multipliers_at_lower_edge": {}}
+    out: dict[str, Any] = {"windows": {}, "kinds": {}, "brackets": {}, "intervals": {}, "unresolved": {},
+                           "multipliers_at_lower_edge": {}}
     todo = {M: w for M, w in guide.items() if w is not None}
+    tols = {M: float(xtol[M]) if isinstance(xtol, Mapping) else float(xtol) for M in todo}
     results: dict[int, tuple[Edge, Edge]] = {}
     evaluations = 0
     if workers > 1 and len(todo) > 1:
@@ -295,24 +364,33 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
 
         # spawn, as the sweep pool does: the parent holds a loaded FMU library
         ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx) as pool:
+        from .tasks import init_child_process
+
+        # workers die with this process (SIGKILL included) and clean their temp folders
+        with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx,
+                                 initializer=init_child_process, initargs=(os.getpid(),)) as pool:
             futures = [pool.submit(_shoot_window_task, smap.sim.source, smap.params, smap.theta, c, M, w,
-                                   sigma_range, xtol, relative) for M, w in todo.items()]
+                                   sigma_range, tols[M], relative, smap.derivatives) for M, w in todo.items()]
             for f in futures:
                 M, e_lo, e_hi, n = f.result()
                 results[M] = (e_lo, e_hi)
                 evaluations += n
     else:
         for M, w in todo.items():
-            results[M] = _shoot_window(smap, c, M, w, sigma_range, xtol, relative)
+            results[M] = _shoot_window(smap, c, M, w, sigma_range, tols[M], relative)
     for M, w in guide.items():
         if w is None:
             out["windows"][M] = None
             continue
         e_lo, e_hi = results[M]
-        out["windows"][M] = (e_lo.sigma, e_hi.sigma)
+        out["windows"][M] = None if not (e_lo.resolved or e_hi.resolved) else (e_lo.sigma, e_hi.sigma)
         out["kinds"][M] = (e_lo.kind, e_hi.kind)
         out["brackets"][M] = (e_lo.bracket, e_hi.bracket)
+        out["intervals"][M] = ((e_lo.good, e_lo.bad), (e_hi.good, e_hi.bad))
+        missing = [side for side, e in (("lower", e_lo), ("upper", e_hi)) if not e.resolved]
+        if missing:
+            out["unresolved"][M] = missing
         out["multipliers_at_lower_edge"][M] = e_lo.multipliers
     out["fmu_periods"] = smap.evaluations + evaluations
+    out["derivatives"] = smap.derivatives  # "exact" (the FMU's) or "fd" (central differences)
     return out

@@ -7,17 +7,28 @@ number of wall entries.  Two implementations:
 * :class:`FmuSimulator` drives a Co-Simulation FMU (one instance, reused with ``reset``).
 * :class:`MappingSimulator` wraps a user-given one-period map, so that the same sweeps,
   classification and plots apply to an analytic map (e.g. from :mod:`mapcheck`).
+
+Derivatives (optional, feature-detected): a simulator with ``derivatives_available`` true
+can integrate the variational equations (:meth:`FmuSimulator.track_derivatives`) and
+report d(u, v)/d(u, v)_mark and d(u, v)/d sigma accumulated since the last
+:meth:`~FmuSimulator.reset_derivatives` (or ``start``): the per-``doStep`` matrices the FMU
+outputs are chained, so a period taken in several steps gets the product.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import threading
-from typing import Any, Callable, Mapping, Protocol, runtime_checkable
+from typing import Any, Callable, Iterator, Mapping, Protocol, runtime_checkable
+
+import numpy as np
 
 from .errors import FmuError, FmuRejectedInput, HarnessInputError
 from .fmi import (
     IMPACT_COUNTER,
     INITIAL_STATE,
+    SENSITIVITY_OUTPUTS,
+    SENSITIVITY_SWITCH,
     STATE_OUTPUTS,
     FmuModel,
     FmuSource,
@@ -80,11 +91,48 @@ class FmuSimulator:
         self._impact_offset = 0
         self.time = math.nan
         self.restarts = 0  # re-initializations to carry the state across a non-tunable change
+        #: the FMU reports the derivatives of its map (issue 11's interface)
+        self.derivatives_available: bool = model.has_sensitivities
+        self._track = False
+        self._get_sens = (self._slave.getter([v[n] for n in SENSITIVITY_OUTPUTS])
+                          if self.derivatives_available else None)
+        self._J = np.eye(2)
+        self._S = np.zeros(2)
+
+    # -- derivatives ---------------------------------------------------------------------
+    def track_derivatives(self, on: bool = True) -> None:
+        """Integrate the variational equations from the next :meth:`start` on (``on``), or not.
+
+        Raises
+        ------
+        HarnessInputError
+            If ``on`` and the FMU has no sensitivity outputs.
+        """
+        if on and not self.derivatives_available:
+            raise HarnessInputError(
+                "derivatives", f"{self.model.path.name} does not report the derivatives of its map "
+                f"(no variables {SENSITIVITY_SWITCH!r}, {', '.join(SENSITIVITY_OUTPUTS)})")
+        self._track = bool(on)
+
+    @property
+    def tracking(self) -> bool:
+        """True while the variational equations are integrated."""
+        return self._track
+
+    def reset_derivatives(self) -> None:
+        """Start accumulating the derivatives afresh at the current time."""
+        self._J = np.eye(2)
+        self._S = np.zeros(2)
+
+    def derivatives(self) -> tuple[np.ndarray, np.ndarray]:
+        """(J, S): d(u, v)/d(u, v) and d(u, v)/d sigma from the last mark to now (copies)."""
+        return self._J.copy(), self._S.copy()
 
     # -- life cycle ----------------------------------------------------------------------
     def start(self, params: Params, t0: float, state: tuple[float, float]) -> None:
         self._params = dict(params)
         self._impact_offset = 0
+        self.reset_derivatives()
         self._initialize(t0, state)
 
     def _initialize(self, t0: float, state: tuple[float, float]) -> None:
@@ -93,6 +141,8 @@ class FmuSimulator:
             if name in INITIAL_STATE:
                 continue  # the state argument wins
             values[self.model.check_settable(name)] = value
+        if self.derivatives_available:  # the harness decides (variational equations cost time)
+            values[self.model.variables[SENSITIVITY_SWITCH]] = self._track
         values[self._init_vars[0]] = float(state[0])
         values[self._init_vars[1]] = float(state[1])
         try:
@@ -117,6 +167,12 @@ class FmuSimulator:
                 said = self._slave.last_error()
                 raise FmuError(f"doStep from t = {self.time} to {t_next} failed: {said or exc}") from exc
             self.time = t_next
+            if self._track:
+                # chain rule over the steps: x_{k+1} = F_k(x_k, sigma)
+                juu, juv, jvu, jvv, su, sv = self._get_sens()
+                Jk = np.array([[juu, juv], [jvu, jvv]])
+                self._S = Jk @ self._S + np.array([su, sv])
+                self._J = Jk @ self._J
 
     def set_parameter(self, name: str, value: Any) -> None:
         var = self.model.check_settable(name)
@@ -170,10 +226,20 @@ class MappingSimulator:
         time ``t`` and the number of wall entries during that period.
     defaults : mapping
         Default parameters, merged under those passed to :meth:`start`.
+    derivative : callable, optional
+        ``derivative(u, v, t, params) -> (J, S)``: the map's Jacobian (2x2) at (u, v) and its
+        derivative in sigma (2,; may be None); makes the mapping report derivatives as an
+        FMU with sensitivity outputs does.
     """
 
-    def __init__(self, step: OneStepMap, defaults: Params | None = None) -> None:
+    def __init__(self, step: OneStepMap, defaults: Params | None = None,
+                 derivative: Callable[..., tuple[Any, Any]] | None = None) -> None:
         self._step = step
+        self._derivative = derivative
+        self.derivatives_available = derivative is not None
+        self._track = False
+        self._J = np.eye(2)
+        self._S = np.zeros(2)
         self._defaults = dict(defaults or {})
         self._params: dict[str, Any] = {}
         self._u = self._v = math.nan
@@ -185,6 +251,24 @@ class MappingSimulator:
         self._u, self._v = float(state[0]), float(state[1])
         self._n = 0
         self.time = float(t0)
+        self.reset_derivatives()
+
+    def track_derivatives(self, on: bool = True) -> None:
+        """As :meth:`FmuSimulator.track_derivatives`."""
+        if on and not self.derivatives_available:
+            raise HarnessInputError("derivatives", "this mapping was given no derivative")
+        self._track = bool(on)
+
+    @property
+    def tracking(self) -> bool:
+        return self._track
+
+    def reset_derivatives(self) -> None:
+        self._J = np.eye(2)
+        self._S = np.zeros(2)
+
+    def derivatives(self) -> tuple[np.ndarray, np.ndarray]:
+        return self._J.copy(), self._S.copy()
 
     def advance(self, t: float) -> None:
         periods = t - self.time
@@ -192,6 +276,11 @@ class MappingSimulator:
         if k < 0 or abs(periods - k) > 1e-9:
             raise HarnessInputError("t", f"a mapping advances in whole periods; cannot go from {self.time} to {t}")
         for _ in range(k):
+            if self._track:
+                Jk, Sk = self._derivative(self._u, self._v, self.time, self._params)
+                Jk = np.asarray(Jk, dtype=float)
+                self._S = Jk @ self._S + (np.zeros(2) if Sk is None else np.asarray(Sk, dtype=float))
+                self._J = Jk @ self._J
             self._u, self._v, m = self._step(self._u, self._v, self.time, self._params)
             self._n += int(m)
             self.time += 1.0
@@ -201,6 +290,27 @@ class MappingSimulator:
 
     def read(self) -> tuple[float, float, int]:
         return self._u, self._v, self._n
+
+
+def has_derivatives(sim: Any) -> bool:
+    """True when ``sim`` can report exact derivatives of its map."""
+    return bool(getattr(sim, "derivatives_available", False))
+
+
+@contextlib.contextmanager
+def tracking_derivatives(sim: Any, on: bool = True) -> Iterator[Any]:
+    """Within the block ``sim`` integrates the variational equations (``on``) or not; the
+    previous setting is restored afterwards.  Takes effect at the next ``start``."""
+    before = bool(getattr(sim, "tracking", False))
+    if has_derivatives(sim):
+        sim.track_derivatives(on)
+    elif on:
+        raise HarnessInputError("derivatives", "the simulator does not report derivatives")
+    try:
+        yield sim
+    finally:
+        if has_derivatives(sim):
+            sim.track_derivatives(before)
 
 
 # ----------------------------------------------------------------------------------------

@@ -6,9 +6,14 @@ Two kinds of task:
 * **continuation** (``up`` / ``down``): one run through the whole grid of the swept
   parameter, changed between periods with the state carried on (through the FMU's tunable
   ``sigma``; a non-tunable parameter is changed by restarting from the current state).
-  This is how the experiment and the paper's figures show hysteresis.  Each direction
-  starts from the initial state at its first grid value, so up and down are independent
-  tasks and can run in parallel.
+  This is how the experiment and the paper's figures show hysteresis.  A single direction
+  starts from the initial state at its first grid value.  With both directions the sweep
+  is one hysteresis loop (task ``both``): up from the initial state, then down from the
+  state where the up scan ended.
+
+A chain reports each finished point; with a checkpoint those points are stored as they
+come (``<key>.partial.npz``), so an interrupted chain resumes at its first missing point
+from the stored state instead of starting over.
 
 In a 2D scan the second parameter (e.g. Gamma) is fixed per task: fresh points cover the
 grid, continuation runs one chain per value of the second parameter.
@@ -18,6 +23,7 @@ that process's reused FMU instance.
 """
 from __future__ import annotations
 
+import dataclasses
 import pickle
 import threading
 import time
@@ -29,11 +35,11 @@ import xarray as xr
 
 from .backends import Backend, make_backend
 from .checkpoint import Checkpoint, fingerprint
-from .config import SamplingSpec, SweepSpec
+from .config import SamplingSpec, SweepSpec, sweep_directions
 from .errors import HarnessInputError
 from .fmi import INITIAL_STATE, FmuModel
 from .progress import progress_bar
-from .results import provenance
+from .results import ORBIT_IMPACTS_ATTRS, PERIOD_ATTRS, provenance
 from .tasks import RESULT_FIELDS, SweepTask, execute, run_task
 
 __all__ = ["SweepStats", "SweepTask", "assemble", "execute", "plan_tasks", "run_sweep", "run_task"]
@@ -59,6 +65,10 @@ def plan_tasks(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, 
                 for i, value in enumerate(grid):
                     key = f"fresh{suffix}-p{i:05d}"
                     tasks[key] = SweepTask(key, mode, spec.param, (float(value),), base, state0, sampling)
+            elif mode == LOOP:  # one task: up, then down from where up ended
+                chain = np.concatenate([grid, grid[::-1]])
+                key = f"{LOOP}{suffix}"
+                tasks[key] = SweepTask(key, LOOP, spec.param, tuple(float(x) for x in chain), base, state0, sampling)
             else:
                 chain = grid if mode == "up" else grid[::-1]
                 key = f"{mode}{suffix}"
@@ -66,10 +76,28 @@ def plan_tasks(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, 
     return tasks
 
 
+#: What a checkpoint keeps of each finished point of an unfinished chain: its results and
+#: ``end`` = (t, u, v), the state the chain went on from.
+PARTIAL_FIELDS = (*RESULT_FIELDS, "end")
+
+#: Mode of the task that runs a hysteresis loop: its first half is the up scan, its
+#: second half the down scan from the state the up scan ended in.
+LOOP = "both"
+
+
+def task_rows(task: SweepTask) -> list[tuple[str, float]]:
+    """(direction, value) of each row of a task's results."""
+    if task.mode != LOOP:
+        return [(task.mode, v) for v in task.values]
+    half = len(task.values) // 2
+    return [("up" if i < half else "down", v) for i, v in enumerate(task.values)]
+
+
 def sweep_fingerprint(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, float],
                       sampling: SamplingSpec, fmu_sha256: str) -> str:
     """Identity of a sweep for checkpoints: same fingerprint, same results."""
     return fingerprint({
+        "tasks": 2,  # 2: up+down as one loop task, chains checkpointed per point
         "fmu": fmu_sha256,
         "params": dict(params),
         "state0": list(state0),
@@ -89,7 +117,7 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
              sampling: SamplingSpec, attrs: Mapping[str, Any]) -> xr.Dataset:
     """Put task results on the grid: dims (direction, param[, scan_param], sample)."""
     grid = np.sort(np.asarray(spec.values, dtype=float))
-    directions = list(spec.modes)
+    directions = sweep_directions(spec.modes)
     dims = ["direction", spec.param]
     coords: dict[str, Any] = {"direction": directions, spec.param: grid}
     shape = [len(directions), len(grid)]
@@ -108,18 +136,22 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         "impacts": np.full(shape + [n], -1, dtype=np.int64),
         "period": np.full(shape, -1, dtype=np.int64),
         "orbit_impacts": np.full(shape, -1, dtype=np.int64),
+        "dynamics": np.full(shape, -1, dtype=np.int64),
+        "lyapunov": np.full(shape + [2], np.nan),
+        "lyapunov_err": np.full(shape + [2], np.nan),
     }
     index_of_value = {float(x): i for i, x in enumerate(grid)}
     for key, task in tasks.items():
         res = results[key]
-        d = directions.index(task.mode)
         j = None
         if scan is not None:
             j = int(np.flatnonzero(scan == float(task.params[spec.scan_param]))[0])
-        for row, value in enumerate(task.values):
+        for row, (direction, value) in enumerate(task_rows(task)):
+            d = directions.index(direction)
             idx = (d, index_of_value[value]) if j is None else (d, index_of_value[value], j)
             for name in RESULT_FIELDS:
-                arrays[name][idx] = res[name][row]
+                if name in res:  # a checkpoint written before a field existed lacks it
+                    arrays[name][idx] = res[name][row]
     sample_dims = dims + ["sample"]
     ds = xr.Dataset(
         {
@@ -127,14 +159,33 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
             "v": (sample_dims, arrays["v"], {"long_name": "velocity at t = n + theta"}),
             "impacts": (sample_dims, arrays["impacts"], {"long_name": "wall entries in the period ending at the sample"}),
             "t": (sample_dims, arrays["t"], {"long_name": "absolute sample time"}),
-            "period": (dims, arrays["period"], {"long_name": "orbit period in forcing periods (0: not periodic)"}),
-            "orbit_impacts": (dims, arrays["orbit_impacts"], {"long_name": "wall entries per orbit period (-1: not periodic)"}),
+            "period": (dims, arrays["period"], PERIOD_ATTRS),
+            "orbit_impacts": (dims, arrays["orbit_impacts"], ORBIT_IMPACTS_ATTRS),
         },
         coords=coords,
         attrs=dict(attrs),
     )
+    from .classify import DYNAMICS_NAMES
+
+    codes = sorted(DYNAMICS_NAMES)
+    ds["dynamics"] = (dims, arrays["dynamics"], {
+        "long_name": "dynamics of the orbit", "flag_values": np.array(codes, dtype=np.int64),
+        "flag_meanings": " ".join(DYNAMICS_NAMES[c].replace(" ", "_").replace("-", "_") for c in codes),
+        "comment": "periodic: periodic samples, converged; chaotic: largest Lyapunov exponent > 0 by more "
+                   "than 3 standard errors; quasi_periodic: largest exponent 0 within 3 standard errors (band "
+                   "< 0.02); not_converged: largest exponent < 0 (attracting orbit not reached), still "
+                   "settling, or undecided; unclassified: not periodic and no exponents (sampling.lyapunov = 0)"})
+    if sampling.lyapunov:
+        ds = ds.assign_coords(exponent=[1, 2])
+        ds["lyapunov"] = (dims + ["exponent"], arrays["lyapunov"], {
+            "long_name": "Lyapunov exponents of the stroboscopic map", "units": "1/forcing period",
+            "comment": f"QR method over {sampling.lyapunov} periods after the samples, natural log"})
+        ds["lyapunov_err"] = (dims + ["exponent"], arrays["lyapunov_err"], {
+            "long_name": "standard error of the Lyapunov exponents (batch means of 10 blocks)",
+            "units": "1/forcing period"})
     ds[spec.param].attrs["long_name"] = f"swept FMU parameter {spec.param}"
-    ds["direction"].attrs["long_name"] = "fresh: every point from the same state; up/down: continuation"
+    ds["direction"].attrs["long_name"] = ("fresh: every point from the same state; up/down: continuation "
+                                          "(with both, down starts where up ended)")
     return ds
 
 
@@ -148,6 +199,12 @@ class SweepStats:
     computed: int = 0
     resumed: int = 0
     wall_time: float = 0.0
+    #: points of unfinished chains taken from the checkpoint (not recomputed)
+    resumed_points: int = 0
+    #: points on disk in the checkpoint now (whole tasks and leading points of chains)
+    kept_points: int = 0
+    #: points of the whole sweep (directions x grid [x second axis])
+    total_points: int = 0
 
 
 def run_sweep(
@@ -229,13 +286,23 @@ def run_sweep(
         store = Checkpoint(checkpoint, sweep_fingerprint(spec, base, state0, sampling, sha))
     results: dict[str, dict[str, np.ndarray]] = {}
     todo: dict[str, SweepTask] = {}
+    # leading points of chains: from the checkpoint, then as the chains report them
+    partial: dict[str, dict[str, list]] = {}
+    stats = stats if stats is not None else SweepStats()
     for key, task in tasks.items():
         if store is not None and store.has(key):
             results[key] = store.load(key)
-        else:
-            todo[key] = task
-    stats = stats if stats is not None else SweepStats()
+            continue
+        rows = store.load_partial(key) if store is not None else None
+        if rows is not None and "end" in rows and 0 < len(rows["period"]) < len(task.values):
+            done = len(rows["period"])
+            partial[key] = {name: list(rows[name]) for name in PARTIAL_FIELDS}
+            t_last, u_last, v_last = rows["end"][-1]  # the state after the last finished point
+            task = dataclasses.replace(task, resume=(done, float(t_last), float(u_last), float(v_last)))
+            stats.resumed_points += done
+        todo[key] = task
     stats.resumed = len(results)
+    stats.kept_points = sum(len(tasks[k].values) for k in results) + stats.resumed_points
 
     be: Backend = make_backend(backend, workers, scheduler)
     if model is None and be.name != "serial":
@@ -249,8 +316,9 @@ def run_sweep(
                 "define its map at module level or use backend='serial'") from None
     if be.name == "dask" and model is not None:
         source = model.source(embed=True)  # remote workers may not share the file system
-    total_points = sum(len(t.values) for t in tasks.values())
-    finished = {"points": sum(len(tasks[k].values) for k in results)}
+    first_of = {key: (task.resume[0] if task.resume else 0) for key, task in todo.items()}
+    total_points = stats.total_points = sum(len(t.values) for t in tasks.values())
+    finished = {"points": stats.kept_points}
     in_flight: dict[str, int] = {}  # points reported by tasks still running
     lock = threading.Lock()
     bar = progress_bar(total=total_points, initial=finished["points"], desc=f"sweep {spec.param}", unit="pt",
@@ -267,24 +335,42 @@ def run_sweep(
             bar.refresh()
             last_draw[0] = now
 
-    def on_progress(key: str, points: int) -> None:
+    def on_progress(key: str, points: int, row: Mapping[str, Any] | None = None) -> None:
         with lock:
-            if key not in results:
-                in_flight[key] = points
-                show()
+            if key in results:
+                return  # a late report of a task already finished
+            rows = partial.setdefault(key, {name: [] for name in PARTIAL_FIELDS})
+            if row is not None and points == len(rows["period"]) + 1:  # the next point, in order
+                for name in PARTIAL_FIELDS:
+                    rows[name].append(row[name])
+                if store is not None:
+                    store.save_partial(key, {name: np.asarray(rows[name]) for name in PARTIAL_FIELDS})
+                    stats.kept_points += 1
+            in_flight[key] = points - first_of[key]  # points computed in this run
+            show()
 
     def on_result(key: str, arrays: dict[str, np.ndarray]) -> None:
+        rows = partial.get(key)
+        first = first_of[key]
+        if first:  # the leading points came from the checkpoint
+            for name in RESULT_FIELDS:
+                arrays[name][:first] = np.asarray(rows[name][:first])
         if store is not None:
             store.save(key, arrays)
+            store.remove_partial(key)
         with lock:
             results[key] = arrays
+            partial.pop(key, None)
             in_flight.pop(key, None)
-            finished["points"] += len(tasks[key].values)
+            finished["points"] += len(tasks[key].values) - first
+            if store is not None:  # the whole task is on disk now, its partial rows replaced
+                stats.kept_points += len(tasks[key].values) - (len(rows["period"]) if rows else 0)
             stats.computed += 1
             show(force=finished["points"] == total_points)
 
     try:
-        be.run(run_task, todo, source, on_result, on_progress if progress else None)
+        # reports drive the progress bar and the checkpoint inside chains
+        be.run(run_task, todo, source, on_result, on_progress if (progress or store is not None) else None)
         description = be.describe()
     finally:
         bar.close()
@@ -305,9 +391,11 @@ def run_sweep(
         "sampling.tol": sampling.tol,
         "sampling.max_period": sampling.max_period,
         "sampling.extend": sampling.extend,
+        "sampling.lyapunov": sampling.lyapunov,
         "initial.u0": state0[0],
         "initial.v0": state0[1],
-        **{f"model.{k}": v for k, v in base.items()},
+        # the swept parameters are coordinates: their FMU defaults would be stale attributes
+        **{f"model.{k}": v for k, v in base.items() if k not in (spec.param, spec.scan_param)},
         "tasks_computed": stats.computed,
         "tasks_resumed": stats.resumed,
         # CPU seconds of the tasks computed in this run, summed over workers

@@ -6,19 +6,20 @@ paid once per worker and per sweep.
 """
 from __future__ import annotations
 
+import os
 import time
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
 
-from .classify import classify_orbit, still_settling
+from .classify import classify_dynamics, classify_orbit, still_settling
 from .config import SamplingSpec
 from .fmi import INITIAL_STATE, FmuSource
 from .sampling import sample_periods
-from .simulator import simulator_for
+from .simulator import has_derivatives, simulator_for
 
-RESULT_FIELDS = ("u", "v", "impacts", "t", "period", "orbit_impacts")
+RESULT_FIELDS = ("u", "v", "impacts", "t", "period", "orbit_impacts", "dynamics", "lyapunov", "lyapunov_err")
 
 
 @dataclass(frozen=True)
@@ -40,6 +41,8 @@ class SweepTask:
     state0 : (float, float)
         Initial state at the first section time.
     sampling : SamplingSpec
+    resume : (int, float, float, float), optional
+        Resume an interrupted chain at this point from state (u, v) at time t.
     """
 
     key: str
@@ -49,35 +52,73 @@ class SweepTask:
     params: dict[str, Any] = field(hash=False)
     state0: tuple[float, float]
     sampling: SamplingSpec
+    #: (first point, t, u, v): go on from a checkpointed chain (None: from the start)
+    resume: tuple[int, float, float, float] | None = None
 
 
-def execute(task: SweepTask, sim: Any, report: Callable[[str, int], None] | None = None) -> dict[str, np.ndarray]:
+def execute(task: SweepTask, sim: Any, report: Callable[[str, int, dict], None] | None = None) -> dict[str, np.ndarray]:
     """Run ``task`` on simulator ``sim``; arrays indexed (point in ``task.values``, sample).
 
-    ``report(key, points_done)`` is called after each point, so that a long continuation
-    chain moves the progress bar while it runs.
+    ``report(key, points_done, row)`` is called after each point but the last (which
+    arrives with the result), ``row`` holding that point's results as lists: a long
+    continuation chain moves the progress bar while it runs, and the caller can checkpoint
+    the chain point by point.  A task with :attr:`SweepTask.resume` starts at that point
+    from the stored state; the rows before it are left for the caller to fill in.
     """
     cpu_start = time.process_time()
     s = task.sampling
     k, n = len(task.values), s.n_samples
     out = {
-        "u": np.empty((k, n)),
-        "v": np.empty((k, n)),
-        "impacts": np.empty((k, n), dtype=np.int64),
-        "t": np.empty((k, n)),
-        "period": np.empty(k, dtype=np.int64),
-        "orbit_impacts": np.empty(k, dtype=np.int64),
+        "u": np.full((k, n), np.nan),
+        "v": np.full((k, n), np.nan),
+        "impacts": np.full((k, n), -1, dtype=np.int64),
+        "t": np.full((k, n), np.nan),
+        "period": np.full(k, -1, dtype=np.int64),
+        "orbit_impacts": np.full(k, -1, dtype=np.int64),
+        "dynamics": np.full(k, -1, dtype=np.int64),
+        "lyapunov": np.full((k, 2), np.nan),
+        "lyapunov_err": np.full((k, 2), np.nan),
     }
     params = dict(task.params)
     state0 = task.state0
-    for i, value in enumerate(task.values):
-        if i == 0:
+    exact = bool(s.lyapunov) and has_derivatives(sim)
+    tracked_before = bool(getattr(sim, "tracking", False))
+    if exact:
+        sim.track_derivatives(True)  # the variational equations from the first start on
+    try:
+        _run_points(task, sim, params, state0, exact, out, report)
+    finally:
+        if has_derivatives(sim):  # the simulator is reused by the next task on this worker
+            sim.track_derivatives(tracked_before)
+    # CPU seconds of this task on its worker: with the wall time this tells how much of
+    # the machine a sweep really got (shared machines, oversubscribed clusters)
+    out["cpu_s"] = np.array(time.process_time() - cpu_start)
+    return out
+
+
+def _run_points(task: SweepTask, sim: Any, params: dict[str, Any], state0: tuple[float, float], exact: bool,
+                out: dict[str, np.ndarray], report: Callable[[str, int, dict], None] | None) -> None:
+    s = task.sampling
+    k = len(task.values)
+    first = 0
+    if task.resume is not None:
+        # an interrupted chain goes on from the state after its last finished point: the
+        # next value set at that (theta-aligned) time, as set_parameter would have done
+        first, t_resume, u_resume, v_resume = task.resume
+        params[task.param] = task.values[first]
+        run_test_hook(task.key, first)
+        sim.start(params, t_resume, (u_resume, v_resume))
+    for i in range(first, k):
+        value = task.values[i]
+        if i == first and task.resume is None:
+            run_test_hook(task.key, i)
             if task.param in INITIAL_STATE:  # sweeping the initial state (basin scans)
                 state0 = (value, state0[1]) if task.param == INITIAL_STATE[0] else (state0[0], value)
             else:
                 params[task.param] = value
             sim.start(params, s.theta, state0)
-        else:
+        elif i > first:
+            run_test_hook(task.key, i)
             sim.set_parameter(task.param, value)
         r = sample_periods(sim, s.n_transient, s.n_samples)
         orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
@@ -92,26 +133,116 @@ def execute(task: SweepTask, sim: Any, report: Callable[[str, int], None] | None
             orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
         out["u"][i], out["v"][i], out["impacts"][i], out["t"][i] = r.u, r.v, r.impacts, r.t
         out["period"][i], out["orbit_impacts"][i] = orbit.period, orbit.impacts
+        settling = orbit.periodic and still_settling(r.u, r.v, orbit.period, s.tol)
+        lam = err = float("nan")
+        if s.lyapunov:
+            now = dict(params) if task.param in INITIAL_STATE else {**params, task.param: value}
+            from .lyapunov import lyapunov_continued
+
+            ly = lyapunov_continued(sim, now, s.lyapunov, exact)
+            out["lyapunov"][i], out["lyapunov_err"][i] = ly.exponents, ly.uncertainty
+            lam, err = ly.largest, ly.largest_uncertainty
+        out["dynamics"][i] = classify_dynamics(orbit.period, settling, lam, err)
         if report is not None and i + 1 < k:  # the last point arrives with the result
-            report(task.key, i + 1)
-    # CPU seconds of this task on its worker: with the wall time this tells how much of
-    # the machine a sweep really got (shared machines, oversubscribed clusters)
-    out["cpu_s"] = np.array(time.process_time() - cpu_start)
-    return out
+            row = {name: out[name][i].tolist() for name in RESULT_FIELDS}
+            u_end, v_end, _ = sim.read()
+            row["end"] = [float(sim.time), float(u_end), float(v_end)]  # where a resumed chain goes on
+            report(task.key, i + 1, row)
+
+
+#: ``KEY:POINT:ACTION[:FILE]``: tests make an interruption land at a known point of a known
+#: task instead of after a sleep (issue 13.6).  Before point POINT of task KEY starts:
+#: ``interrupt`` sends SIGINT to the process running the sweep (the pool's parent, or this
+#: process), ``kill`` SIGKILLs this process once (FILE is created first and, if it already
+#: exists, nothing happens), ``block`` creates FILE.reached and waits until FILE exists.
+TEST_HOOK_ENV = "IMPACT_HARNESS_TEST_HOOK"
+
+
+def run_test_hook(key: str, point: int) -> None:
+    """The test hook of :data:`TEST_HOOK_ENV`, if set for this task and point (else nothing)."""
+    spec = os.environ.get(TEST_HOOK_ENV)
+    if not spec:
+        return
+    hook_key, hook_point, action, *rest = spec.split(":", 3)
+    if hook_key != key or int(hook_point) != point:
+        return
+    import signal
+    from pathlib import Path
+
+    marker = Path(rest[0]) if rest else None
+    if action == "interrupt":
+        target = os.getppid() if _POOL_PROGRESS_QUEUE is not None or _IN_POOL else os.getpid()
+        os.kill(target, signal.SIGINT)
+        if target == os.getpid():
+            time.sleep(1e-3)  # let the handler raise KeyboardInterrupt here, before the point
+    elif action == "kill":
+        if marker is None or not marker.exists():
+            if marker is not None:
+                marker.touch()
+            os.kill(os.getpid(), signal.SIGKILL)
+    elif action == "block" and marker is not None:
+        Path(str(marker) + ".reached").touch()
+        while not marker.exists():
+            time.sleep(0.01)
 
 
 # Progress channel of a process-pool worker, set by the pool's initializer.
 _POOL_PROGRESS_QUEUE: Any = None
+_IN_POOL = False
 
 
-def init_pool_worker(progress_queue: Any) -> None:
+def init_pool_worker(progress_queue: Any, parent_pid: int | None = None) -> None:
     """Process-pool initializer: Ctrl-C is left to the parent (which stops the pool and keeps
-    the checkpoint), and per-point progress goes to ``progress_queue``."""
+    the checkpoint), per-point progress goes to ``progress_queue``, SIGTERM removes this
+    worker's temporary folder and exits at once, and the worker dies with its parent."""
     import signal
 
-    global _POOL_PROGRESS_QUEUE
+    global _POOL_PROGRESS_QUEUE, _IN_POOL
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _exit_on_signal)
     _POOL_PROGRESS_QUEUE = progress_queue
+    _IN_POOL = True
+    die_with_parent(parent_pid)
+
+
+def init_child_process(parent_pid: int | None = None) -> None:
+    """Initializer of any other process pool of the harness (e.g. parallel shooting): the
+    process dies with its parent, SIGKILL included, and SIGTERM removes its temporary folder.
+    Ctrl-C is left as it is."""
+    import signal
+
+    signal.signal(signal.SIGTERM, _exit_on_signal)
+    die_with_parent(parent_pid)
+
+
+def _exit_on_signal(signum: int, frame: Any) -> None:
+    # os._exit, not SystemExit: the pool's worker loop catches BaseException from a task and
+    # would send it back as a result instead of exiting
+    from . import tempdirs
+
+    tempdirs.remove_now()
+    os._exit(128 + signum)
+
+
+def die_with_parent(parent_pid: int | None) -> bool:
+    """Ask Linux to send this process SIGTERM when its parent dies, SIGKILL included
+    (``prctl(PR_SET_PDEATHSIG)``); without it, workers of a killed sweep wait on their task
+    queue as orphans for good.  Returns False where prctl is unavailable (not Linux).
+
+    If the parent died before the request took effect, exit now.
+    """
+    import ctypes
+    import signal
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(1, int(signal.SIGTERM), 0, 0, 0) != 0:  # 1 = PR_SET_PDEATHSIG
+            return False
+    except (OSError, AttributeError):
+        return False
+    if parent_pid is not None and os.getppid() != parent_pid:
+        _exit_on_signal(int(signal.SIGTERM), None)
+    return True
 
 
 def _reporter(progress: Any) -> Callable[[str, int], None] | None:
@@ -121,12 +252,12 @@ def _reporter(progress: Any) -> Callable[[str, int], None] | None:
         return progress
     if progress == "pool":
         queue = _POOL_PROGRESS_QUEUE
-        return None if queue is None else (lambda key, n: queue.put((key, n)))
+        return None if queue is None else (lambda key, n, row: queue.put((key, n, row)))
     if isinstance(progress, str) and progress.startswith("dask:"):
         from distributed import get_worker
 
         worker, topic = get_worker(), progress[len("dask:"):]
-        return lambda key, n: worker.log_event(topic, (key, n))
+        return lambda key, n, row: worker.log_event(topic, (key, n, row))
     return None
 
 

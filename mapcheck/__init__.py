@@ -11,7 +11,6 @@ Modules, by concern:
 * :mod:`mapcheck.bifurcation` -- vectorized iteration over sigma/rho grids (fresh, up, down)
 * :mod:`mapcheck.duration` -- impact duration: exact (41) and (42), (45), (50)
 * :mod:`mapcheck.orbits`   -- Newton periodic orbits and window edges of any map (e.g. the exact map)
-* :mod:`mapcheck.fig9`     -- figure 9's window table for every map variant
 """
 from .coeffs import A_GRAZING, Coefficients, coefficients, grazing_acceleration
 from .exact import ExactOscillator

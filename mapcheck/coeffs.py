@@ -82,7 +82,7 @@ class Coefficients:
     c1, c2, c3 : float
         c1 = sign(P12), c2 = alpha - 2(1+r)P22 + (1+r)^2 P22^2,
         c3 = (1+2r) gamma - (1+r)^2 P22^3 (with r -> r_eff; P22^3 as CORRECTED in
-        FORMULAS.md section 4).
+        docs/theory.md section 7).
     l : float
         Length scale (36): 1 / (4 A^2 (1+r_eff)^2 P12^2), with A = -4 pi^2.
     rho_per_sigma : float
@@ -147,6 +147,17 @@ def coefficients(nu: float, Omega: float, r: float, wall: str = "rigid") -> Coef
     Returns
     -------
     Coefficients
+
+    Examples
+    --------
+    Figure 9's parameters: the period-1 flip rho = 1/4 lies at sigma = 0.445 with rho linear in
+    sigma, at sigma = 0.80 with |A~(sigma)| (docs/theory.md section 7):
+
+    >>> from mapcheck import invert_alpha_gamma
+    >>> inv = invert_alpha_gamma(0.99, 0.01)
+    >>> c = coefficients(inv.nu, inv.Omega, 0.9, "compliant")
+    >>> round(float(c.sigma_of_rho(0.25)), 4), round(float(c.sigma_of_rho(0.25, "tilde")), 4)
+    (0.4454, 0.8015)
     """
     re = effective_r(r, wall)
     P = propagator(1.0, nu, Omega)

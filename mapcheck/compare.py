@@ -4,10 +4,10 @@ The harness measures (sweep Datasets, shooting edges, Jacobians); this module ho
 comparison logic, so that it can be tested without the FMU:
 
 * coordinates: the FMU samples the real state at t = n + theta; the maps' state is the
-  pre-impact ("virtual") state at t = n (FORMULAS.md section 3), related by the free
+  pre-impact ("virtual") state at t = n (docs/theory.md section 3), related by the free
   propagator (8).  :func:`free_flight`, :func:`virtual_to_phase`, :func:`phase_to_natural`.
-* windows: :func:`theory_windows` (Figure 9's three map variants, from :mod:`mapcheck.fig9`),
-  :func:`map_windows` (any coefficients), :func:`sweep_windows` (runs of maximal period-M
+* windows: :func:`predicted_windows` ((64), the 2D map, the 2D map with A~, for any
+  coefficients), :func:`map_windows` (any coefficients), :func:`sweep_windows` (runs of maximal period-M
   orbits in an up or down scan), :func:`scan_confirmation`, :func:`window_differences`,
   :func:`best_variant`, :func:`markdown_window_table`; starting guesses for shooting on the
   FMU from the map's orbits: :func:`maximal_orbit_section_guess` (:func:`maximal_orbit_guess`).
@@ -34,9 +34,9 @@ __all__ = [
     "phase_to_natural",
     "maximal_orbit_guess",
     "maximal_orbit_section_guess",
-    "theory_windows",
     "sweep_windows",
     "map_windows",
+    "predicted_windows",
     "window_differences",
     "scan_confirmation",
     "best_variant",
@@ -148,31 +148,6 @@ def maximal_orbit_section_guess(c: Coefficients, M: int, sigma: float, theta: fl
 # ----------------------------------------------------------------------------------------
 # Window tables
 # ----------------------------------------------------------------------------------------
-def _clean(w: Any) -> "tuple[float, float | None] | None":
-    if w is None:
-        return None
-    if isinstance(w[0], tuple):  # several windows of one period: keep the widest
-        w = max(w, key=lambda e: e[1] - e[0])
-    lo, hi = float(w[0]), float(w[1])
-    return (lo, None if not math.isfinite(hi) else hi)
-
-
-def theory_windows(M_max: int = 4) -> dict[str, Windows]:
-    """The three map predictions of Figure 9's window edges in sigma.
-
-    Returns
-    -------
-    dict
-        ``{"theory_64": {M: (lo, hi)}, "map": ..., "map_A_tilde": ...}``; ``hi = None``
-        where a window has no upper edge (M = 1).  (64) with rho(sigma) of (48); the 2D map
-        (37)/(38) with (48) and rho linear in sigma; the same with |A~(sigma)| in rho.
-    """
-    from .fig9 import fig9_windows
-
-    res = fig9_windows(M_max=M_max)
-    return {name: {M: _clean(res[key][M]) for M in range(1, M_max + 1)} for name, (key, _) in VARIANTS.items()}
-
-
 def map_windows(c: Coefficients, M_max: int, sigma_grid: np.ndarray, variant: str = "tilde") -> Windows:
     """Stable maximal period-M windows in sigma of the 2D map (37)/(38) with the
     coefficients ``c`` ((39) rigid, (48) compliant), rho from A or A~(sigma) (``variant``).
@@ -189,6 +164,36 @@ def map_windows(c: Coefficients, M_max: int, sigma_grid: np.ndarray, variant: st
         w = max(ws, key=lambda w: w.hi - w.lo)
         out[M] = (float(w.lo), None if w.kind_hi == "range" else float(w.hi))
     return out
+
+
+def predicted_windows(c: Coefficients, M_max: int, sigma_grid: np.ndarray) -> dict[str, Windows]:
+    """The three map predictions of the sigma-edges of the stable maximal period-M windows.
+
+    Parameters
+    ----------
+    c : Coefficients
+        :func:`mapcheck.coeffs.coefficients` of the parameter set ((39) rigid wall, (48)
+        compliant wall).
+    M_max : int
+    sigma_grid : ndarray
+        Sorted sigma grid for the 2D maps' window search (each window is bisected from it).
+
+    Returns
+    -------
+    dict
+        ``{"theory_64": {M: (lo, hi)}, "map": ..., "map_A_tilde": ...}``: (64) with rho
+        linear in sigma; the 2D map (37)/(38) with rho linear in sigma; the same with
+        |A~(sigma)| in rho.  ``hi`` None where a window has no upper edge (M = 1) or
+        reaches the end of the grid; a window None where there is none.
+    """
+    from .windows import window_1d
+
+    t64: Windows = {}
+    for M in range(1, M_max + 1):
+        lo, hi = window_1d(M)
+        t64[M] = None if lo > hi else (lo / c.rho_per_sigma, None if not math.isfinite(hi) else hi / c.rho_per_sigma)
+    return {"theory_64": t64, "map": map_windows(c, M_max, sigma_grid, "paper"),
+            "map_A_tilde": map_windows(c, M_max, sigma_grid, "tilde")}
 
 
 def sweep_windows(values: np.ndarray, period: np.ndarray, impacts: np.ndarray) -> dict[int, tuple[float, float]]:
@@ -243,7 +248,7 @@ def scan_confirmation(shooting: Windows, up: Mapping[int, tuple[float, float]],
         hi_scan = up.get(M, (None, None))[1] if w[1] is not None else None
         out[M] = {
             "scan_lower": lo_scan, "scan_upper": hi_scan,
-            "lower_minus_shooting": None if lo_scan is None else lo_scan - w[0],
+            "lower_minus_shooting": None if (lo_scan is None or w[0] is None) else lo_scan - w[0],
             "upper_minus_shooting": None if (hi_scan is None or w[1] is None) else hi_scan - w[1],
         }
     return out
@@ -251,14 +256,14 @@ def scan_confirmation(shooting: Windows, up: Mapping[int, tuple[float, float]],
 
 def window_differences(reference: Windows, other: Windows) -> dict[int, tuple[float | None, float | None]]:
     """Per period, (other - reference) at the lower and upper edges (None where either is
-    missing or unbounded)."""
+    missing, unresolved or unbounded)."""
     out: dict[int, tuple[float | None, float | None]] = {}
     for M, ref in reference.items():
         w = other.get(M)
         if ref is None or w is None:
             out[M] = (None, None)
             continue
-        dlo = w[0] - ref[0]
+        dlo = None if (ref[0] is None or w[0] is None) else w[0] - ref[0]
         dhi = None if (ref[1] is None or w[1] is None) else w[1] - ref[1]
         out[M] = (dlo, dhi)
     return out
@@ -278,8 +283,10 @@ def best_variant(ode: Windows, variants: Mapping[str, Windows]) -> tuple[str, di
 def _fmt_window(w: Any, digits: int = 4) -> str:
     if w is None:
         return "none"
+    # an edge that is None: no upper edge (maps, M = 1) or not bracketed inside the range
+    lo = "unresolved" if w[0] is None else f"{w[0]:.{digits}f}"
     hi = "none (no upper edge)" if w[1] is None else f"{w[1]:.{digits}f}"
-    return f"[{w[0]:.{digits}f}, {hi}]"
+    return f"[{lo}, {hi}]"
 
 
 def markdown_window_table(rows: Mapping[str, Windows], labels: Mapping[str, str] | None = None,
@@ -315,7 +322,7 @@ def scaled_state(eps: float, direction: Sequence[float], c: Coefficients) -> tup
     """The physical state (u, v, sigma) at (x, y, rho) = l eps (a, b, s) in natural coordinates.
 
     The map (37)/(38) is an expansion in the size of (x, y, rho); its error is
-    O(eps^(3/2)) (FORMULAS.md section 4).  The factor l of (36) makes eps the same physical
+    O(eps^(3/2)) (docs/theory.md section 4).  The factor l of (36) makes eps the same physical
     size for every wall (chi = x / l ~ eps: impact velocity ~ sqrt(eps)); l differs by
     (1+r)^2/(1-r)^2 between the rigid (39) and the compliant (48) map.  Inverse (35) (exact
     inverse of (33)) with A; sigma = rho / (rho/sigma) of (39)/(48).
@@ -332,7 +339,7 @@ def map_one_step_error(u: float, v: float, sigma: float, u1_ode: float, v1_ode: 
 
     The map is (31)/(32) in physical coordinates (with L from (26)-(30), r_eff of ``c``);
     both images are expressed in the natural coordinates (33)/(34), where the state is
-    O(eps) and the map's error is O(eps^(3/2)) (FORMULAS.md section 4); divided by l (36)
+    O(eps) and the map's error is O(eps^(3/2)) (docs/theory.md section 4); divided by l (36)
     so that the error is in the units of chi for every wall.
     """
     from .maps import physical_map

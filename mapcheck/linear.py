@@ -1,7 +1,7 @@
 """Linear part of the oscillator: eigenvalues, propagator, (alpha, gamma) and its inverse.
 
 References are to Molenaar, de Weger & van de Water, Nonlinearity 14 (2001) 301
-("the paper") and to the verified formula sheet FORMULAS.md (section 2).
+("the paper") and to the verified account docs/theory.md (section 2).
 
 The free oscillator (3), written for the deviation w = u - p from the periodic
 solution p(t) (4), is w'' + nu w' + k2 w = 0 with k2 = Omega^2.  Inside a
@@ -51,7 +51,7 @@ def eigenvalues(nu: float, Omega: float) -> tuple[complex, complex]:
 def _damped_c_and_s(t: np.ndarray, nu: float, k2: float) -> tuple[np.ndarray, np.ndarray]:
     """e^{-nu t/2} C and e^{-nu t/2} S, C = cosh(sqrt(d) t), S = sinh(sqrt(d) t)/sqrt(d).
 
-    d = nu^2/4 - k2 of any sign (FORMULAS.md section 2): cosh/sinh for d > 0, cos/sin for
+    d = nu^2/4 - k2 of any sign (docs/theory.md section 2): cosh/sinh for d > 0, cos/sin for
     d < 0 (both accurate to a few ulp, also for small sqrt(|d|) t); a short Taylor series
     in d t^2 only where |d| t^2 <= 1e-6 (there sqrt(d) may vanish: critical damping); and
     for sqrt(d) t > 30 the exponentials are combined, (e^{(q-b)t} +- e^{-(q+b)t})/2, so
@@ -93,7 +93,7 @@ def _damped_c_and_s(t: np.ndarray, nu: float, k2: float) -> tuple[np.ndarray, np
 def propagator_k2(t, nu: float, k2: float) -> np.ndarray:
     """Propagator P(t) of w'' + nu w' + k2 w = 0, valid at every damping.
 
-    FORMULAS.md section 2, equivalent to the paper's (7):
+    docs/theory.md section 2, equivalent to the paper's (7):
     ``P = e^{-nu t/2} [[C + nu S/2, S], [-k2 S, C - nu S/2]]`` with
     ``d = nu^2/4 - k2``, ``C = cosh(sqrt(d) t)``, ``S = sinh(sqrt(d) t)/sqrt(d)``
     (cos/sin when d < 0, a series near d t^2 = 0).  For overdamped motion at
@@ -233,7 +233,7 @@ def invert_alpha_gamma(alpha: float, gamma: float, branch: int | None = None) ->
     """Invert (9): (alpha, gamma) -> (nu, Omega).
 
     nu = -ln gamma always.  If P(1) has real positive eigenvalues lambda_i the
-    inverse is unique: Omega^2 = ln(lambda_1) ln(lambda_2) (FORMULAS.md section 2).
+    inverse is unique: Omega^2 = ln(lambda_1) ln(lambda_2) (docs/theory.md section 2).
     If they are complex, psi (alpha = 2 gamma^{1/2} cos psi) is fixed only modulo
     2 pi and up to sign, and the branch sets sign(P12) = c1 -- so the caller must
     choose: ``branch`` indexes :func:`underdamped_branches`.

@@ -1,17 +1,17 @@
 """The paper's near-grazing maps, each a plain vectorized function of numpy arrays.
 
 Equation numbers refer to Molenaar, de Weger & van de Water, Nonlinearity 14 (2001)
-301, as read and corrected in FORMULAS.md.  All state and parameter arguments
+301, as read and corrected in docs/theory.md.  All state and parameter arguments
 broadcast against each other, so one call maps many orbits or parameter values.
 
 Conventions
 -----------
 * Physical state (u, v) is the *pre-impact* ("virtual") state at t = n (figure 3;
-  FORMULAS.md section 3).
+  docs/theory.md section 3).
 * ``r_eff`` is the restitution entering the formulas: r for a rigid wall (11), -r
   for low-velocity impacts at a compliant wall (46)-(48).
 * ``variant="tilde"`` replaces A = -4 pi^2 (15) by A~(sigma) = (1+sigma) A + sigma Omega^2
-  in chi, l and rho (section 6; FORMULAS.md section 7, item 3).
+  in chi, l and rho (section 6; docs/theory.md section 7, item 3).
 """
 from __future__ import annotations
 
@@ -44,7 +44,7 @@ def local_impact_map(u, v, nu: float, r_eff: float, A=A_GRAZING):
 
     For chi >= 0::
 
-        u~ = -(1 + 2r) u - (1/A)(1 + r) v (sqrt(chi) - v)        (26), sign as in FORMULAS.md
+        u~ = -(1 + 2r) u - (1/A)(1 + r) v (sqrt(chi) - v)        (26), sign as in docs/theory.md section 7
         v~ = v - (1 + r)(sqrt(chi) - 2 nu u)                      (27)
 
     and L is the identity for chi < 0 (no impact).
@@ -78,7 +78,7 @@ def local_impact_map(u, v, nu: float, r_eff: float, A=A_GRAZING):
 
 def local_impact_map_delay(u, v, nu: float, r: float, kappa: float, A=A_GRAZING):
     """Rigid-wall local map (26)/(27) plus the impact-delay correction for high-velocity
-    impacts at a compliant wall (section 6.2, FORMULAS.md section 5).
+    impacts at a compliant wall (section 6.2, docs/theory.md section 5).
 
     The mass leaves the wall Delta t later than a rigid-wall impact would, with Delta t
     from (42): (2/kappa) arctan(beta), beta = r v_c kappa / |A| (43), v_c = sqrt(chi).
@@ -218,7 +218,7 @@ def nordmark_map(x, y, rho, alpha: float, gamma: float, r: float):
         x <= 0:  x' = alpha x + y + rho,    y' = -gamma x
         x > 0:   x' = -sqrt(x) + y + rho,   y' = -r^2 gamma x
 
-    The impact branch has Jacobian determinant r^2 gamma (FORMULAS.md section 6).
+    The impact branch has Jacobian determinant r^2 gamma (docs/theory.md section 6).
     """
     return piecewise_map(x, y, rho, alpha, gamma, 1.0, 0.0, -r * r * gamma)
 

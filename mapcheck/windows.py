@@ -40,6 +40,13 @@ def window_1d(M: int) -> tuple[float, float]:
     Returns
     -------
     (rho_lo, rho_hi) : tuple of float
+
+    Examples
+    --------
+    >>> window_1d(3)
+    (0.08333333333333333, 0.1111111111111111)
+    >>> window_1d(1)
+    (0.25, inf)
     """
     if M < 1:
         raise ValueError("M must be >= 1")

@@ -12,7 +12,7 @@ log() { printf '[setup] %s\n' "$*" >&2; }
 
 # --- 1. Debian packages -------------------------------------------------------------------
 # libtbb12: the ecos co-simulation master (ecospy, a test dependency) links against it.
-apt_pkgs=(libsundials-dev build-essential cmake zip libtbb12)
+apt_pkgs=(libsundials-dev build-essential cmake zip valgrind libtbb12)
 missing=()
 for p in "${apt_pkgs[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

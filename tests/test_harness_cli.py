@@ -61,7 +61,15 @@ BAD_INPUT = [
     (["jacobian", "--x-start", "-1"], "--x-start", "must be > 0"),
     (["jacobian", "--theta", "2"], "--theta", r"\[0, 1\)"),
     (["sweep", "--transient", "abc"], "--transient", "invalid int value"),
-    (["simulate", "--dt", "0"], "dt", "must be > 0"),
+    (["simulate", "--dt", "0"], "--dt", "must be > 0"),
+    (["simulate", "--t0", "nan"], "--t0", "must be finite"),
+    (["simulate", "--t-end", "inf"], "--t-end", "must be finite"),
+    (["simulate", "--t0", "5", "--t-end", "1"], "--t-end", "greater than the start time"),
+    (["sweep", "--values", "0.5", "--checkpoint", "/proc/no/such"], "--checkpoint", "cannot create the checkpoint"),
+    (["sweep", "--mode", "both,up"], "--mode", "up-then-down loop already"),
+    (["sweep", "--max-work", "nan"], "--max-work", "invalid positive number"),
+    (["sweep", "--max-memory", "lots"], "--max-memory", "invalid size"),
+    (["strobe", "--fmu", "/"], "--fmu", "is a directory"),
     # found by the FMU itself, quoted from its log
     (["strobe", "--set", "wall=rigid", "--u0", "0.01"], None, "rejected the settings.*inside the rigid wall"),
 ]

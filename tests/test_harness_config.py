@@ -95,8 +95,11 @@ def test_parameter_values() -> None:
 
 
 def test_parse_modes() -> None:
-    assert parse_modes("both", "--mode") == ("up", "down")
-    assert parse_modes("fresh,both", "--mode") == ("fresh", "up", "down")
+    assert parse_modes("both", "--mode") == ("both",)  # the hysteresis loop, one task
+    assert parse_modes("fresh,both", "--mode") == ("fresh", "both")
+    assert parse_modes("up,down", "--mode") == ("up", "down")  # two independent scans
+    with pytest.raises(HarnessInputError, match="up-then-down loop already"):
+        parse_modes("both,down", "--mode")
     assert parse_modes(["down", "down"], "--mode") == ("down",)
     with pytest.raises(HarnessInputError, match="unknown sweep mode 'sideways'"):
         parse_modes("sideways", "--mode")
@@ -115,5 +118,5 @@ def test_shipped_experiment_files_are_valid(model: FmuModel, name: str) -> None:
     path = Path(__file__).resolve().parents[1] / "harness" / "experiments" / name
     exp = Experiment.from_sources(path, model=model)
     spec = exp.sweep_spec()
-    assert spec.param == "sigma" and spec.modes == ("up", "down") and len(spec.values) > 10
+    assert spec.param == "sigma" and spec.modes == ("both",) and len(spec.values) > 10
     assert exp.run.out and exp.run.plot

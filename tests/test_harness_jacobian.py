@@ -1,4 +1,4 @@
-"""Jacobian of the stroboscopic map measured on the real FMU (FORMULAS.md sections 6 and 8).
+"""Jacobian of the stroboscopic map measured on the real FMU (docs/theory.md sections 6 and 8).
 
 Independent truths: the free-flight Jacobian P(1) from mapcheck.linear (closed form (7)),
 det J = r^2 e^{-nu} across one impact (section 6), and the square-root singularity of the
@@ -60,7 +60,7 @@ def test_every_element_singular_at_another_phase(fig9_scans) -> None:
 
 
 def test_determinant_across_one_impact(fig9_scans) -> None:
-    """det J = r^2 e^{-nu} (FORMULAS.md section 6), whatever the coordinates."""
+    """det J = r^2 e^{-nu} (docs/theory.md section 6), whatever the coordinates."""
     p, x, scans = fig9_scans
     expected = p["r"] ** 2 * math.exp(-p["nu"])
     for s in scans.values():

@@ -1,17 +1,14 @@
 """Sweeps on the real FMU: period adding (Figure 9), hysteresis, 2D scans, resuming, worker loss.
 
-Expected windows come from the paper's 1D theory (FORMULAS.md section 6, eq (56) with the
+Expected windows come from the paper's 1D theory (docs/theory.md section 6, eq (56) with the
 |A~(sigma)| scale of section 7 item 3, and eq (64)), not from the harness's own output.
 """
 from __future__ import annotations
 
 import math
 import os
-import signal
 import subprocess
 import sys
-import threading
-import time
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +18,7 @@ from scipy.optimize import brentq
 
 from harness import FmuModel, HarnessInputError, MappingSimulator, SamplingSpec, SweepSpec, SweepStats, run_sweep
 from harness.backends import ProcessBackend
+from harness.tasks import TEST_HOOK_ENV
 
 ROOT = Path(__file__).resolve().parents[1]
 FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
@@ -28,7 +26,7 @@ DATA_VARS = ("u", "v", "impacts", "t", "period", "orbit_impacts")
 
 
 def rho_of_sigma(sigma: float, nu: float, Omega: float, r: float) -> float:
-    """Strongly damped 1D map parameter, eq (56) with |A~(sigma)| (FORMULAS.md 7.3)."""
+    """Strongly damped 1D map parameter, eq (56) with |A~(sigma)| (docs/theory.md section 7, item 3)."""
     A_tilde = (1 + sigma) * 4 * math.pi**2 - sigma * Omega**2
     return nu * Omega**2 * sigma / (2 * A_tilde * (1 - r) ** 2)
 
@@ -120,31 +118,28 @@ def test_sweep_input_errors(model: FmuModel) -> None:
 
 def test_interrupted_cli_sweep_resumes_without_recomputing(tmp_path: Path, model: FmuModel) -> None:
     """Ctrl-C a running CLI sweep, rerun the same command: finished points are not redone and
-    the result equals an uninterrupted run."""
+    the result equals an uninterrupted run.  The interruption lands at a known point (the
+    test hook sends SIGINT just before point 2 starts), so exactly 2 points are finished."""
     out = tmp_path / "s.nc"
     ckpt = tmp_path / "s.nc.partial"
     values = "0.3,0.4,0.5,0.6,0.7,0.9"
-    cmd = [sys.executable, "-m", "harness", "sweep", "--values", values, "--mode", "fresh", "--transient", "1500",
+    cmd = [sys.executable, "-m", "harness", "sweep", "--values", values, "--mode", "fresh", "--transient", "300",
            "--samples", "10", "--backend", "serial", "--out", str(out), "--no-plot", "--no-progress"]
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    deadline = time.time() + 60
-    while time.time() < deadline and len(list(ckpt.glob("fresh-*.npz"))) < 2:
-        time.sleep(0.05)
-    proc.send_signal(signal.SIGINT)
-    _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130, err
-    assert "rerun the same command to resume" in err
-    done = len(list(ckpt.glob("fresh-*.npz")))
-    assert 2 <= done < 6 and not out.exists()
+    env = {**os.environ, TEST_HOOK_ENV: "fresh-p00002:0:interrupt"}
+    res = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=120, env=env)
+    assert res.returncode == 130, res.stderr
+    assert "interrupted: 2 of 6 points are kept" in res.stderr and "rerun the same command to resume" in res.stderr
+    assert sorted(p.name for p in ckpt.glob("fresh-*.npz")) == ["fresh-p00000.npz", "fresh-p00001.npz"]
+    assert not out.exists()
 
     res = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr
-    assert f"{6 - done} tasks computed, {done} resumed" in res.stdout
+    assert "4 tasks computed, 2 resumed" in res.stdout
     assert not ckpt.exists()  # removed once the NetCDF file holds everything
     with xr.open_dataset(out) as resumed:
-        assert int(resumed.attrs["tasks_resumed"]) == done
+        assert int(resumed.attrs["tasks_resumed"]) == 2
         reference = run_sweep(model, SweepSpec("sigma", np.array([float(x) for x in values.split(",")]), ("fresh",)),
-                              sampling=SamplingSpec(n_transient=1500, n_samples=10), backend="serial", progress=False)
+                              sampling=SamplingSpec(n_transient=300, n_samples=10), backend="serial", progress=False)
         assert_same_results(resumed, reference)
 
 
@@ -160,35 +155,21 @@ def test_checkpoint_of_another_run_is_refused(tmp_path: Path, model: FmuModel) -
                   checkpoint=str(tmp_path / "c"), progress=False)
 
 
-def test_process_pool_loses_no_point_when_a_worker_dies(model: FmuModel) -> None:
-    # ~4 s of work on 2 workers (12 points x ~0.7 s): the sweep must still be running when the
-    # killer strikes (~1.5 s after the pool starts), or no worker dies with work to redo; with
-    # 8 points x 0.17 s an idle machine finished first and the test failed by timing alone
-    spec = SweepSpec("sigma", np.linspace(0.3, 0.9, 12), ("fresh",))
-    sampling = SamplingSpec(n_transient=2500, n_samples=10)
+def test_process_pool_loses_no_point_when_a_worker_dies(model: FmuModel, tmp_path: Path,
+                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A worker is SIGKILLed at a known point (the test hook, just before point 5 starts, once):
+    the pool is replaced, the lost tasks rerun, and the results equal a serial run."""
+    spec = SweepSpec("sigma", np.linspace(0.3, 0.9, 8), ("fresh",))
+    sampling = SamplingSpec(n_transient=100, n_samples=10)
+    marker = tmp_path / "killed"
+    monkeypatch.setenv(TEST_HOOK_ENV, f"fresh-p00005:0:kill:{marker}")  # the spawned workers inherit it
     backend = ProcessBackend(2)
-    killed: list[int] = []
-
-    def killer() -> None:
-        # kill one worker of this backend's pool once both workers are up and busy
-        deadline = time.time() + 60
-        while time.time() < deadline and not killed:
-            pool = backend._pool
-            procs = [p for p in (getattr(pool, "_processes", None) or {}).values() if p.pid and p.is_alive()]
-            if len(procs) >= 2:
-                time.sleep(0.5)  # let both start on their tasks (~0.7 s each)
-                os.kill(procs[0].pid, signal.SIGKILL)
-                killed.append(procs[0].pid)
-            time.sleep(0.05)
-
-    thread = threading.Thread(target=killer, daemon=True)
-    thread.start()
     try:
         ds = run_sweep(model, spec, sampling=sampling, backend=backend, progress=False)
     finally:
         backend.close()
-    thread.join(5)
-    assert killed and backend.restarts >= 1
+    assert marker.exists() and backend.restarts == 1
+    monkeypatch.delenv(TEST_HOOK_ENV)
     reference = run_sweep(model, spec, sampling=sampling, backend="serial", progress=False)
     assert_same_results(ds, reference)
 
@@ -203,7 +184,7 @@ def test_continuation_chain_reports_each_point(model: FmuModel) -> None:
     tasks = plan_tasks(SweepSpec("sigma", np.array([0.5, 0.6, 0.7]), ("down",)), base, (-1.0, 0.0),
                        SamplingSpec(n_transient=5, n_samples=3))
     seen: list[tuple[str, int]] = []
-    out = execute(tasks["down"], FmuSimulator(model.source()), lambda key, n: seen.append((key, n)))
+    out = execute(tasks["down"], FmuSimulator(model.source()), lambda key, n, row: seen.append((key, n)))
     assert seen == [("down", 1), ("down", 2)]
     assert out["u"].shape == (3, 3)
 

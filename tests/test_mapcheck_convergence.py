@@ -1,7 +1,7 @@
 """Convergence order of the near-grazing maps against the exact pre-impact map.
 
 With (u, v, sigma) = eps (a, b, c) the error of each map against the exact
-stroboscopic map of the ODE (closed form, FORMULAS.md section 3) must fall like
+stroboscopic map of the ODE (closed form, docs/theory.md section 3) must fall like
 eps^1.5: the maps keep all terms through O(eps) (x ~ eps, sqrt(x) ~ eps^0.5).
 The slope is fitted over four decades of eps.
 """
@@ -73,7 +73,7 @@ def test_compliant_low_velocity_map_order_1p5(par, direction):
 def test_high_velocity_compliant_map_order_1p5(par):
     """Section 6.2: with kappa = eps^-1.5 (beta ~ eps^-1) the rigid map (39) is accurate to
     O(eps^1.5) for a compliant wall; with kappa = eps^-1 the delay pi/kappa costs the order
-    (error ~ eps), and the delay correction of FORMULAS.md section 5 restores it."""
+    (error ~ eps), and the delay correction of docs/theory.md section 5 restores it."""
     eps = np.logspace(-2, -5, 4)
     d = (1.0, 0.5, 0.5)
     s_hi = slopes(errors(par, 0.9, "compliant", "compliant-high", d, eps, kappa_of_eps=lambda e: e ** -1.5), eps)
@@ -95,7 +95,7 @@ def test_tilde_variant_order_1p5(wall):
 
 def test_order_test_detects_the_ocr_reading_of_c3():
     """Sensitivity check: with the OCR reading c3 = (1+2r) gamma - (1+r)^2 P22^2 (not P22^3,
-    FORMULAS.md section 4) the natural map is only O(eps) accurate where P22 is not small."""
+    docs/theory.md section 4) the natural map is only O(eps) accurate where P22 is not small."""
     c = coefficients(*UNDER, 0.9, "rigid")
     P22 = c.P[1, 1]
     wrong = dataclasses.replace(c, c3=(1 + 2 * c.r_eff) * c.gamma - (1 + c.r_eff) ** 2 * P22 ** 2)

@@ -52,7 +52,7 @@ def test_eigenvalue_form_of_7(nu, Omega):
 @pytest.mark.parametrize("nu, Omega", PARAMS)
 def test_identities_and_9(nu, Omega):
     P = propagator(1.0, nu, Omega)
-    # P11 - nu P12 = P22 (FORMULAS.md section 2)
+    # P11 - nu P12 = P22 (docs/theory.md section 2)
     assert abs(P[0, 0] - nu * P[0, 1] - P[1, 1]) < 1e-14 * max(1.0, abs(P).max())
     alpha, gamma = alpha_gamma(nu, Omega)
     s1, s2 = eigenvalues(nu, Omega)
@@ -87,7 +87,7 @@ def test_large_stiffness_and_long_times_do_not_overflow():
 
 
 def test_inverse_overdamped_is_unique():
-    """Figure 9 and figure 1: real eigenvalues, unique inverse (FORMULAS.md section 2)."""
+    """Figure 9 and figure 1: real eigenvalues, unique inverse (docs/theory.md section 2)."""
     inv = invert_alpha_gamma(0.99, 0.01)
     assert inv.branch is None and inv.sign_P12 == 1.0
     assert math.isclose(inv.nu, 4.605170185988091, rel_tol=1e-15)

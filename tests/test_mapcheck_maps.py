@@ -88,7 +88,7 @@ def test_nordmark_impact_branch_determinant():
 @pytest.mark.parametrize("wall", ["rigid", "compliant"])
 def test_exact_map_across_one_impact_has_determinant_r2_gamma(wall):
     """The independent reason for Nordmark's r^2 gamma: the exact pre-impact map across one
-    impact (closed-form ODE) has Jacobian determinant r^2 e^{-nu} (FORMULAS.md section 6)."""
+    impact (closed-form ODE) has Jacobian determinant r^2 e^{-nu} (docs/theory.md section 6)."""
     nu, Om = UNDER
     r = 0.7
     osc = ExactOscillator(nu, Om, 0.0, r=r, Gamma=50.0, wall=wall)

@@ -55,7 +55,7 @@ def test_orbit_solver_reproduces_64_for_the_1d_map():
         else:
             assert abs(w.hi - hi) < 1e-12 and w.kind_hi == "graze"
     assert windows(p, 4, grid) == [] and windows(p, 5, grid) == []
-    # the orbit itself: sqrt(x_M) = M rho (FORMULAS.md section 6)
+    # the orbit itself: sqrt(x_M) = M rho (docs/theory.md section 6)
     orb = maximal_orbits(p, 3, np.array([0.1]))
     k = int(np.argmax(orb.stable))
     assert math.isclose(orb.s[k, 0], 0.3, rel_tol=1e-12)
@@ -147,23 +147,3 @@ def test_tilde_variant_moves_windows_up():
     s_t = float(c.sigma_of_rho(0.25, "tilde"))
     assert 0.79 < s_t < 0.81
     assert math.isclose(float(c.rho(s_t, "tilde")), 0.25, rel_tol=1e-12)
-
-
-def test_fig9_table_variants():
-    """Figure 9 (alpha, gamma) = (0.99, 0.01), r = 0.9: the 2D map's windows lie within a few
-    percent of (64) (gamma is small, so the map is nearly 1D), while A~(sigma) moves every
-    window to larger sigma (e.g. the period-1 lower edge from ~0.45 to ~0.80)."""
-    from mapcheck.fig9 import fig9_windows, format_table
-
-    res = fig9_windows(M_max=4, sigma_max=2.0, n_grid=4001)
-    for M in (1, 2, 3):
-        for a, b in (("64", "2d"), ("64_tilde", "2d_tilde")):
-            lo64, hi64 = res[a][M]
-            lo2, hi2 = res[b][M]
-            assert abs(lo2 - lo64) < 0.03 * lo64
-            if M > 1:
-                assert abs(hi2 - hi64) < 0.03 * hi64
-        assert res["2d_tilde"][M][0] > res["2d"][M][0] * 1.1
-    assert res["64"][4][0] == res["64"][4][1]  # (64): a single point at M = 4
-    assert 0 < res["2d"][4][1] - res["2d"][4][0] < 0.01  # the 2D map: a narrow window
-    assert "M=4" in format_table(res)

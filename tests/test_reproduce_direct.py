@@ -1,7 +1,7 @@
 """``reproduce direct --quick``: the map's one-step prediction against the real FMU near grazing.
 
 The expansion behind (31)/(37)-(39), (48) neglects terms of relative order eps^(1/2), so the
-one-step error in natural coordinates is O(eps^(3/2)) (FORMULAS.md section 4).  The fitted
+one-step error in natural coordinates is O(eps^(3/2)) (docs/theory.md section 4).  The fitted
 order must be >= 1.4 on every ray, for the compliant (48) and the rigid (39) wall.
 """
 from __future__ import annotations

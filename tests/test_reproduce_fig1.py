@@ -3,6 +3,7 @@ r = 0.9, and the ODE's (the real FMU) at the same parameters."""
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
@@ -50,3 +51,27 @@ def test_down_scan_sees_the_windows(fig1) -> None:
         w = ode[M]
         top = w[1] if w[1] is not None else float("inf")
         assert lo <= top * 1.25 and hi >= w[0] / 1.25, (M, scan[M], w)
+
+
+def test_report_is_consistent(fig1) -> None:
+    """The verdict agrees with the tables: the relative differences name what they are relative
+    to and where they occur (the numbers recomputed from the JSON's windows), and periods the
+    scans saw beyond the shooting's M are acknowledged, not called unmeasured or unresolved."""
+    out, res = fig1
+    report = (out / "report.md").read_text()
+    verdict = report.split("## Verdict", 1)[1]
+    assert "relative to the ODE's edge" in verdict
+    w = res["windows"]
+    for k in ("map", "map_A_tilde"):
+        at = res["max_relative_difference_at"][k]
+        i = 0 if at["edge"] == "lower" else 1
+        a, b = w["ode"][str(at["M"])][i], w[k][str(at["M"])][i]
+        assert abs(b - a) / a == pytest.approx(res["max_relative_difference_to_ode"][k], rel=1e-12)
+        assert f"{res['max_relative_difference_to_ode'][k]:.2%}" in verdict
+        assert f"M = {at['M']} {at['edge']} edge" in verdict
+    seen = {int(M) for d in ("up", "down") for M in res["scan_windows"][d]}
+    beyond = seen - {1, 2, 3}
+    if beyond:
+        listed = re.search(r"The scans do see maximal orbits of M = ([\d, ]+) at", verdict)
+        assert listed and {int(M) for M in listed.group(1).split(",")} == beyond
+    assert "not resolved" not in verdict

@@ -35,27 +35,29 @@ from impact_twin_model import MODE_FREE, CvodeDriver, ModelError, OscillatorMode
 # (name, description, extra attributes of the type element) in value-reference order 0..16:
 # copied from the C FMU's modelDescription.xml, which is the reference.
 _PARAMETERS_REAL = {
-    "nu": ("damping nu = 2 pi c/(m omega), eq (3)", {"min": "0"}),
+    "nu": ("damping nu = 2 pi c/(m omega), eq (3)", {"min": "0", "max": "1e6"}),
     "Omega": (
         "natural frequency over drive frequency, times 2 pi (Omega^2 = 4 pi^2 k/(m omega^2))",
-        {"min": "0"},
+        {"min": "1e-6", "max": "1e4"},
     ),
     "sigma": (
         "bifurcation parameter sigma = (F - F_g)/F_g, eq (5); tunable between steps",
-        {"min": "-1"},
+        {"min": "-1", "max": "1e6"},
     ),
     "r": (
         "restitution coefficient: rigid v -> -r v; compliant v -> r v on entering (footnote 2)",
         {"min": "0", "max": "1"},
     ),
-    "Gamma": ("wall stiffness ratio Gamma = kappa^2/Omega^2 (compliant wall)", {"min": "0"}),
+    "Gamma": ("wall stiffness ratio Gamma = kappa^2/Omega^2 (compliant wall)",
+              {"min": "0", "max": "1e16"}),
 }
 _WALL_DESC = "wall model: 0 none, 1 compliant, 2 rigid"
 _START_REAL = {
-    "u0": ("position at the start time (rest position -1, wall at 0)", {}),
-    "v0": ("velocity at the start time", {}),
-    "rtol": ("CVODE relative tolerance", {"min": "0", "max": "1"}),
-    "atol": ("CVODE absolute tolerance", {"min": "0"}),
+    "u0": ("position at the start time (rest position -1, wall at 0)",
+           {"min": "-1e6", "max": "1e6"}),
+    "v0": ("velocity at the start time", {"min": "-1e6", "max": "1e6"}),
+    "rtol": ("CVODE relative tolerance", {"min": "1e-15", "max": "0.1"}),
+    "atol": ("CVODE absolute tolerance", {"min": "1e-30", "max": "0.01"}),
 }
 _CALCULATED = {
     "F_g": ("grazing forcing amplitude, eq (5)", {}),
@@ -126,7 +128,12 @@ def _guard_pythonfmu_exit(resources: Optional[str]) -> None:
 
 
 class ImpactOscillatorPy(Fmi2Slave):
-    """Driven oscillator with a rigid or compliant wall; CVODE (scikit-sundae) inside."""
+    """Driven oscillator with a rigid or compliant wall; CVODE (scikit-sundae) inside.
+
+    Without the C FMU's ports (F_ext, u_wall in; F_contact, v_impact, t_impact out): pythonfmu
+    assigns value references by registration order without gaps and has no input derivatives,
+    so the shared value references 23-27 cannot be reproduced (README.md here).
+    """
 
     author = "impact-grazing project"
     description = (

@@ -11,7 +11,7 @@ without touching C: everything that defines what happens at the wall is in
 ``event_update``, ``missed_crossing``, ``release_now``).
 
 The model is the non-dimensional driven oscillator of Molenaar, de Weger & van de Water (2001),
-eqs (3), (5), (40), (53) (see ``shared/paper/FORMULAS.md``, section 1)::
+eqs (3), (5), (40), (53) (see ``docs/theory.md``, section 1)::
 
     u'' + nu u' + Omega^2 (u + 1) [+ kappa^2 u in contact] = (1 + sigma) F_g cos(2 pi t + phi)
 
@@ -81,6 +81,20 @@ class ModelError(ValueError):
     """A parameter value or combination the model rejects (message names the variable)."""
 
 
+#: Valid ranges (lo, hi, lo excluded) of the Real parameters: the C FMU's (fmu_core.c, VARS).
+RANGES = {
+    "nu": (0.0, 1e6, False),
+    "Omega": (1e-6, 1e4, False),
+    "sigma": (-1.0, 1e6, True),
+    "r": (0.0, 1.0, False),
+    "Gamma": (0.0, 1e16, False),
+    "u0": (-1e6, 1e6, False),
+    "v0": (-1e6, 1e6, False),
+    "rtol": (1e-15, 0.1, False),
+    "atol": (1e-30, 0.01, False),
+}
+
+
 def check_real(name: str, x: float) -> Optional[str]:
     """Check one Real parameter value before it is stored (mirrors ``model_check_real``).
 
@@ -103,23 +117,13 @@ def check_real(name: str, x: float) -> Optional[str]:
         return "must be a real number"
     if not math.isfinite(x):
         return "must be a finite number"
-    if name == "nu":
-        return "must be >= 0 (damping)" if x < 0.0 else None
-    if name == "Omega":
-        return "must be > 0" if x <= 0.0 else None
-    if name == "sigma":
-        return "must be > -1 (forcing amplitude (1+sigma) F_g > 0)" if x <= -1.0 else None
-    if name == "r":
-        return "must lie in [0, 1]" if (x < 0.0 or x > 1.0) else None
-    if name == "Gamma":
-        return "must be >= 0" if x < 0.0 else None
-    if name in ("u0", "v0"):
-        return None
-    if name == "rtol":
-        return "must lie in (0, 1)" if (x <= 0.0 or x >= 1.0) else None
-    if name == "atol":
-        return "must be > 0" if x <= 0.0 else None
-    return "is not a settable Real variable"
+    rng = RANGES.get(name)
+    if rng is None:
+        return "is not a settable Real variable"
+    lo, hi, lo_open = rng
+    if (x <= lo if lo_open else x < lo) or not x <= hi:
+        return f"must lie in {'(' if lo_open else '['}{lo:g}, {hi:g}]"
+    return None
 
 
 def check_wall(x: int) -> Optional[str]:
@@ -138,7 +142,7 @@ def check_wall(x: int) -> Optional[str]:
     if isinstance(x, bool) or not isinstance(x, (int, np.integer)) or not (
         WALL_NONE <= int(x) <= WALL_RIGID
     ):
-        return "must be 0 (none), 1 (compliant) or 2 (rigid)"
+        return "must lie in [0, 2]"
     return None
 
 
@@ -226,8 +230,8 @@ class OscillatorModel:
             raise ModelError(f"Gamma = {self.Gamma:g}: a compliant wall needs Gamma > 0")
         if self.wall == WALL_RIGID and (self.u0 > 0.0 or (self.u0 == 0.0 and self.v0 > 0.0)):
             raise ModelError(
-                f"u0 = {self.u0:g}, v0 = {self.v0:g} starts inside the rigid wall "
-                "(need u0 < 0, or u0 = 0 with v0 <= 0)"
+                f"u0 = {self.u0:g}, v0 = {self.v0:g} starts inside the rigid wall at u_wall = 0 "
+                "(need u0 < u_wall, or u0 = u_wall moving away from it)"
             )
 
     # -- physics ---------------------------------------------------------------------------

@@ -1,6 +1,6 @@
 """Figure 9's period-adding windows, as predicted by each variant of the map.
 
-Run ``python -m mapcheck.fig9`` to print the table.
+Run ``python -m harness.reproduce.fig9_maps`` to print the table.
 
 Parameters: (alpha, gamma) = (0.99, 0.01) (overdamped, unique inverse), r = 0.9,
 compliant wall, low-velocity map (37)/(38) with (48).  Predictions of the sigma-edges
@@ -16,7 +16,7 @@ of the stable maximal period-M windows:
 * ``"ode"``       -- the exact pre-impact map of the ODE (53) with a compliant wall
   (closed form, Newton orbits + continuation, :func:`ode_windows`; slow: minutes).
 
-Run ``python -m mapcheck.fig9 [--physical] [--ode GAMMA]``.  Output of
+Run ``python -m harness.reproduce.fig9_maps [--physical] [--ode GAMMA]``.  Output of
 ``--physical --ode 10`` (sigma-edges; inf: no upper edge)::
 
     variant                     M=1              M=2               M=3               M=4
@@ -34,18 +34,21 @@ puts the upper edges at about half the sigma.
 """
 from __future__ import annotations
 
+import math
+import sys
+from typing import Any
+
 import numpy as np
 
-import sys
+from mapcheck.compare import VARIANTS, Windows
+from mapcheck.coeffs import coefficients, grazing_acceleration
+from mapcheck.exact import ExactOscillator
+from mapcheck.linear import invert_alpha_gamma
+from mapcheck.maps import chi, from_natural, physical_map, rho_1d
+from mapcheck.orbits import map_step, window_edge
+from mapcheck.windows import MapParams, maximal_orbits, window_1d, windows
 
-from .coeffs import coefficients, grazing_acceleration
-from .exact import ExactOscillator
-from .linear import invert_alpha_gamma
-from .maps import chi, from_natural, physical_map, rho_1d
-from .orbits import map_step, window_edge
-from .windows import MapParams, maximal_orbits, window_1d, windows
-
-__all__ = ["fig9_windows", "physical_windows", "ode_windows", "format_table"]
+__all__ = ["theory_windows", "fig9_windows", "physical_windows", "ode_windows", "format_table"]
 
 ALPHA, GAMMA, R = 0.99, 0.01, 0.9
 
@@ -101,7 +104,7 @@ def _newton_windows(step_of, guess_variant: str, M_max: int, xtol: float, sigma_
         w = ws[0]
         hi = w.hi if w.kind_hi != "range" else 1.25 * w.lo
         s0 = 0.5 * (w.lo + hi)
-        dp = min(0.02, (hi - w.lo) / 6.0)
+        dp = min(0.02, (hi - w.lo) / 6.3)  # not a half-integer: the march never lands on the guide edge
         orb = maximal_orbits(p, M, rho_of(np.array([s0])))
         k = int(np.argmax(orb.stable[:, 0]))
         u0, v0 = from_natural(orb.x[k, 0, 0], orb.y[k, 0, 0], s0, c, guess_variant)
@@ -144,6 +147,29 @@ def ode_windows(Gamma: float = 10.0, M_max: int = 4, xtol: float = 1e-5, sigma_m
         return st
 
     return _newton_windows(step_of, "tilde", M_max, xtol, sigma_max)
+
+
+def _clean(w: Any) -> "tuple[float, float | None] | None":
+    if w is None:
+        return None
+    if isinstance(w[0], tuple):  # several windows of one period: keep the widest
+        w = max(w, key=lambda e: e[1] - e[0])
+    lo, hi = float(w[0]), float(w[1])
+    return (lo, None if not math.isfinite(hi) else hi)
+
+
+def theory_windows(M_max: int = 4) -> dict[str, Windows]:
+    """The three map predictions of Figure 9's window edges in sigma.
+
+    Returns
+    -------
+    dict
+        ``{"theory_64": {M: (lo, hi)}, "map": ..., "map_A_tilde": ...}``; ``hi = None``
+        where a window has no upper edge (M = 1).  (64) with rho(sigma) of (48); the 2D map
+        (37)/(38) with (48) and rho linear in sigma; the same with |A~(sigma)| in rho.
+    """
+    res = fig9_windows(M_max=M_max)
+    return {name: {M: _clean(res[key][M]) for M in range(1, M_max + 1)} for name, (key, _) in VARIANTS.items()}
 
 
 def format_table(res: dict[str, dict[int, tuple]]) -> str:

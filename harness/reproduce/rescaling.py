@@ -27,8 +27,8 @@ from mapcheck.coeffs import coefficients, grazing_acceleration
 from mapcheck.compare import map_windows, markdown_window_table
 from mapcheck.linear import alpha_gamma
 
-from .reproduce import Context
-from .shooting import StroboscopicMap, map_guided_windows
+from ..shooting import StroboscopicMap, map_guided_windows
+from . import Context
 
 NU, OMEGA, R, GAMMA_WALL = 100.0, math.sqrt(2.0), 0.5, 10.0
 WALLS = {"compliant": (1, "compliant"), "rigid": (2, "rigid")}
@@ -95,7 +95,7 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
 
 
 def _plot(ctx: Context, res: dict[str, Any]) -> str:
-    from . import plots  # noqa: F401  (Agg backend)
+    from .. import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(6.5, 4.5))

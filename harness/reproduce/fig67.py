@@ -3,7 +3,7 @@ hysteretic period-3 -> period-1 transition, (nu, Omega) = (0.196, 7.368), compli
 
 * J(x) along the grazing family (wall-free state (x, 0) at t = n, sigma = 0) for
   Gamma = 10, 1e2, 1e3, 1e4 (and, beyond the paper, 1e5 and 1e6 for the hard limit),
-  in the paper's coordinates at t = n, where J11 carries the singularity (FORMULAS.md
+  in the paper's coordinates at t = n, where J11 carries the singularity (docs/theory.md
   section 8).  The impact contribution J11 - P11 is fitted on log-log axes in the soft
   (beta <= 0.1) and hard (beta >= 5) regimes, beta = r kappa sqrt(8 pi^2 x) / |A|:
   expected +1/2 soft at r = 1 (the map is O(x^(3/2)): N = I, no square root), -1/2 soft
@@ -22,9 +22,9 @@ import numpy as np
 
 from mapcheck.compare import loglog_slope, power_law_with_offset
 
-from .config import SamplingSpec, SweepSpec
-from .jacobian import jacobian_vs_x
-from .reproduce import Context
+from ..config import SamplingSpec, SweepSpec
+from ..jacobian import jacobian_vs_x, resolve_method
+from . import Context
 
 NU, OMEGA = 0.196, 7.368
 A_ABS = 4.0 * math.pi ** 2
@@ -33,11 +33,18 @@ GAMMAS = (10.0, 1e2, 1e3, 1e4)
 GAMMAS_EXTRA = (1e5, 1e6)
 R_OF = {"fig6": 1.0, "fig7": 0.9}
 SOFT_BETA, HARD_BETA = 0.1, 5.0
-#: x >= 1e-5: the difference steps must stay below x (else the stencil straddles grazing),
-#: and near grazing the FMU's own error is ~1e-9 in u (measured by `reproduce direct`), so
-#: below x ~ 1e-5 the differences are noise at the percent level and, at r < 1, outliers
-#: appear that the Jacobian's own error estimate does not flag.
-X_RANGE = (1e-5, 1e-1)
+#: x range per Jacobian method.  Differences: x >= 1e-5, the steps must stay below x (else
+#: the stencil straddles grazing), and near grazing the FMU's own error is ~1e-9 in u
+#: (measured by `reproduce direct`), so below x ~ 1e-5 the differences are noise at the
+#: percent level and, at r < 1, outliers appear that the Jacobian's own error estimate does
+#: not flag.  The FMU's own derivatives (variational equations with saltation matrices)
+#: have no step: the scan goes down to x = 1e-9, four decades further into the singularity.
+X_RANGES = {"exact": (1e-9, 1e-1), "fd": (1e-5, 1e-1)}
+X_RANGE = X_RANGES["fd"]
+#: Points per decade of x (quick, full).
+X_PER_DECADE = {True: 3, False: 8}
+#: x of the exact-vs-differences cross-check (where both are reliable).
+X_CHECK = (1e-4, 1e-3, 1e-2)
 #: A fit needs >= 3 points over >= 1 decade of x.
 MIN_POINTS, MIN_DECADES = 3, 1.0
 #: sigma ranges of the bifurcation diagrams.  At r = 0.9 and Gamma = 10 (low velocity,
@@ -46,23 +53,44 @@ MIN_POINTS, MIN_DECADES = 3, 1.0
 SIGMA_RANGE = {(1.0, 10.0): (-0.1, 0.2), (1.0, 1e3): (-0.1, 0.2),
                (0.9, 10.0): (-0.002, 0.004), (0.9, 1e3): (-0.1, 0.2)}
 SETTINGS = {
-    True: {"x_num": 13, "sigma_num": 31, "transient": 200, "samples": 24},
-    False: {"x_num": 33, "sigma_num": 121, "transient": 400, "samples": 48},
+    True: {"sigma_num": 31, "transient": 200, "samples": 24},
+    False: {"sigma_num": 121, "transient": 400, "samples": 48},
 }
 
 
 def beta_of(x: np.ndarray, r: float, Gamma: float) -> np.ndarray:
-    """beta = r kappa sqrt(8 pi^2 x) / |A| at sigma = 0, v_n = 0 (FORMULAS.md section 8)."""
+    """beta = r kappa sqrt(8 pi^2 x) / |A| at sigma = 0, v_n = 0 (docs/theory.md section 8)."""
     return r * math.sqrt(Gamma) * OMEGA * np.sqrt(8.0 * math.pi ** 2 * np.asarray(x)) / A_ABS
 
 
-def jacobian_scans(ctx: Context, r: float, x: np.ndarray) -> dict[float, Any]:
+def x_grid(method: str, quick: bool) -> np.ndarray:
+    """The x values of the scans: log-spaced over :data:`X_RANGES` [method]."""
+    lo, hi = X_RANGES[method]
+    return np.geomspace(lo, hi, int(round(X_PER_DECADE[quick] * math.log10(hi / lo))) + 1)
+
+
+def jacobian_scans(ctx: Context, r: float, x: np.ndarray, method: str = "auto") -> dict[float, Any]:
     sim = ctx.simulator()
     out = {}
     for G in GAMMAS + GAMMAS_EXTRA:
         p = ctx.params(nu=NU, Omega=OMEGA, r=r, Gamma=G, wall=1, sigma=0.0)
-        out[G] = jacobian_vs_x(sim, p, x, theta=0.0, measure_theta=0.5)
+        out[G] = jacobian_vs_x(sim, p, x, theta=0.0, measure_theta=0.5, method=method)
     return out
+
+
+def cross_check(ctx: Context, r: float) -> dict[str, Any]:
+    """Exact against central differences at :data:`X_CHECK`: the largest relative difference
+    of J11 - P11 over the stiffnesses (the differences' own error is ~1e-3 there)."""
+    sim = ctx.simulator()
+    x = np.asarray(X_CHECK)
+    worst = 0.0
+    for G in GAMMAS + GAMMAS_EXTRA:
+        p = ctx.params(nu=NU, Omega=OMEGA, r=r, Gamma=G, wall=1, sigma=0.0)
+        ex = jacobian_vs_x(sim, p, x, theta=0.0, measure_theta=0.5, method="exact")
+        fd = jacobian_vs_x(sim, p, x, theta=0.0, measure_theta=0.5, method="fd")
+        de, df = ex.J[:, 0, 0] - ex.P1[0, 0], fd.J[:, 0, 0] - fd.P1[0, 0]
+        worst = max(worst, float(np.max(np.abs(de - df) / np.abs(de))))
+    return {"x": x, "max_relative_difference": worst}
 
 
 def fit_regimes(x: np.ndarray, scan: Any, r: float, Gamma: float) -> dict[str, Any]:
@@ -86,7 +114,7 @@ def fit_regimes(x: np.ndarray, scan: Any, r: float, Gamma: float) -> dict[str, A
 
 def _scan_chain(ctx: Context, r: float, G: float, grid: np.ndarray, cfg: dict[str, Any]):
     """Up from the non-impacting state, then down from where the up scan ended."""
-    from .sweeps import run_sweep
+    from ..sweeps import run_sweep
 
     params = ctx.params(nu=NU, Omega=OMEGA, r=r, Gamma=G, wall=1)
     sampling = SamplingSpec(theta=0.5, n_transient=cfg["transient"], n_samples=cfg["samples"], tol=1e-4)
@@ -137,12 +165,14 @@ def hysteresis(up, down) -> dict[str, Any]:
 def run(ctx: Context) -> tuple[dict[str, Any], str]:
     r = R_OF[ctx.target]
     cfg = SETTINGS[ctx.quick]
-    x = np.geomspace(*X_RANGE, cfg["x_num"])
+    method = resolve_method(ctx.simulator(), "auto")
+    x = x_grid(method, ctx.quick)
     diag_gammas = (10.0, 1e3)
     with concurrent.futures.ThreadPoolExecutor(2) as ex:
         futs = {G: ex.submit(_scan_chain, ctx, r, G, np.linspace(*SIGMA_RANGE[(r, G)], cfg["sigma_num"]), cfg)
                 for G in diag_gammas}
-        scans = jacobian_scans(ctx, r, x)
+        scans = jacobian_scans(ctx, r, x, method)
+        check = cross_check(ctx, r) if method == "exact" else None
         chains = {G: f.result() for G, f in futs.items()}
     fits = {G: fit_regimes(x, s, r, G) for G, s in scans.items()}
     hyst = {G: hysteresis(*chains[G]) for G in diag_gammas}
@@ -157,21 +187,21 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
                + ", ".join(f"Gamma={G:g}: {s:+.3f}" for G, s in summary["hard"].items()) + " (expected -0.5)")
     result = {
         "figure": ctx.target, "verdict": verdict, "expected": {"soft": expected_soft, "hard": -0.5},
-        "slopes": fits, "summary": summary,
+        "slopes": fits, "summary": summary, "method": method, "cross_check": check,
         "jacobian": {G: {"x": x, "J": s.J, "P1": s.P1, "error": s.error, "beta": beta_of(x, r, G)}
                      for G, s in scans.items()},
         "hysteresis": hyst, "files": files,
         "parameters": {"nu": NU, "Omega": OMEGA, "r": r, "wall": "compliant", "Gammas": GAMMAS,
                        "Gammas_extra": GAMMAS_EXTRA, "sigma_jacobian": 0.0, "coordinates": "t = n (theta = 0)",
                        "element": "J11 - P11", "soft_beta_max": SOFT_BETA, "hard_beta_min": HARD_BETA,
-                       "x_range": X_RANGE, "sigma_ranges": {str(k[1]): v for k, v in SIGMA_RANGE.items() if k[0] == r},
+                       "x_range": X_RANGES[method], "x_num": int(x.size), "sigma_ranges": {str(k[1]): v for k, v in SIGMA_RANGE.items() if k[0] == r},
                        **cfg},
     }
     return result, _report(ctx, result)
 
 
 def _plot_jacobian(ctx: Context, r: float, x: np.ndarray, scans: dict, fits: dict) -> str:
-    from . import plots  # noqa: F401  (Agg backend)
+    from .. import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(8, 5.5))
@@ -199,7 +229,7 @@ def _plot_jacobian(ctx: Context, r: float, x: np.ndarray, scans: dict, fits: dic
 
 
 def _plot_diagrams(ctx: Context, r: float, chains: dict) -> str:
-    from . import plots  # noqa: F401
+    from .. import plots  # noqa: F401
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, len(chains), figsize=(11, 4.5))
@@ -236,26 +266,44 @@ def _report(ctx: Context, res: dict[str, Any]) -> str:
         "",
         "## What was compared",
         "",
-        "The Jacobian of the FMU's stroboscopic map (central differences, restarts from perturbed states) along the "
+        "The Jacobian of the FMU's stroboscopic map ("
+        + ("the FMU's own derivatives: variational equations with saltation matrices at the wall events"
+           if res["method"] == "exact" else "central differences, restarts from perturbed states")
+        + f", x = {p['x_range'][0]:g} to {p['x_range'][1]:g}, {p['x_num']} points) along the "
         "grazing family (wall-free state (x, 0) at t = n, sigma = 0), in the paper's coordinates at t = n where J11 "
-        "is the singular element (FORMULAS.md section 8), against the theory's exponents of the impact contribution "
+        "is the singular element (docs/theory.md section 8), against the theory's exponents of the impact contribution "
         f"J11 - P11: soft contacts (beta <= {SOFT_BETA:g}) {res['expected']['soft']:+.1f}, hard contacts "
         f"(beta >= {HARD_BETA:g}) -1/2; beta = r kappa sqrt(8 pi^2 x)/|A|. Fitted where the Jacobian's error estimate "
         "is below 5% of the value, on at least 3 points over a decade of x. 'offset removed': the exponent of "
         "a x^q + b, the regular O(1) part P (N - I) of the impact contribution removed.",
         "",
+    ]
+    if res["cross_check"]:
+        c = res["cross_check"]
+        lines += [
+            "Cross-check: the exact J11 - P11 against central differences at x = "
+            + ", ".join(f"{v:g}" for v in c["x"]) + f", all stiffnesses: largest relative difference "
+            f"{c['max_relative_difference']:.1e} (the differences' own error).",
+            "",
+        ]
+    elif res["method"] == "fd":
+        lines += ["This FMU does not report its derivatives: the scan stops at x = 1e-5, where the differences "
+                  "stop being usable.", ""]
+    lines += [
         "## Fitted slopes",
         "",
-        "| Gamma | soft slope | soft, offset removed | soft beta range | hard slope | hard, offset removed | hard beta range |",
-        "|---|---|---|---|---|---|---|",
+        "| Gamma | soft slope | soft, offset removed | soft x range | soft beta range | hard slope | hard, offset removed | hard x range | hard beta range |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for G, f in res["slopes"].items():
         s, h = f["soft"], f["hard"]
         tag = " (beyond the paper)" if G in GAMMAS_EXTRA else ""
         lines.append(
             f"| {G:g}{tag} | {_fmt(s and s['slope'])} | {_fmt(s and s['slope_offset_removed'])} | "
+            + ("-" if not s else f"{s['x_range'][0]:.1e}-{s['x_range'][1]:.1e}") + " | "
             + ("-" if not s else f"{s['beta_range'][0]:.2g}-{s['beta_range'][1]:.2g}") + " | "
             + f"{_fmt(h and h['slope'])} | {_fmt(h and h['slope_offset_removed'])} | "
+            + ("-" if not h else f"{h['x_range'][0]:.1e}-{h['x_range'][1]:.1e}") + " | "
             + ("-" if not h else f"{h['beta_range'][0]:.2g}-{h['beta_range'][1]:.2g}") + " |")
     hard = {G: f["hard"]["slope"] for G, f in res["slopes"].items() if f["hard"]}
     h4 = res["slopes"].get(1e4, {}).get("hard")

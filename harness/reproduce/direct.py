@@ -1,6 +1,6 @@
 """Direct state comparison near grazing: the map's one-step prediction against the FMU.
 
-The FMU's pre-impact map (the exact counterpart of (31)/(32), FORMULAS.md section 3): a
+The FMU's pre-impact map (the exact counterpart of (31)/(32), docs/theory.md section 3): a
 virtual state at t = n is propagated freely back to n - 1/2, the FMU integrates with the
 wall to n + 1/2, and the result is propagated freely to n + 1.  Along rays
 (x, y, rho) = l eps (a, b, s) in natural coordinates the error of the map's image, in natural
@@ -22,10 +22,10 @@ from mapcheck.compare import (
     virtual_to_phase,
 )
 from mapcheck.exact import ExactOscillator
-from mapcheck.fig9 import ALPHA, GAMMA, R
 from mapcheck.linear import invert_alpha_gamma
 
-from .reproduce import Context
+from . import Context
+from .fig9_maps import ALPHA, GAMMA, R
 
 #: Rays (a, b, s) in natural coordinates: (x, y, rho) = l eps (a, b, s); x > 0: an impact.
 DIRECTIONS = ((1.0, 0.0, 0.0), (1.0, 1.0, 1.0), (0.5, -1.0, 1.0), (2.0, 0.5, -1.0))
@@ -97,7 +97,7 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
 
 
 def _plot(ctx: Context, rows: dict[str, Any]) -> str:
-    from . import plots  # noqa: F401  (Agg backend)
+    from .. import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, len(rows), figsize=(10, 4), sharey=True)

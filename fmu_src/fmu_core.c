@@ -1,0 +1,880 @@
+/*
+ * The FMI core shared by FMI 2.0 and 3.0, Co-Simulation and Model Exchange (see fmu_core.h).
+ * Everything the standard asks of an instance lives here once; fmi2_cs.c and fmi3.c translate.
+ */
+#include "fmu_core.h"
+#include "sens.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ------------------------------------------------------------------------------------------ */
+/* Logging and state machine */
+
+void core_log(CoreInstance *c, int status, const char *category, const char *fmt, ...) {
+    if (!c || !c->log) return;
+    if (status == CORE_OK && !c->logging) return;
+    char buf[1024];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    c->log(c->env, c->name, status, category, buf);
+}
+
+int core_fail(CoreInstance *c, const char *fn, const char *fmt, ...) {
+    char buf[900];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    va_end(ap);
+    if (c) core_log(c, CORE_ERROR, "logStatusError", "%s: %s", fn, buf);
+    return CORE_ERROR;
+}
+
+int core_allowed(CoreInstance *c, const char *fn, int states) {
+    if (!c) return 0;
+    if (c->state & states) return 1;
+    core_fail(c, fn, "not allowed in the current state (%d)", c->state);
+    return 0;
+}
+
+static double local_tau(const CoreInstance *c) {
+    return c->is_me ? c->me_time - floor(c->me_time) : c->s.tau;
+}
+
+double core_time(const CoreInstance *c) { return c->is_me ? c->me_time : solver_time(&c->s); }
+
+/* ------------------------------------------------------------------------------------------ */
+/* The variable table: one entry per value reference. */
+
+typedef enum {
+    K_FIXED = 'f',      /* parameter, settable before initialisation ends */
+    K_TUNABLE = 't',    /* parameter, also settable after (c->tunable_states) */
+    K_INPUT = 'i',      /* input, settable in every state but Terminated/Error */
+    K_CALCULATED = 'c', /* calculated parameter */
+    K_OUTPUT = 'o',
+    K_LOCAL = 'l',
+    K_INDEPENDENT = 'x', /* FMI 3.0 time */
+} Kind;
+
+#define NO_FIELD ((size_t)-1)
+#define FIELD(f) offsetof(ModelData, f)
+
+typedef struct {
+    unsigned vr;
+    const char *name;
+    CoreVarType type;
+    Kind kind;
+    size_t off;      /* offset of its double (Real) or int (Integer/Boolean) in ModelData */
+    double lo, hi;   /* valid range of a settable value (also checked on snapshots) */
+    int lo_open;     /* lo excluded */
+    double (*get)(const CoreInstance *c); /* computed values (off == NO_FIELD) */
+    int fmi3_only;
+} VarDef;
+
+static double get_in_contact(const CoreInstance *c) { return c->m.mode != MODE_FREE; }
+/* Sensitivities of the last doStep (sens.h); J = I, S = 0 (as set at initialisation) when they
+ * are not computed, so that every output stays finite. */
+static double get_sens(const CoreInstance *c, int i) {
+    return i < 4 ? c->m.sJ[i / 2][i % 2] : c->m.sS[i - 4];
+}
+static double get_J_uu(const CoreInstance *c) { return get_sens(c, 0); }
+static double get_J_uv(const CoreInstance *c) { return get_sens(c, 1); }
+static double get_J_vu(const CoreInstance *c) { return get_sens(c, 2); }
+static double get_J_vv(const CoreInstance *c) { return get_sens(c, 3); }
+static double get_S_u(const CoreInstance *c) { return get_sens(c, 4); }
+static double get_S_v(const CoreInstance *c) { return get_sens(c, 5); }
+static double get_der(const CoreInstance *c, int i) {
+    const double y[2] = {c->m.u, c->m.v};
+    double dy[2];
+    model_derivatives(&c->m, local_tau(c), y, dy);
+    return dy[i];
+}
+static double get_der_u(const CoreInstance *c) { return get_der(c, 0); }
+static double get_der_v(const CoreInstance *c) { return get_der(c, 1); }
+static double get_indicator(const CoreInstance *c) {
+    const double y[2] = {c->m.u, c->m.v};
+    double g[MODEL_N_EVENTS];
+    model_event_indicators(&c->m, local_tau(c), y, g);
+    return g[0];
+}
+static double get_time(const CoreInstance *c) { return core_time(c); }
+static double get_contact_force(const CoreInstance *c) {
+    return model_contact_output(&c->m, local_tau(c));
+}
+/* Inputs read back as their value now (a ramp given by input derivatives included). */
+static double get_F_ext(const CoreInstance *c) {
+    return model_external_force(&c->m, local_tau(c));
+}
+static double get_u_wall(const CoreInstance *c) {
+    return model_wall_position(&c->m, local_tau(c));
+}
+
+/* Valid ranges: chosen so that every derived quantity (F_g, kappa, the forcing, the wall
+ * force) stays finite with many orders of magnitude to spare; README "Valid ranges". */
+static const VarDef VARS[] = {
+    {VR_NU, "nu", VT_REAL, K_FIXED, FIELD(nu), 0, 1e6, 0, NULL, 0},
+    {VR_OMEGA, "Omega", VT_REAL, K_FIXED, FIELD(Omega), 1e-6, 1e4, 0, NULL, 0},
+    {VR_SIGMA, "sigma", VT_REAL, K_TUNABLE, FIELD(sigma), -1, 1e6, 1, NULL, 0},
+    {VR_R, "r", VT_REAL, K_FIXED, FIELD(r), 0, 1, 0, NULL, 0},
+    {VR_GAMMA, "Gamma", VT_REAL, K_FIXED, FIELD(Gamma), 0, 1e16, 0, NULL, 0},
+    {VR_WALL, "wall", VT_INTEGER, K_FIXED, FIELD(wall), 0, 2, 0, NULL, 0},
+    {VR_U0, "u0", VT_REAL, K_FIXED, FIELD(u0), -1e6, 1e6, 0, NULL, 0},
+    {VR_V0, "v0", VT_REAL, K_FIXED, FIELD(v0), -1e6, 1e6, 0, NULL, 0},
+    {VR_RTOL, "rtol", VT_REAL, K_FIXED, FIELD(rtol), 1e-15, 0.1, 0, NULL, 0},
+    {VR_ATOL, "atol", VT_REAL, K_FIXED, FIELD(atol), 1e-30, 0.01, 0, NULL, 0},
+    {VR_F_G, "F_g", VT_REAL, K_CALCULATED, FIELD(F_g), 0, 0, 0, NULL, 0},
+    {VR_PHI, "phi", VT_REAL, K_CALCULATED, FIELD(phi), 0, 0, 0, NULL, 0},
+    {VR_KAPPA, "kappa", VT_REAL, K_CALCULATED, FIELD(kappa), 0, 0, 0, NULL, 0},
+    {VR_U, "u", VT_REAL, K_OUTPUT, FIELD(u), 0, 0, 0, NULL, 0},
+    {VR_V, "v", VT_REAL, K_OUTPUT, FIELD(v), 0, 0, 0, NULL, 0},
+    {VR_IMPACTS, "impacts", VT_INTEGER, K_OUTPUT, FIELD(impacts), 0, 0, 0, NULL, 0},
+    {VR_IN_CONTACT, "in_contact", VT_BOOLEAN, K_OUTPUT, NO_FIELD, 0, 0, 0, get_in_contact, 0},
+    {VR_CONTACT, "contact", VT_INTEGER, K_FIXED, FIELD(contact), 0, 2, 0, NULL, 0},
+    {VR_HC_ALPHA, "alpha_hc", VT_REAL, K_FIXED, FIELD(alpha_hc), 0, 1e6, 0, NULL, 0},
+    {VR_DER_U, "der(u)", VT_REAL, K_LOCAL, NO_FIELD, 0, 0, 0, get_der_u, 0},
+    {VR_DER_V, "der(v)", VT_REAL, K_LOCAL, NO_FIELD, 0, 0, 0, get_der_v, 0},
+    {VR_WALL_INDICATOR, "wall_indicator", VT_REAL, K_LOCAL, NO_FIELD, 0, 0, 0, get_indicator, 0},
+    {VR_TIME, "time", VT_REAL, K_INDEPENDENT, NO_FIELD, 0, 0, 0, get_time, 1},
+    {VR_F_EXT, "F_ext", VT_REAL, K_INPUT, FIELD(F_ext), -1e12, 1e12, 0, get_F_ext, 0},
+    {VR_U_WALL, "u_wall", VT_REAL, K_INPUT, FIELD(u_wall), -1e6, 1e6, 0, get_u_wall, 0},
+    {VR_F_CONTACT, "F_contact", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_contact_force, 0},
+    {VR_V_IMPACT, "v_impact", VT_REAL, K_OUTPUT, FIELD(v_impact), 0, 0, 0, NULL, 0},
+    {VR_T_IMPACT, "t_impact", VT_REAL, K_OUTPUT, FIELD(t_impact), 0, 0, 0, NULL, 0},
+    {VR_MAX_EVENTS, "max_events_per_time", VT_REAL, K_FIXED, FIELD(max_events_per_time), 1, 1e9,
+     0, NULL, 0},
+    {VR_MAX_STEPS, "max_steps_per_time", VT_REAL, K_FIXED, FIELD(max_steps_per_time), 1, 1e9, 0,
+     NULL, 0},
+    {VR_SENSITIVITIES, "sensitivities", VT_BOOLEAN, K_FIXED, FIELD(sensitivities), 0, 1, 0, NULL, 0},
+    {VR_SOLVER, "solver", VT_INTEGER, K_FIXED, FIELD(solver), 0, 1, 0, NULL, 0},
+    {VR_J_UU, "J_uu", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_J_uu, 0},
+    {VR_J_UV, "J_uv", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_J_uv, 0},
+    {VR_J_VU, "J_vu", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_J_vu, 0},
+    {VR_J_VV, "J_vv", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_J_vv, 0},
+    {VR_S_U, "S_u", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_S_u, 0},
+    {VR_S_V, "S_v", VT_REAL, K_OUTPUT, NO_FIELD, 0, 0, 0, get_S_v, 0},
+};
+#define N_VARS (sizeof VARS / sizeof VARS[0])
+
+/* Bounds on the input derivatives (slopes per unit time). */
+static const double MAX_DF_EXT = 1e12, MAX_DU_WALL = 1e6;
+
+static const VarDef *find_var(const CoreInstance *c, unsigned vr) {
+    for (size_t i = 0; i < N_VARS; ++i)
+        if (VARS[i].vr == vr) return VARS[i].fmi3_only && !c->fmi3 ? NULL : &VARS[i];
+    return NULL;
+}
+
+const char *core_variable_name(unsigned vr) {
+    for (size_t i = 0; i < N_VARS; ++i)
+        if (VARS[i].vr == vr) return VARS[i].name;
+    return "?";
+}
+
+static const char *const TYPE_NAMES[] = {"Real", "Integer", "Boolean"};
+
+static int settable(const VarDef *d) {
+    return d->kind == K_FIXED || d->kind == K_TUNABLE || d->kind == K_INPUT;
+}
+
+/* Why x is not a valid value of d (NULL if it is); buf receives the message. */
+static const char *check_value(const VarDef *d, double x, char *buf, size_t n) {
+    if (!isfinite(x)) return "must be a finite number";
+    if (d->type != VT_REAL && x != floor(x)) return "must be an integer";
+    const int below = d->lo_open ? !(x > d->lo) : !(x >= d->lo);
+    if (below || !(x <= d->hi)) {
+        snprintf(buf, n, "must lie in %c%g, %g]", d->lo_open ? '(' : '[', d->lo, d->hi);
+        return buf;
+    }
+    return NULL;
+}
+
+static double field_get(const ModelData *m, const VarDef *d) {
+    const char *p = (const char *)m + d->off;
+    if (d->type == VT_REAL) {
+        double x;
+        memcpy(&x, p, sizeof x);
+        return x;
+    }
+    int i;
+    memcpy(&i, p, sizeof i);
+    return i;
+}
+
+static void field_set(ModelData *m, const VarDef *d, double x) {
+    char *p = (char *)m + d->off;
+    if (d->type == VT_REAL) {
+        memcpy(p, &x, sizeof x);
+    } else {
+        const int i = (int)x;
+        memcpy(p, &i, sizeof i);
+    }
+}
+
+/* Folds the input ramps into the input values at local time tau (the reference point moves
+ * to tau; the values there are unchanged). */
+static void rebase_inputs(ModelData *m, double tau) {
+    if (m->dF_ext != 0.0) m->F_ext = model_external_force(m, tau);
+    if (m->du_wall != 0.0) m->u_wall = model_wall_position(m, tau);
+    m->in_tau = tau;
+}
+
+int core_get(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[], size_t n,
+             double out[]) {
+    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    if (n > 0 && (!vr || !out)) return core_fail(c, fn, "NULL argument");
+    for (size_t i = 0; i < n; ++i) {
+        const VarDef *d = find_var(c, vr[i]);
+        if (!d || d->type != t)
+            return core_fail(c, fn, "value reference %u is not a%s %s variable", vr[i],
+                             t == VT_INTEGER ? "n" : "", TYPE_NAMES[t]);
+        out[i] = d->get ? d->get(c) : field_get(&c->m, d);
+    }
+    return CORE_OK;
+}
+
+/* Checks the quantities derived from several parameters (kappa, the forcing amplitude) of a
+ * parameter set that is in use (after initialisation). */
+static const char *check_derived(const ModelData *m, char *buf, size_t n) {
+    if (!(m->kappa <= 1e8)) {
+        snprintf(buf, n, "kappa = sqrt(Gamma) Omega = %g would exceed 1e8", m->kappa);
+        return buf;
+    }
+    const double amp = (1.0 + m->sigma) * m->F_g;
+    if (!isfinite(m->phi) || !(fabs(amp) <= 1e15)) {
+        snprintf(buf, n, "the forcing amplitude (1 + sigma) F_g = %g would exceed 1e15", amp);
+        return buf;
+    }
+    return NULL;
+}
+
+int core_set(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[], size_t n,
+             const double in[]) {
+    if (!core_allowed(c, fn, CS_INSTANTIATED | CS_INIT | CS_RUN)) return CORE_ERROR;
+    if (n > 0 && (!vr || !in)) return core_fail(c, fn, "NULL argument");
+    for (size_t i = 0; i < n; ++i) {
+        const VarDef *d = find_var(c, vr[i]);
+        if (!d || d->type != t || !settable(d))
+            return core_fail(c, fn, "value reference %u is not a settable %s variable", vr[i],
+                             TYPE_NAMES[t]);
+        const int early = (c->state & (CS_INSTANTIATED | CS_INIT)) != 0;
+        if (!early && !(d->kind == K_INPUT ||
+                        (d->kind == K_TUNABLE && (c->state & c->tunable_states))))
+            return core_fail(c, fn, "%s (value reference %u) cannot be set now: only sigma is "
+                             "tunable after initialisation", d->name, vr[i]);
+        char buf[200];
+        const char *why = check_value(d, in[i], buf, sizeof buf);
+        /* a value valid alone may still overflow a derived quantity of the running model */
+        ModelData trial;
+        memcpy(&trial, &c->m, sizeof trial);
+        if (!why && d->kind != K_INPUT) {
+            field_set(&trial, d, in[i]);
+            model_update_derived(&trial);
+            if (!early) why = check_derived(&trial, buf, sizeof buf);
+        }
+        if (why) {
+            if (t == VT_REAL)
+                return core_fail(c, fn, "%s = %g rejected: %s (value kept at its previous "
+                                 "setting)", d->name, in[i], why);
+            return core_fail(c, fn, "%s = %.17g rejected: %s", d->name, in[i], why);
+        }
+        if (d->kind == K_INPUT) {
+            const double tau = local_tau(c);
+            const double before = d->get(c);
+            rebase_inputs(&c->m, tau);
+            field_set(&c->m, d, in[i]);
+            if (in[i] != before && !early) {
+                c->inputs_changed = 1;
+                if (!c->is_me) c->s.needs_reinit = 1; /* the right-hand side changed here */
+            }
+        } else {
+            memcpy(&c->m, &trial, sizeof trial);
+            /* a new sigma changes the right-hand side from now on: CVODE restarts here */
+            if (c->state & CS_RUN) c->s.needs_reinit = 1;
+        }
+    }
+    return CORE_OK;
+}
+
+int core_set_input_derivatives(CoreInstance *c, const char *fn, const unsigned vr[], size_t n,
+                               const int order[], const double value[]) {
+    if (!core_allowed(c, fn, CS_INSTANTIATED | CS_INIT | CS_STEP)) return CORE_ERROR;
+    if (c->is_me) return core_fail(c, fn, "a Model Exchange instance has no input derivatives");
+    if (n > 0 && (!vr || !order || !value)) return core_fail(c, fn, "NULL argument");
+    int status = CORE_OK;
+    for (size_t i = 0; i < n; ++i) {
+        if (vr[i] != VR_F_EXT && vr[i] != VR_U_WALL)
+            return core_fail(c, fn, "value reference %u is not a Real input", vr[i]);
+        if (order[i] < 1) return core_fail(c, fn, "order %d: must be >= 1", order[i]);
+        const double bound = vr[i] == VR_F_EXT ? MAX_DF_EXT : MAX_DU_WALL;
+        if (!isfinite(value[i]) || !(fabs(value[i]) <= bound))
+            return core_fail(c, fn, "d%s/dt = %g rejected: must be finite with |.| <= %g",
+                             core_variable_name(vr[i]), value[i], bound);
+        if (order[i] > 1) { /* the inputs are integrated as linear ramps: order 1 is used */
+            if (value[i] != 0.0)
+                core_log(c, CORE_WARNING, "logStatusWarning", "%s: derivative of order %d of "
+                         "%s ignored (maxInputDerivativeOrder is 1)", fn, order[i],
+                         core_variable_name(vr[i]));
+            status = value[i] != 0.0 ? CORE_WARNING : status;
+            continue;
+        }
+        rebase_inputs(&c->m, local_tau(c));
+        double *slot = vr[i] == VR_F_EXT ? &c->m.dF_ext : &c->m.du_wall;
+        if (*slot != value[i]) {
+            *slot = value[i];
+            if (c->state == CS_STEP) {
+                c->inputs_changed = 1;
+                c->s.needs_reinit = 1;
+            }
+        }
+    }
+    return status;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Life cycle */
+
+CoreInstance *core_instantiate(const char *name, CoreInterface iface, void *env, CoreLogFn log,
+                               CoreCallocFn calloc_fn, CoreFreeFn free_fn, int logging) {
+    if (!name || !name[0]) name = "ImpactOscillator";
+    CoreInstance *c = calloc_fn ? calloc_fn(1, sizeof(CoreInstance))
+                                : calloc(1, sizeof(CoreInstance));
+    if (!c) return NULL;
+    c->calloc_fn = calloc_fn;
+    c->free_fn = free_fn;
+    c->env = env;
+    c->log = log;
+    c->logging = logging;
+    c->iface = iface;
+    c->is_me = iface == IF_FMI2_ME || iface == IF_FMI3_ME;
+    c->fmi3 = iface == IF_FMI3_CS || iface == IF_FMI3_ME;
+    c->tunable_states = c->fmi3 ? (CS_STEP | CS_EVENT) : CS_RUN;
+    c->name = calloc_fn ? calloc_fn(1, strlen(name) + 1) : calloc(1, strlen(name) + 1);
+    if (c->name) strcpy(c->name, name);
+    model_set_defaults(&c->m);
+    if (solver_create(&c->s, &c->m) != 0) {
+        if (log) log(env, name, CORE_ERROR, "logStatusError", c->s.msg);
+        core_free(c);
+        return NULL;
+    }
+    c->state = CS_INSTANTIATED;
+    return c;
+}
+
+static void core_release(CoreInstance *c, void *p) {
+    if (!p) return;
+    if (c->free_fn) c->free_fn(p);
+    else free(p);
+}
+
+static void *core_alloc(CoreInstance *c, size_t n) {
+    return c->calloc_fn ? c->calloc_fn(1, n) : calloc(1, n);
+}
+
+void core_free(CoreInstance *c) {
+    if (!c) return;
+    solver_free(&c->s);
+    core_release(c, c->name);
+    core_release(c, c);
+}
+
+int core_setup(CoreInstance *c, const char *fn, int tol_defined, double tol, double start) {
+    if (!core_allowed(c, fn, CS_INSTANTIATED)) return CORE_ERROR;
+    if (!isfinite(start) || !(fabs(start) <= CORE_MAX_TIME))
+        return core_fail(c, fn, "startTime = %g: must be finite with |startTime| <= %g", start,
+                         CORE_MAX_TIME);
+    /* The importer's tolerance tightens (never loosens) the FMU's own rtol, down to its
+     * smallest valid value. */
+    if (tol_defined && isfinite(tol) && tol > 0.0 && tol < c->m.rtol)
+        c->m.rtol = fmax(tol, 1e-15);
+    c->start_time = start;
+    return CORE_OK;
+}
+
+int core_enter_init(CoreInstance *c, const char *fn) {
+    if (!core_allowed(c, fn, CS_INSTANTIATED)) return CORE_ERROR;
+    c->state = CS_INIT;
+    return CORE_OK;
+}
+
+int core_exit_init(CoreInstance *c, const char *fn) {
+    if (!core_allowed(c, fn, CS_INIT)) return CORE_ERROR;
+    char buf[300];
+    model_update_derived(&c->m);
+    const char *why = model_check_consistency(&c->m, buf, sizeof buf);
+    if (!why) why = check_derived(&c->m, buf, sizeof buf);
+    if (why) {
+        c->state = CS_ERROR;
+        return core_fail(c, fn, "%s", why);
+    }
+    solver_start(&c->s, c->start_time);
+    c->m.origin = c->s.origin;
+    c->m.in_tau = c->s.tau;
+    model_initialize_state(&c->m, c->s.tau);
+    c->s.events = c->s.guard_hits = 0;
+    c->s.pending = 0;
+    c->inputs_changed = 0;
+    c->me_time = c->start_time;
+    c->state = (c->is_me || c->event_mode_used) ? CS_EVENT : CS_STEP;
+    return CORE_OK;
+}
+
+int core_terminate(CoreInstance *c, const char *fn) {
+    if (!core_allowed(c, fn, CS_RUN | CS_ERROR)) return CORE_ERROR;
+    c->state = CS_TERMINATED;
+    return CORE_OK;
+}
+
+int core_reset(CoreInstance *c, const char *fn) {
+    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    /* CVODE's memory is kept: the next run re-initialises it instead of reallocating. */
+    model_set_defaults(&c->m);
+    c->start_time = 0.0;
+    c->me_time = 0.0;
+    c->s.needs_reinit = 1;
+    c->s.pending = 0;
+    c->inputs_changed = 0;
+    c->state = CS_INSTANTIATED;
+    return CORE_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* FMU state snapshots.
+ *
+ * The in-memory FMU state and its serialised form are the same bytes: a header (magic, format
+ * version, interface tag, size), the instance's data, and a 64-bit FNV-1a checksum over all of
+ * it. Restoring checks the header, the checksum and then every field (ranges as for set, the
+ * FMI state word against the states this interface can be saved in, mode against wall model,
+ * finite and bounded states and times); a bad one is refused with a message and the instance is
+ * left exactly as it was. Extending it: add the field to Snapshot (before checksum), copy it in
+ * snapshot_take/snapshot_restore, check it in snapshot_check, bump SNAPSHOT_VERSION. */
+
+#define SNAPSHOT_MAGIC 0x494d504fu /* "IMPO" */
+#define SNAPSHOT_VERSION 3u /* 3: ModelData carries sensitivities, solver, J, S (issue 11) */
+
+typedef struct {
+    uint32_t magic, version, iface, size;
+    int32_t state;
+    int32_t inputs_changed;
+    double start_time, me_time;
+    ModelData m;
+    double origin, tau;
+    long events, guard_hits;
+    int32_t pending;
+    int32_t reserved;
+    uint64_t checksum; /* over every byte before it */
+} Snapshot;
+
+static uint64_t fnv1a(const void *p, size_t n) {
+    const unsigned char *b = (const unsigned char *)p;
+    uint64_t h = 1469598103934665603ull;
+    for (size_t i = 0; i < n; ++i) {
+        h ^= b[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+static uint64_t snapshot_sum(const Snapshot *s) { return fnv1a(s, offsetof(Snapshot, checksum)); }
+
+static void snapshot_take(CoreInstance *c, Snapshot *s) {
+    memset(s, 0, sizeof *s);
+    s->magic = SNAPSHOT_MAGIC;
+    s->version = SNAPSHOT_VERSION;
+    s->iface = (uint32_t)c->iface;
+    s->size = (uint32_t)sizeof *s;
+    s->state = c->state;
+    s->inputs_changed = c->inputs_changed;
+    s->start_time = c->start_time;
+    s->me_time = c->me_time;
+    memcpy(&s->m, &c->m, sizeof s->m);
+    s->origin = c->s.origin;
+    s->tau = c->s.tau;
+    s->events = c->s.events;
+    s->guard_hits = c->s.guard_hits;
+    s->pending = c->s.pending;
+    s->checksum = snapshot_sum(s);
+    /* CVODE's step history is not part of the snapshot; restarting the live instance here too
+     * makes "continue" and "restore, then continue" follow the very same computation. */
+    c->s.needs_reinit = 1;
+}
+
+static int finite_within(double x, double bound) { return isfinite(x) && fabs(x) <= bound; }
+
+/* NULL if the snapshot may be restored into c, else why not (in buf). */
+static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char *buf,
+                                  size_t n) {
+    if (s->magic != SNAPSHOT_MAGIC) return "not a state of this FMU (bad magic word)";
+    if (s->version != SNAPSHOT_VERSION || s->size != sizeof *s) {
+        snprintf(buf, n, "state format version %u, size %u: this FMU reads version %u, size %zu",
+                 (unsigned)s->version, (unsigned)s->size, SNAPSHOT_VERSION, sizeof *s);
+        return buf;
+    }
+    if (s->checksum != snapshot_sum(s)) return "checksum mismatch (the state is corrupted)";
+    static const char *const IF_NAMES[] = {"?", "FMI 2.0 Co-Simulation",
+                                           "FMI 2.0 Model Exchange", "FMI 3.0 Co-Simulation",
+                                           "FMI 3.0 Model Exchange"};
+    if (s->iface != (uint32_t)c->iface) {
+        snprintf(buf, n, "a state of an %s instance cannot be set into an %s instance",
+                 s->iface <= 4 ? IF_NAMES[s->iface] : "unknown", IF_NAMES[c->iface]);
+        return buf;
+    }
+    int savable = CS_INSTANTIATED | CS_INIT | CS_TERMINATED;
+    savable |= c->is_me ? (CS_EVENT | CS_CONT) : CS_STEP;
+    if (!c->is_me && c->event_mode_used) savable |= CS_EVENT;
+    const int st = s->state;
+    if (!(st & savable) || (st & (st - 1))) {
+        snprintf(buf, n, "FMI state word %d is not a state this instance can be restored to", st);
+        return buf;
+    }
+    for (size_t i = 0; i < N_VARS; ++i) {
+        const VarDef *d = &VARS[i];
+        if (!settable(d)) continue;
+        const char *why = check_value(d, field_get(&s->m, d), buf, n);
+        if (why) {
+            char tmp[200];
+            snprintf(tmp, sizeof tmp, "field %s %s", d->name, why);
+            snprintf(buf, n, "%s", tmp);
+            return buf;
+        }
+    }
+    const ModelData *m = &s->m;
+    ModelData trial;
+    memcpy(&trial, m, sizeof trial);
+    model_update_derived(&trial);
+    if (check_derived(&trial, buf, n)) return buf;
+    if (m->mode < MODE_FREE || m->mode > MODE_STICK ||
+        (m->mode == MODE_CONTACT && m->wall != WALL_COMPLIANT) ||
+        (m->mode == MODE_STICK && m->wall != WALL_RIGID))
+        return "contact mode inconsistent with the wall model";
+    if (m->impacts < 0 || s->events < 0 || s->guard_hits < 0) return "negative event counter";
+    if (!finite_within(m->u, CORE_MAX_STATE) || !finite_within(m->v, CORE_MAX_STATE))
+        return "continuous state (u, v) not finite or beyond 1e15";
+    for (int i = 0; i < 6; ++i)
+        if (!isfinite(i < 4 ? m->sJ[i / 2][i % 2] : m->sS[i - 4]))
+            return "sensitivities (J_uu ... S_v) not finite";
+    if (!finite_within(m->dF_ext, MAX_DF_EXT) || !finite_within(m->du_wall, MAX_DU_WALL) ||
+        !finite_within(m->in_tau, 2 * CORE_MAX_TIME) || !isfinite(m->v_impact) ||
+        !finite_within(m->t_impact, 2 * CORE_MAX_TIME))
+        return "input derivatives or impact record not finite or out of range";
+    if (!finite_within(s->start_time, CORE_MAX_TIME) ||
+        !finite_within(s->me_time, 2 * CORE_MAX_TIME) ||
+        !finite_within(s->origin, 2 * CORE_MAX_TIME) || s->origin != floor(s->origin) ||
+        (!c->is_me && m->origin != s->origin) || !(s->tau >= 0.0) || !finite_within(s->tau, 2 * CORE_MAX_TIME))
+        return "times not finite, out of range, or inconsistent";
+    if (s->pending != 0 && (s->pending != 1 || c->is_me)) return "bad pending-event flag";
+    if (s->inputs_changed != 0 && s->inputs_changed != 1) return "bad input flag";
+    return NULL;
+}
+
+static void snapshot_restore(CoreInstance *c, const Snapshot *s) {
+    c->state = s->state;
+    c->inputs_changed = s->inputs_changed;
+    c->start_time = s->start_time;
+    c->me_time = s->me_time;
+    memcpy(&c->m, &s->m, sizeof c->m);
+    model_update_derived(&c->m); /* recomputed, never trusted */
+    c->s.origin = s->origin;
+    c->s.tau = s->tau;
+    c->s.events = s->events;
+    c->s.guard_hits = s->guard_hits;
+    c->s.pending = s->pending;
+    c->s.needs_reinit = 1;
+}
+
+#define SNAPSHOT_STATES (CS_INSTANTIATED | CS_INIT | CS_RUN | CS_TERMINATED)
+
+int core_get_state(CoreInstance *c, const char *fn, void **state) {
+    if (!core_allowed(c, fn, SNAPSHOT_STATES)) return CORE_ERROR;
+    if (!state) return core_fail(c, fn, "NULL argument");
+    Snapshot *s = *state ? (Snapshot *)*state : core_alloc(c, sizeof(Snapshot));
+    if (!s) return core_fail(c, fn, "out of memory");
+    snapshot_take(c, s);
+    *state = s;
+    return CORE_OK;
+}
+
+int core_set_state(CoreInstance *c, const char *fn, const void *state) {
+    if (!core_allowed(c, fn, SNAPSHOT_STATES)) return CORE_ERROR;
+    if (!state) return core_fail(c, fn, "NULL state");
+    char buf[300];
+    const char *why = snapshot_check(c, (const Snapshot *)state, buf, sizeof buf);
+    if (why) return core_fail(c, fn, "state refused, instance unchanged: %s", why);
+    snapshot_restore(c, (const Snapshot *)state);
+    return CORE_OK;
+}
+
+int core_free_state(CoreInstance *c, const char *fn, void **state) {
+    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    if (state && *state) {
+        core_release(c, *state);
+        *state = NULL;
+    }
+    return CORE_OK;
+}
+
+int core_serialized_size(CoreInstance *c, const char *fn, const void *state, size_t *size) {
+    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    if (!size || !state || ((const Snapshot *)state)->magic != SNAPSHOT_MAGIC)
+        return core_fail(c, fn, "not a state of this FMU");
+    *size = sizeof(Snapshot);
+    return CORE_OK;
+}
+
+int core_serialize(CoreInstance *c, const char *fn, const void *state, unsigned char *bytes,
+                   size_t size) {
+    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    if (!bytes || size < sizeof(Snapshot) || !state ||
+        ((const Snapshot *)state)->magic != SNAPSHOT_MAGIC)
+        return core_fail(c, fn, "bad state or buffer too small");
+    memcpy(bytes, state, sizeof(Snapshot));
+    return CORE_OK;
+}
+
+int core_deserialize(CoreInstance *c, const char *fn, const unsigned char *bytes, size_t size,
+                     void **state) {
+    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    if (!bytes || !state || size != sizeof(Snapshot))
+        return core_fail(c, fn, "%zu bytes are not a serialised state of this FMU (expected "
+                         "%zu)", size, sizeof(Snapshot));
+    Snapshot tmp;
+    memcpy(&tmp, bytes, sizeof tmp);
+    char buf[300];
+    const char *why = snapshot_check(c, &tmp, buf, sizeof buf);
+    if (why) return core_fail(c, fn, "not a valid serialised state of this instance: %s", why);
+    Snapshot *s = *state ? (Snapshot *)*state : core_alloc(c, sizeof(Snapshot));
+    if (!s) return core_fail(c, fn, "out of memory");
+    memcpy(s, &tmp, sizeof tmp);
+    *state = s;
+    return CORE_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Co-Simulation */
+
+/* Applies the documented rule for inputs that jumped since the last step (model.c,
+ * model_input_jump) at the current point. */
+static void apply_input_jump(CoreInstance *c) {
+    if (!c->inputs_changed) return;
+    c->inputs_changed = 0;
+    solver_apply_pending(&c->s, &c->m);
+    double y[2] = {c->m.u, c->m.v};
+    const int impacts = c->m.impacts;
+    if (model_input_jump(&c->m, local_tau(c), y)) {
+        c->m.u = y[0];
+        c->m.v = y[1];
+        core_log(c, CORE_OK, "logEvents", "inputs changed at t = %.17g: state set to u = %.17g,"
+                 " v = %.17g%s", core_time(c), y[0], y[1],
+                 c->m.impacts != impacts ? " (an impact with the moved wall)" : "");
+    }
+    c->s.needs_reinit = 1;
+}
+
+/* After a step: the ramps of the input derivatives end here (the inputs hold their values at
+ * the end of the step until set again). */
+static void end_ramps(CoreInstance *c) {
+    if (c->m.dF_ext == 0.0 && c->m.du_wall == 0.0) return;
+    rebase_inputs(&c->m, c->s.tau);
+    c->m.dF_ext = c->m.du_wall = 0.0;
+    c->s.needs_reinit = 1;
+}
+
+static int outputs_finite(const CoreInstance *c) {
+    return finite_within(c->m.u, CORE_MAX_STATE) && finite_within(c->m.v, CORE_MAX_STATE) &&
+           isfinite(get_contact_force(c)) && isfinite(c->m.v_impact);
+}
+
+int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_at_event,
+                 CoreIntermediateFn intermediate, int *event_needed, int *early_return,
+                 double *last_time) {
+    if (!core_allowed(c, fn, CS_STEP)) return CORE_ERROR;
+    if (c->is_me) return core_fail(c, fn, "a Model Exchange instance");
+    if (event_needed) *event_needed = 0;
+    if (early_return) *early_return = 0;
+    if (!isfinite(t) || !isfinite(h) || h < 0.0)
+        return core_fail(c, fn, "bad communication step (t = %g, h = %g)", t, h);
+    if (!(fabs(t + h) <= CORE_MAX_TIME))
+        return core_fail(c, fn, "the step's end t + h = %g is beyond the FMU's time range "
+                         "|t| <= %g", t + h, CORE_MAX_TIME);
+    const double now = solver_time(&c->s);
+    if (fabs(t - now) > 1e-9 * fmax(1.0, fabs(now)))
+        return core_fail(c, fn, "currentCommunicationPoint %.17g differs from the FMU's time "
+                         "%.17g", t, now);
+    apply_input_jump(c);
+    if (c->m.sensitivities) { /* derivatives w.r.t. the state at t */
+        sens_reset(&c->m);
+        c->s.needs_reinit = 1; /* CVODE carries J, S in its own history: restart it with J = I */
+    }
+    const double t_end = t + h;
+    const long events_before = c->s.events, guard_before = c->s.guard_hits;
+
+    if (!stop_at_event && !intermediate) {
+        if (solver_advance(&c->s, &c->m, t_end) != 0) {
+            c->state = CS_ERROR;
+            return core_fail(c, fn, "integration failed: %s", c->s.msg);
+        }
+    } else {
+        for (;;) {
+            const int rc = solver_advance_ex(&c->s, &c->m, t_end, 1);
+            if (rc < 0) {
+                c->state = CS_ERROR;
+                return core_fail(c, fn, "integration failed: %s", c->s.msg);
+            }
+            if (rc == 0) break; /* reached t_end */
+            const double te = solver_time(&c->s);
+            const int requested = intermediate ? intermediate(c, te) : 0;
+            if (stop_at_event || (c->early_return_allowed && requested)) {
+                /* With event mode the jump waits for the discrete-state update; without, it is
+                 * applied here (outputs after the event). */
+                if (c->event_mode_used) {
+                    if (event_needed) *event_needed = 1;
+                } else {
+                    solver_apply_pending(&c->s, &c->m);
+                }
+                if (early_return) *early_return = te < t_end;
+                core_log(c, CORE_OK, "logEvents", "%s: early return at the wall event t = %.17g",
+                         fn, te);
+                break;
+            }
+            solver_apply_pending(&c->s, &c->m);
+        }
+    }
+    end_ramps(c);
+    if (last_time) *last_time = solver_time(&c->s);
+    if (!outputs_finite(c)) {
+        c->state = CS_ERROR;
+        return core_fail(c, fn, "the state left the valid range (u = %g, v = %g at t = %.17g)",
+                         c->m.u, c->m.v, solver_time(&c->s));
+    }
+    if (c->s.events != events_before)
+        core_log(c, CORE_OK, "logEvents", "%s: %ld wall events in (%.17g, %.17g], %ld of them "
+                 "found by the grazing guard", fn, c->s.events - events_before, t,
+                 solver_time(&c->s), c->s.guard_hits - guard_before);
+    return CORE_OK;
+}
+
+/* ------------------------------------------------------------------------------------------ */
+/* Model Exchange, and the event mode of FMI 3.0 Co-Simulation */
+
+#define ME_ONLY(c, fn, states)                                                                \
+    do {                                                                                      \
+        if (!core_allowed(c, fn, states)) return CORE_ERROR;                                  \
+        if (!(c)->is_me) return core_fail(c, fn, "instance was not instantiated for Model "   \
+                                          "Exchange");                                        \
+    } while (0)
+
+int core_enter_event_mode(CoreInstance *c, const char *fn) {
+    if (!core_allowed(c, fn, c->fmi3 ? (CS_STEP | CS_CONT) : (CS_EVENT | CS_CONT)))
+        return CORE_ERROR;
+    if (!c->fmi3 && !c->is_me)
+        return core_fail(c, fn, "instance was not instantiated for Model Exchange");
+    if (!c->is_me && !c->event_mode_used)
+        return core_fail(c, fn, "instantiated with eventModeUsed = false");
+    c->state = CS_EVENT;
+    return CORE_OK;
+}
+
+int core_update_discrete(CoreInstance *c, const char *fn, int *values_changed) {
+    if (!core_allowed(c, fn, CS_EVENT)) return CORE_ERROR;
+    if (!c->fmi3 && !c->is_me)
+        return core_fail(c, fn, "instance was not instantiated for Model Exchange");
+    int changed;
+    const int impacts = c->m.impacts;
+    if (c->is_me) {
+        double y[2] = {c->m.u, c->m.v};
+        c->m.origin = floor(c->me_time);
+        changed = model_me_event_update(&c->m, local_tau(c), y);
+        c->inputs_changed = 0; /* ME: a jumped input is the event the importer stopped at */
+        c->m.u = y[0];
+        c->m.v = y[1];
+        if (changed) c->s.events++;
+    } else {
+        changed = solver_apply_pending(&c->s, &c->m); /* the jump of an early return */
+    }
+    if (changed)
+        core_log(c, CORE_OK, "logEvents", "%s: wall event at t = %.17g%s", fn, core_time(c),
+                 c->m.impacts != impacts ? " (impact)" : "");
+    if (values_changed) *values_changed = changed;
+    return CORE_OK;
+}
+
+int core_enter_continuous_mode(CoreInstance *c, const char *fn) {
+    ME_ONLY(c, fn, CS_EVENT);
+    c->state = CS_CONT;
+    return CORE_OK;
+}
+
+int core_enter_step_mode(CoreInstance *c, const char *fn) {
+    if (!core_allowed(c, fn, CS_EVENT)) return CORE_ERROR;
+    if (c->is_me) return core_fail(c, fn, "a Model Exchange instance");
+    solver_apply_pending(&c->s, &c->m); /* an importer that skipped the discrete update */
+    c->state = CS_STEP;
+    return CORE_OK;
+}
+
+int core_completed_step(CoreInstance *c, const char *fn, int *enter_event, int *terminate) {
+    ME_ONLY(c, fn, CS_CONT);
+    if (enter_event) *enter_event = 0;
+    if (terminate) *terminate = 0;
+    return CORE_OK;
+}
+
+int core_set_time(CoreInstance *c, const char *fn, double t) {
+    ME_ONLY(c, fn, CS_EVENT | CS_CONT);
+    if (!finite_within(t, CORE_MAX_TIME))
+        return core_fail(c, fn, "time = %g: must be finite with |t| <= %g", t, CORE_MAX_TIME);
+    c->me_time = t;
+    c->m.origin = floor(t);
+    return CORE_OK;
+}
+
+int core_set_states(CoreInstance *c, const char *fn, const double x[], size_t n) {
+    ME_ONLY(c, fn, CS_EVENT | CS_CONT);
+    if (n != 2 || !x) return core_fail(c, fn, "expected 2 states, got %zu", n);
+    if (!finite_within(x[0], CORE_MAX_STATE) || !finite_within(x[1], CORE_MAX_STATE))
+        return core_fail(c, fn, "states (%g, %g) rejected: must be finite with |x| <= %g (state "
+                         "kept)", x[0], x[1], CORE_MAX_STATE);
+    c->m.u = x[0];
+    c->m.v = x[1];
+    return CORE_OK;
+}
+
+#define ME_GET_STATES (CS_INIT | CS_RUN | CS_TERMINATED | CS_ERROR)
+
+int core_get_states(CoreInstance *c, const char *fn, double x[], size_t n) {
+    ME_ONLY(c, fn, ME_GET_STATES);
+    if (n != 2 || !x) return core_fail(c, fn, "expected 2 states, got %zu", n);
+    x[0] = c->m.u;
+    x[1] = c->m.v;
+    return CORE_OK;
+}
+
+int core_get_derivatives(CoreInstance *c, const char *fn, double dx[], size_t n) {
+    ME_ONLY(c, fn, ME_GET_STATES);
+    if (n != 2 || !dx) return core_fail(c, fn, "expected 2 states, got %zu", n);
+    const double y[2] = {c->m.u, c->m.v};
+    model_derivatives(&c->m, local_tau(c), y, dx);
+    if (!isfinite(dx[0]) || !isfinite(dx[1]))
+        return core_fail(c, fn, "derivatives not finite at u = %g, v = %g", y[0], y[1]);
+    return CORE_OK;
+}
+
+int core_get_event_indicators(CoreInstance *c, const char *fn, double g[], size_t n) {
+    ME_ONLY(c, fn, ME_GET_STATES);
+    if (n != MODEL_N_ME_EVENTS || !g)
+        return core_fail(c, fn, "expected %d indicators, got %zu", MODEL_N_ME_EVENTS, n);
+    g[0] = get_indicator(c);
+    return CORE_OK;
+}
+
+int core_get_nominals(CoreInstance *c, const char *fn, double x[], size_t n) {
+    ME_ONLY(c, fn, CS_ANY);
+    if (n != 2 || !x) return core_fail(c, fn, "expected 2 states, got %zu", n);
+    x[0] = x[1] = 1.0;
+    return CORE_OK;
+}

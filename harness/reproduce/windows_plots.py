@@ -1,0 +1,112 @@
+"""Plots of the map-vs-ODE window comparison (:mod:`harness.reproduce.windows`).
+
+Every title names the parameter set; axes carry natural labels.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from mapcheck.bifurcation import PiecewiseMap, orbit_diagram
+from mapcheck.compare import phase_to_natural
+from mapcheck.windows import MapParams, window_1d
+
+__all__ = ["plot_all"]
+
+
+def _save(fig, path) -> str:
+    import matplotlib.pyplot as plt
+
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+    return path.name
+
+
+def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any]) -> list[str]:
+    """TARGET_map.png (map, linear rho and A~), TARGET_ode.png (FMU up/down), TARGET_windows.png."""
+    from .. import plots  # noqa: F401  (selects the Agg backend)
+    import matplotlib.pyplot as plt
+
+    from .windows import labels_for
+
+    c = problem.coefficients()
+    eq = problem.coefficient_eq()
+    params = problem.describe()
+    grid = st.scan_grid
+    n_map = int(st.extra.get("map_points", 4 * len(grid) + 1))
+    sig = np.geomspace(grid[0], grid[-1], n_map) if st.log_sigma else np.linspace(grid[0], grid[-1], n_map)
+    f = PiecewiseMap(MapParams.from_coefficients(c))
+    files = []
+    fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
+    for ax, variant, what in ((axes[0], "paper", f"rho linear in sigma {eq}"),
+                              (axes[1], "tilde", f"rho with |A~(sigma)|, {eq}")):
+        od = orbit_diagram(f, c.rho(sig, variant), 0.0, 0.0, n_transient=400, n_keep=32, mode="down")
+        ax.plot(np.repeat(sig, od.x.shape[-1]), od.x[:, 0, :].ravel(), ",", color="k", alpha=0.6,
+                label="map iterates (down scan)")
+        first = True
+        for M in range(1, problem.M_max + 1):
+            lo, hi = window_1d(M)
+            if lo > hi:
+                continue
+            for rho_edge in (lo, hi):
+                if math.isfinite(rho_edge):
+                    s_edge = float(c.sigma_of_rho(rho_edge, variant))
+                    if math.isfinite(s_edge) and grid[0] <= s_edge <= grid[-1]:
+                        ax.axvline(s_edge, color="tab:green", lw=0.8, ls="--", label="(64) window edges" if first else None)
+                        first = False
+        ax.set_ylabel("x, pre-impact position (natural coordinates)")
+        ax.set_title(f"map (37)/(38), {what}\n{params}", fontsize=9)
+        ax.legend(loc="lower left", fontsize=8)
+    axes[1].set_xlabel("forcing amplitude above grazing, sigma")
+    if st.log_sigma:
+        axes[1].set_xscale("log")
+    fig.tight_layout()
+    files.append(_save(fig, ctx.out / f"{ctx.target}_map.png"))
+
+    fig, ax = plt.subplots(figsize=(8, 4.8))
+    for direction, style in (("up", dict(color="tab:blue", marker=".", ms=2)),
+                             ("down", dict(color="tab:red", marker="x", ms=2))):
+        sel = ds.sel(direction=direction)
+        s = np.broadcast_to(sel["sigma"].values[:, None], sel["u"].shape)
+        x, _ = phase_to_natural(sel["u"].values, sel["v"].values, s, c, problem.theta, "tilde")
+        ax.plot(s.ravel(), x.ravel(), ls="none", alpha=0.6, label=f"FMU, sigma stepped {direction}", **style)
+    first = True
+    for M, w in windows["ode"].items():
+        for e in (w or ()):
+            if e is not None:
+                ax.axvline(e, color="tab:green", lw=0.8, ls="--", label="ODE window edges (shooting)" if first else None)
+                first = False
+    ax.set_xlabel("forcing amplitude above grazing, sigma")
+    ax.set_ylabel("x, pre-impact position\n(natural coordinates, A~)")
+    if st.log_sigma:
+        ax.set_xscale("log")
+    ax.set_title(f"ODE (FMU): quasi-static up/down scans\n{params}", fontsize=9)
+    ax.legend(loc="lower left", fontsize=8, markerscale=3)
+    fig.tight_layout()
+    files.append(_save(fig, ctx.out / f"{ctx.target}_ode.png"))
+
+    fig, ax = plt.subplots(figsize=(8, 4.0))
+    labels = labels_for(problem)
+    names = ["ode", "theory_64", "map", "map_A_tilde"]
+    cmap = plt.get_cmap("tab10")
+    x_hi = float(grid[-1])
+    for i, name in enumerate(names):
+        for M, w in windows[name].items():
+            if w is None or w[0] is None:
+                continue
+            hi = w[1] if w[1] is not None else x_hi
+            ax.plot([w[0], max(hi, w[0] * 1.01)], [i, i], lw=8, solid_capstyle="butt", color=cmap((M - 1) % 10),
+                    label=f"M = {M}" if i == 0 else None)
+    ax.set_yticks(range(len(names)), [labels[n] for n in names], fontsize=8)
+    ax.set_xlabel("forcing amplitude above grazing, sigma")
+    if st.log_sigma:
+        ax.set_xscale("log")
+    ax.set_xlim(float(grid[0]), x_hi)
+    ax.set_ylim(-0.6, len(names) - 0.4)
+    ax.set_title(f"Stable maximal period-M windows (M = 1 extends beyond the plot)\n{params}", fontsize=9)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), fontsize=8, ncol=min(problem.M_max, 8), frameon=False)
+    fig.tight_layout()
+    files.append(_save(fig, ctx.out / f"{ctx.target}_windows.png"))
+    return files

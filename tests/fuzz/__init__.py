@@ -1,0 +1,8 @@
+"""A fuzzer of the FMU's FMI 2.0 and 3.0 C interfaces (issue 13.4).
+
+``bindings`` loads the shared libraries with ctypes (no fmpy: the fuzzer must run inside a process
+whose allocator is AddressSanitizer's), ``model`` reads the variables from modelDescription.xml,
+``sequences`` draws random call sequences as plain JSON actions, ``executor`` runs them against the
+oracle, and ``runner`` drives it all in a sanitizer-enabled subprocess, minimises what fails and
+replays the corpus (tests/fuzz_corpus/).
+"""

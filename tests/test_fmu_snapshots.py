@@ -1,0 +1,197 @@
+"""FMU-state snapshots (issue 13.2): versioned, tagged with the interface (FMI 2.0/3.0, CS/ME),
+checksummed and validated field by field. A bad state is refused with a message and leaves the
+instance exactly as it was; nothing non-finite ever comes back with OK.
+
+The serialised layout is the core's Snapshot struct (fmu_core.c): a 16-byte header (magic,
+version, interface, size), the FMI state word at byte 16, ..., and a 64-bit FNV-1a checksum of
+all preceding bytes in the last 8 bytes. Tests that corrupt a field on purpose re-seal the
+checksum (as a careless or hostile importer could) to reach the field-by-field checks.
+"""
+from __future__ import annotations
+
+import struct
+
+import numpy as np
+import pytest
+from fmpy import extract, read_model_description
+from fmpy.fmi2 import FMU2Model
+from fmpy.fmi3 import FMU3Slave
+
+from tests.fmu_support import FMU3_PATH, FMU_PATH, LoggedSlave, expect_error
+
+UNDERDAMPED = dict(nu=0.196, Omega=7.368)
+
+
+def fnv1a(data: bytes) -> int:
+    h = 1469598103934665603
+    for b in data:
+        h = ((h ^ b) * 1099511628211) & 0xFFFFFFFFFFFFFFFF
+    return h
+
+
+def reseal(blob: bytearray) -> bytes:
+    """Recompute the trailing checksum after an edit."""
+    blob[-8:] = struct.pack("<Q", fnv1a(bytes(blob[:-8])))
+    return bytes(blob)
+
+
+def put_double(blob: bytes, old: float, new: float) -> bytearray:
+    """Replace the (unique) occurrence of the double `old` by `new`."""
+    b = bytearray(blob)
+    pat = struct.pack("<d", old)
+    i = bytes(b).find(pat)
+    assert i >= 0 and bytes(b).find(pat, i + 1) < 0, "value not unique in the snapshot"
+    b[i:i + 8] = struct.pack("<d", new)
+    return b
+
+
+@pytest.fixture
+def running():
+    """A CS instance mid-run (rigid wall, impacts) and its serialised state."""
+    s = LoggedSlave(name="snap")
+    s.start(wall=2, sigma=0.1, r=0.8, u0=-0.5, v0=1.0, **UNDERDAMPED)
+    s.step_to(2.37)
+    st = s.slave.getFMUstate()
+    blob = s.slave.serializeFMUstate(st)
+    s.slave.freeFMUstate(st)
+    yield s, blob
+    s.close()
+
+
+def _refused(s: LoggedSlave, blob: bytes, words: str) -> None:
+    """The blob is refused with a message containing `words`, and the instance is unchanged."""
+    before = (s.state().tolist(), s.impacts(), s.get("F_contact"))
+    expect_error(s.slave.deSerializeFMUstate, blob)
+    assert words in s.errors()[-1], s.errors()[-1]
+    assert (s.state().tolist(), s.impacts(), s.get("F_contact")) == before
+    s.step_to(s.t + 1.0)  # still running
+    assert np.all(np.isfinite(s.state()))
+
+
+def test_round_trip_is_exact(running):
+    s, blob = running
+    ref = LoggedSlave(name="ref")
+    try:
+        ref.start(wall=2, sigma=0.1, r=0.8, u0=-0.5, v0=1.0, **UNDERDAMPED)
+        ref.step_to(2.37)
+        ref.slave.freeFMUstate(ref.slave.getFMUstate())  # a snapshot restarts CVODE here
+        ref.step_to(5.0)
+        st = s.slave.deSerializeFMUstate(blob)
+        s.step_to(4.0)  # move on, then restore
+        s.slave.setFMUstate(st)
+        s.slave.freeFMUstate(st)
+        s.t = 2.37
+        s.step_to(5.0)
+        assert np.array_equal(s.state(), ref.state()) and s.impacts() == ref.impacts()
+    finally:
+        ref.close()
+
+
+def test_every_single_byte_flip_is_refused(running):
+    """Without re-sealing, a change anywhere (header, body, checksum) is caught."""
+    s, blob = running
+    for i in range(0, len(blob), 3):
+        b = bytearray(blob)
+        b[i] ^= 0x5A
+        expect_error(s.slave.deSerializeFMUstate, bytes(b))
+    assert "checksum" in s.errors()[-1] or "state" in s.errors()[-1]
+    _refused(s, blob[:-1], "bytes are not a serialised state")
+
+
+def test_nan_in_the_body_is_refused_even_with_a_valid_checksum(running):
+    s, blob = running
+    u = s.state()[0]
+    st = s.slave.getFMUstate()  # the snapshot holds the state of this moment
+    blob = s.slave.serializeFMUstate(st)
+    s.slave.freeFMUstate(st)
+    _refused(s, reseal(put_double(blob, u, float("nan"))), "not finite")
+    _refused(s, reseal(put_double(blob, u, 1e300)), "beyond 1e15")
+
+
+def test_out_of_range_parameters_in_a_state_are_refused(running):
+    s, blob = running
+    _refused(s, reseal(put_double(blob, 0.1, 1e308)), "sigma")          # sigma
+    _refused(s, reseal(put_double(blob, 7.368, 1.8e308)), "Omega")      # Omega
+    _refused(s, reseal(put_double(blob, 0.8, 2.0)), "field r")          # r
+
+
+def test_bad_fmi_state_word_is_refused_and_the_instance_is_not_bricked(running):
+    s, blob = running
+    for word in (0, 3, 1 << 6, 1 << 4, -1):  # none, two states, Error, ME's continuous mode
+        b = bytearray(blob)
+        b[16:20] = struct.pack("<i", word)
+        _refused(s, reseal(b), "FMI state word")
+    # reset and free still work, and a good state still restores
+    st = s.slave.deSerializeFMUstate(blob)
+    s.slave.setFMUstate(st)
+    s.slave.freeFMUstate(st)
+    s.slave.reset()
+
+
+def test_version_and_size_are_checked(running):
+    s, blob = running
+    b = bytearray(blob)
+    b[4:8] = struct.pack("<I", 1)
+    _refused(s, reseal(b), "version")
+
+
+def test_a_cs_state_is_refused_by_a_model_exchange_instance(running):
+    _, blob = running
+    md = read_model_description(str(FMU_PATH))
+    me = FMU2Model(guid=md.guid, unzipDirectory=extract(str(FMU_PATH)),
+                   modelIdentifier=md.modelExchange.modelIdentifier, instanceName="me")
+    msgs = []
+    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+    from fmpy.logging import addLoggerProxy
+    import ctypes
+
+    def log(env, inst, status, cat, msg):  # noqa: ANN001
+        msgs.append(msg.decode())
+    cb = fmi2CallbackFunctions()
+    cb.logger = fmi2CallbackLoggerTYPE(log)
+    addLoggerProxy(ctypes.byref(cb))
+    me.instantiate(callbacks=cb)
+    try:
+        me.setupExperiment(startTime=0.0)
+        me.enterInitializationMode()
+        me.exitInitializationMode()
+        with pytest.raises(Exception):
+            me.deSerializeFMUstate(blob)
+        assert any("Co-Simulation instance cannot be set into an FMI 2.0 Model Exchange"
+                   in m for m in msgs), msgs
+        # the ME instance's own states round-trip
+        st = me.getFMUstate()
+        me.setFMUstate(me.deSerializeFMUstate(me.serializeFMUstate(st)))
+        me.freeFMUstate(st)
+        # and it still does not accept fmi2DoStep-like calls: its event mode is intact
+        me.enterContinuousTimeMode()
+    finally:
+        me.terminate()
+        me.freeInstance()
+
+
+@pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
+def test_fmi3_refuses_fmi2_states_and_corrupted_ones(running):
+    _, blob2 = running
+    md = read_model_description(str(FMU3_PATH))
+    s = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(FMU3_PATH)),
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="s3")
+    s.instantiate()
+    try:
+        s.enterInitializationMode(startTime=0.0)
+        s.exitInitializationMode()
+        s.doStep(0.0, 1.0)
+        st = s.getFMUState()
+        blob = s.serializeFMUState(st)
+        s.freeFMUState(st)
+        with pytest.raises(Exception):
+            s.deserializeFMUState(blob2)  # an FMI 2.0 state
+        b = bytearray(blob)
+        b[len(b) // 2] ^= 1
+        with pytest.raises(Exception):
+            s.deserializeFMUState(bytes(b))
+        s.setFMUState(s.deserializeFMUState(blob))
+        s.doStep(1.0, 1.0)
+    finally:
+        s.terminate()
+        s.freeInstance()

@@ -1,0 +1,74 @@
+"""What a sweep's NetCDF and plots tell a reader: no stale attributes, the codes of period and
+orbit_impacts explained on the variables, titles with the parameters, natural axis labels,
+and period labels that tell impacts per period apart ("2(1)" vs "2(2)")."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from harness import SamplingSpec, SweepSpec, read_netcdf, run_sweep, write_netcdf
+from harness import plots
+from harness.plots import parameter_title, period_labels, section_label
+
+
+@pytest.fixture(scope="module")
+def sweep(model):
+    # Figure 9's defaults: sigma = 0.5 is period 2 with one impact, 0.9 period 1 (docs/theory.md)
+    spec = SweepSpec("sigma", np.array([0.5, 0.9]), ("up",), scan_param="Gamma", scan_values=np.array([10.0, 20.0]))
+    return run_sweep(model, spec, sampling=SamplingSpec(n_transient=200, n_samples=12), backend="serial")
+
+
+def test_swept_parameters_are_not_stale_attributes(sweep, tmp_path) -> None:
+    path = tmp_path / "s.nc"
+    write_netcdf(sweep, path)
+    ds = read_netcdf(path)
+    assert "model.sigma" not in ds.attrs and "model.Gamma" not in ds.attrs  # coordinates instead
+    assert ds.attrs["model.nu"] == pytest.approx(4.605170185988091)
+    assert "model.r" in ds.attrs
+    for name in ("period", "orbit_impacts"):
+        assert "comment" in ds[name].attrs and ds[name].dtype.kind == "i", name
+    assert "-1 when period = 0" in ds["orbit_impacts"].attrs["comment"]
+    assert "dynamics" in ds["period"].attrs["comment"]
+    # the codes agree with the data: orbit_impacts = -1 exactly where no period was found
+    p, k = ds["period"].values, ds["orbit_impacts"].values
+    assert np.array_equal(p == 0, k == -1)
+
+
+def test_period_labels_tell_impacts_apart() -> None:
+    period = np.array([[2, 2, 1, 0, 3]])
+    impacts = np.array([[1, 2, 1, -1, 1]])
+    rows, labels = period_labels(period, impacts)
+    assert labels == ["none", "1(1)", "2(1)", "2(2)", "3(1)"]
+    assert [labels[int(i)] for i in rows.ravel()] == ["2(1)", "2(2)", "1(1)", "none", "3(1)"]
+
+
+def test_labels_and_title_text() -> None:
+    assert section_label("u", 0.0) == "position u at t = n"
+    assert section_label("v", 0.5) == "velocity v at t = n + 1/2"
+    attrs = {"model.nu": 4.605170185988091, "model.Omega": 0.3059238689620112, "model.r": 0.9, "model.wall": 1,
+             "model.Gamma": 10.0, "model.sigma": 0.2}
+    t = parameter_title(attrs, ("sigma",))
+    assert "(alpha, gamma) = (0.99, 0.01)" in t and "r = 0.9" in t and "compliant wall Gamma = 10" in t
+    assert "sigma" not in t
+    assert "rigid wall" in parameter_title({**attrs, "model.wall": 2})
+
+
+def test_bifurcation_diagram_says_what_it_shows(sweep, tmp_path, monkeypatch) -> None:
+    """The drawn figure: parameters in the title, a natural y label, "M(k)" period ticks."""
+    seen = {}
+
+    def capture(fig, path):
+        ax, axp = fig.axes[:2]
+        seen.update(title=ax.get_title(), ylabel=ax.get_ylabel(),
+                    ticks=[t.get_text() for t in axp.get_yticklabels()])
+        return orig(fig, path)
+
+    orig = plots._save
+    monkeypatch.setattr(plots, "_save", capture)
+    path = plots.bifurcation_diagram(sweep, tmp_path / "b.png")
+    assert path.stat().st_size > 0
+    assert "(alpha, gamma) = (0.99, 0.01)" in seen["title"] and "r = 0.9" in seen["title"]
+    assert "Gamma = 10" in seen["title"]  # the scan value shown
+    assert seen["ylabel"] == "position u at t = n"
+    assert "t = n + 0.0" not in seen["ylabel"]
+    assert "2(1)" in seen["ticks"] and "1(1)" in seen["ticks"]
