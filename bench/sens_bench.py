@@ -173,6 +173,78 @@ def measure(quick: bool) -> dict:
     return res
 
 
+def accuracy() -> dict:
+    """The sensitivities against the closed form, and the two solver modes against each other.
+
+    - regular: J and S of one period (both modes) against Richardson-extrapolated central
+      differences of mapcheck.exact (the Python closed form, exact crossing times), max relative
+      error over the cases of tests/test_fmu_sensitivities.py;
+    - near grazing: a contact x deep (the wall-free orbit at sigma = x), CVODE mode against
+      closed-form mode, and both against differences of mapcheck.exact with steps 1e-2 x; the
+      slope of log max|J| against log x (expected -1/2);
+    - CVODE mode against closed-form mode, one period from the same state, max |du|, |dv| over
+      12 periods of each case of tests/test_fmu_closed_form.py.
+    """
+    from tests.fmu_support import on_orbit
+    from tests.sens_support import UNDERDAMPED, Fmu, exact_derivatives, one_period
+    from tests.test_fmu_closed_form import CASES as CF_CASES
+    from tests.test_fmu_sensitivities import CASES as SENS_CASES
+
+    def rel(a, b):
+        return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
+
+    f = Fmu(2)
+    out: dict = {}
+    worst = {0: 0.0, 1: 0.0}
+    errs = []
+    for p in SENS_CASES.values():
+        for t0 in (0.55, 0.8):
+            st = on_orbit(p["sigma"], t0)
+            x0 = (st["u0"], st["v0"])
+            Jx, Sx = exact_derivatives(p, x0, t0)
+            for solver in (0, 1):
+                _, J, S = one_period(f, p, x0, t0, solver=solver)
+                e = max(rel(J, Jx), rel(S, Sx))
+                worst[solver] = max(worst[solver], e)
+                errs.append(e)
+    out["regular"] = dict(cvode=worst[0], closed=worst[1], median=float(np.median(errs)), n=len(errs))
+    rows = []
+    for wall in (1, 2):
+        p = dict(UNDERDAMPED, wall=wall, Gamma=100.0)
+        for x in (1e-4, 1e-6, 1e-8, 1e-9):
+            q = dict(p, sigma=x)
+            st = on_orbit(x, 0.5)
+            x0 = (st["u0"], st["v0"])
+            _, J0, S0 = one_period(f, q, x0, 0.5, solver=0)
+            _, J1, S1 = one_period(f, q, x0, 0.5, solver=1)
+            row = dict(wall=wall, depth=x, norm=float(np.max(np.abs(J1))), cvode_vs_closed=rel(J0, J1))
+            if x >= 1e-6:
+                Jx, _ = exact_derivatives(q, x0, 0.5, h=1e-2 * x)
+                row["closed_vs_differences"] = rel(J1, Jx)
+            rows.append(row)
+        d = np.logspace(-5, -12, 8)
+        norms = []
+        for x in d:
+            st = on_orbit(x, 0.5)
+            norms.append(np.max(np.abs(one_period(f, dict(p, sigma=x), (st["u0"], st["v0"]), 0.5, solver=1)[1])))
+        out[f"slope_wall{wall}"] = float(np.polyfit(np.log(d), np.log(norms), 1)[0])
+    out["grazing"] = rows
+    worst_state = 0.0
+    for p in CF_CASES.values():
+        f.start(0.5, **p, **on_orbit(p["sigma"], 0.5), solver=1)
+        xs = []
+        for k in range(1, 13):
+            f.step(0.5 + k)
+            xs.append(f.state())
+        for k in range(len(xs) - 1):
+            a, _, _ = one_period(f, p, xs[k], 0.5 + k + 1, sens=False, solver=0)
+            b, _, _ = one_period(f, p, xs[k], 0.5 + k + 1, sens=False, solver=1)
+            worst_state = max(worst_state, float(np.max(np.abs(a - b))))
+    out["cvode_vs_closed_per_period"] = worst_state
+    f.close()
+    return out
+
+
 def section(res: dict) -> str:
     M = res["methods"]
     L = [BEGIN, "## Solver modes and sensitivities (issue 11)", "",
@@ -192,7 +264,24 @@ def section(res: dict) -> str:
           f"Sensitivities cost {M['fmpy_cvode+sens']['us'] / M['fmpy_cvode']['us']:.2f}x in CVODE mode "
           f"(8 equations instead of 2) and {M['bare_closed+sens']['us'] / M['bare_closed']['us']:.2f}x in the "
           f"bare closed form; CVODE mode / closed-form mode through fmpy: "
-          f"{M['fmpy_cvode']['us'] / M['fmpy_closed']['us']:.0f}x.", "", END]
+          f"{M['fmpy_cvode']['us'] / M['fmpy_closed']['us']:.0f}x.", ""]
+    A = res.get("accuracy")
+    if A:
+        L += ["Accuracy (same run): J, S of one period against Richardson-extrapolated differences of "
+              f"mapcheck.exact, {A['regular']['n']} cases away from grazing: max relative error "
+              f"{A['regular']['cvode']:.1e} (CVODE mode), {A['regular']['closed']:.1e} (closed form), median "
+              f"{A['regular']['median']:.1e}. CVODE mode against closed-form mode, one period from the same "
+              f"state, every case of tests/test_fmu_closed_form.py: max {A['cvode_vs_closed_per_period']:.1e}. "
+              f"Near grazing, max|J| ~ depth^s with s = {A['slope_wall1']:.3f} (compliant), "
+              f"{A['slope_wall2']:.3f} (rigid), depths 1e-5 .. 1e-12:", "",
+              "| wall | depth | max abs J | CVODE vs closed form (rel) | closed form vs differences (rel) |",
+              "|---|---:|---:|---:|---:|"]
+        for r in A["grazing"]:
+            d = r.get("closed_vs_differences")
+            L.append(f"| {'compliant' if r['wall'] == 1 else 'rigid'} | {r['depth']:.0e} | {r['norm']:.3g} | "
+                     f"{r['cvode_vs_closed']:.1e} | {'' if d is None else f'{d:.1e}'} |")
+        L.append("")
+    L.append(END)
     return "\n".join(L)
 
 
@@ -211,6 +300,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--out", help="markdown file to update (default BENCHMARKS.md, none with --quick)")
     args = ap.parse_args(argv)
     res = measure(args.quick)
+    res["accuracy"] = accuracy()
     text = section(res)
     print(text)
     if args.json:

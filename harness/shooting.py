@@ -29,6 +29,7 @@ that decide the lower edges carry no difference error), else by central differen
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
@@ -363,7 +364,11 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
 
         # spawn, as the sweep pool does: the parent holds a loaded FMU library
         ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx) as pool:
+        from .tasks import init_child_process
+
+        # workers die with this process (SIGKILL included) and clean their temp folders
+        with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx,
+                                 initializer=init_child_process, initargs=(os.getpid(),)) as pool:
             futures = [pool.submit(_shoot_window_task, smap.sim.source, smap.params, smap.theta, c, M, w,
                                    sigma_range, tols[M], relative, smap.derivatives) for M, w in todo.items()]
             for f in futures:

@@ -205,6 +205,16 @@ def init_pool_worker(progress_queue: Any, parent_pid: int | None = None) -> None
     die_with_parent(parent_pid)
 
 
+def init_child_process(parent_pid: int | None = None) -> None:
+    """Initializer of any other process pool of the harness (e.g. parallel shooting): the
+    process dies with its parent, SIGKILL included, and SIGTERM removes its temporary folder.
+    Ctrl-C is left as it is."""
+    import signal
+
+    signal.signal(signal.SIGTERM, _exit_on_signal)
+    die_with_parent(parent_pid)
+
+
 def _exit_on_signal(signum: int, frame: Any) -> None:
     # os._exit, not SystemExit: the pool's worker loop catches BaseException from a task and
     # would send it back as a result instead of exiting

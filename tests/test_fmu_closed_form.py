@@ -174,3 +174,57 @@ def test_ramped_ports_closed_form_equals_cvode(wall):
             f.close()
     assert runs[1][-1, 2] > 2 and np.array_equal(runs[0][:, 2], runs[1][:, 2])
     assert np.max(np.abs(runs[0][:, :2] - runs[1][:, :2])) < 1e-8
+
+
+@pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
+@pytest.mark.parametrize("wall,sigma", [("compliant", 0.5), ("rigid", 0.3)])
+def test_fmi3_early_return_at_every_event_in_closed_form(wall, sigma):
+    """FMI 3.0 event mode with early return: the closed form stops at each wall event (the jump
+    left to the importer's event mode) at the oracle's crossing times."""
+    from fmpy import simulate_fmu
+
+    from tests.fmu_support import WALLS
+    lin = {k: FIG9[k] for k in ("nu", "Omega")}
+    start = dict(wall=WALLS[wall], sigma=sigma, Gamma=10.0, **on_orbit(sigma, 0.5), **lin, solver=1)
+    res = simulate_fmu(str(FMU3_PATH), fmi_type="CoSimulation", start_time=0.5, stop_time=10.5,
+                       output_interval=1.0, start_values=start, output=["u", "v", "impacts"],
+                       use_event_mode=True, early_return_allowed=True)
+    t = res["time"]
+    got = t[1:][np.diff(t) == 0.0]
+    osc = oracle(dict(FIG9, sigma=sigma, wall=WALLS[wall]))
+    events = osc.crossings(start["u0"], start["v0"], 0.5, 10.5)
+    want = np.array([te for te, kind in events if kind in ("enter", "exit", "impact")])
+    assert len(want) >= 1 and len(got) == len(want)
+    assert np.abs(got - want).max() < 1e-11
+    assert res["impacts"][-1] == sum(1 for _, kind in events if kind in ("enter", "impact"))
+
+
+def test_bare_c_driver_runs_the_fmus_code(tmp_path, fmu2):
+    """bench/cf_driver.c (the benchmark's bare C closed form) and the FMU in closed-form mode
+    compute the same orbit bit for bit: the benchmark's ratio compares the same code."""
+    import shutil
+    import subprocess
+
+    from tests.fmu_support import ROOT
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    src = ROOT / "fmu_src"
+    exe = tmp_path / "cf_driver"
+    subprocess.run([cc, "-O2", "-I", str(src), str(ROOT / "bench" / "cf_driver.c"),
+                    *(str(src / f) for f in ("closed_form.c", "sens.c", "model.c")), "-lm", "-o",
+                    str(exe)], check=True)
+    p = dict(UNDERDAMPED, wall=2, sigma=0.05)
+    x0 = {"u0": -0.5, "v0": 1.0}
+    out = tmp_path / "o.bin"
+    args = [str(exe), "0", "30", "1", "1", str(out)] + [f"{k}={float(v)!r}" for k, v in
+                                                         dict(p, **x0).items()]
+    subprocess.run(args, check=True, capture_output=True)
+    rec = np.fromfile(out).reshape(-1, 9)
+    assert rec[-1, 2] > 0  # impacts happened
+    fmu2.start(0.0, **p, **x0, solver=1, sensitivities=True)
+    for k in range(30):
+        fmu2.step(k + 1.0)
+        J, S = fmu2.jac()
+        assert np.array_equal(rec[k, :2], fmu2.state()) and rec[k, 2] == fmu2.impacts()
+        assert np.array_equal(rec[k, 3:7], J.ravel()) and np.array_equal(rec[k, 7:], S)
