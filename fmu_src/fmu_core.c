@@ -105,6 +105,17 @@ static double get_indicator(const CoreInstance *c) {
 }
 static double get_time(const CoreInstance *c) { return core_time(c); }
 static double get_contact_force(const CoreInstance *c) {
+    if (c->inputs_changed && !c->is_me) {
+        /* F_contact feeds through from u_wall (ModelStructure): with a new wall position not
+         * yet stepped over, report the force of the state the wall-jump rule gives now. */
+        ModelData m;
+        memcpy(&m, &c->m, sizeof m);
+        double y[2] = {m.u, m.v};
+        model_input_jump(&m, local_tau(c), y);
+        m.u = y[0];
+        m.v = y[1];
+        return model_contact_output(&m, local_tau(c));
+    }
     return model_contact_output(&c->m, local_tau(c));
 }
 /* Inputs read back as their value now (a ramp given by input derivatives included). */
