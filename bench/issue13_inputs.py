@@ -88,6 +88,11 @@ def fmu_rows() -> list[tuple[str, dict[str, Any], float]]:
                  "actions": INIT + [wall(0), EXIT, step(1e300)]}, 30))
     rows.append(("Omega = 1e10, doStep(0, 0.01)", {"interface": "fmi2cs",
                  "actions": INIT + [real("Omega", 1e10), EXIT, step(0.01)]}, 30))
+    # the same work inside the valid ranges: must end with the work limit, not run for hours
+    rows.append(("(in range) wall = 0, doStep(0, 1e8)", {"interface": "fmi2cs",
+                 "actions": INIT + [wall(0), EXIT, step(1e8)]}, 120))
+    rows.append(("(in range) Omega = 1e4, doStep(0, 10)", {"interface": "fmi2cs",
+                 "actions": INIT + [real("Omega", 1e4), EXIT, step(10.0)]}, 120))
     for h in (1e-300, 5e-324):
         rows.append((f"doStep(0, {h:g}), then doStep(t, 0.5)", {"interface": "fmi2cs",
                      "actions": INIT + [EXIT, step(h, must_pass=True), step(0.5, must_pass=True)]}, 30))

@@ -103,7 +103,10 @@ def write_section(out: dict, lyap: dict, worst: float, xtol, quick: bool) -> Non
     if len(out) == 2:
         L += [f"One-period FMU runs: exact {runs['exact']:,}, differences {runs['fd']:,} "
               f"(ratio {runs['fd'] / runs['exact']:.1f}); wall time {out['exact']['wall_s']:.1f} s against "
-              f"{out['fd']['wall_s']:.1f} s; largest edge difference {worst:.1e}.", ""]
+              f"{out['fd']['wall_s']:.1f} s (machine shared with other jobs: the ratio, not the seconds); "
+              f"largest edge difference {worst:.1e}"
+              + (": one bisection bracket, at a flip, where the differences' error in the multiplier near -1 "
+                 "turned a bisection decision" if worst > 0 else "") + ".", ""]
     L += ["Largest Lyapunov exponent of the stroboscopic map (QR method, per forcing period, +- standard error of 10 "
           "block means), and the check lambda_1 + lambda_2 = -nu + 2 log(r) impacts/period:", "",
           "| sigma | method | lambda_1 | lambda_2 | periods | sum - dissipation | wall s |", "|---|---|---|---|---|---|---|"]

@@ -105,6 +105,17 @@ static double get_indicator(const CoreInstance *c) {
 }
 static double get_time(const CoreInstance *c) { return core_time(c); }
 static double get_contact_force(const CoreInstance *c) {
+    if (c->inputs_changed && !c->is_me) {
+        /* F_contact feeds through from u_wall (ModelStructure): with a new wall position not
+         * yet stepped over, report the force of the state the wall-jump rule gives now. */
+        ModelData m;
+        memcpy(&m, &c->m, sizeof m);
+        double y[2] = {m.u, m.v};
+        model_input_jump(&m, local_tau(c), y);
+        m.u = y[0];
+        m.v = y[1];
+        return model_contact_output(&m, local_tau(c));
+    }
     return model_contact_output(&c->m, local_tau(c));
 }
 /* Inputs read back as their value now (a ramp given by input derivatives included). */
@@ -436,6 +447,7 @@ int core_reset(CoreInstance *c, const char *fn) {
     model_set_defaults(&c->m);
     c->start_time = 0.0;
     c->me_time = 0.0;
+    solver_start(&c->s, 0.0); /* time 0, origin 0 = the model's */
     c->s.needs_reinit = 1;
     c->s.pending = 0;
     c->inputs_changed = 0;
@@ -563,10 +575,14 @@ static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char
         !finite_within(m->t_impact, 2 * CORE_MAX_TIME))
         return "input derivatives or impact record not finite or out of range";
     if (!finite_within(s->start_time, CORE_MAX_TIME) ||
-        !finite_within(s->me_time, 2 * CORE_MAX_TIME) ||
-        !finite_within(s->origin, 2 * CORE_MAX_TIME) || s->origin != floor(s->origin) ||
-        (!c->is_me && m->origin != s->origin) || !(s->tau >= 0.0) || !finite_within(s->tau, 2 * CORE_MAX_TIME))
-        return "times not finite, out of range, or inconsistent";
+        !finite_within(s->me_time, 2 * CORE_MAX_TIME))
+        return "start or Model Exchange time not finite or beyond 1e9";
+    if (!finite_within(s->origin, 2 * CORE_MAX_TIME) || s->origin != floor(s->origin) ||
+        !(s->tau >= 0.0) || !finite_within(s->tau, 2 * CORE_MAX_TIME))
+        return "solver time (origin, local time) not finite, out of range or not integral";
+    /* the model's time origin follows the solver's while a Co-Simulation runs (model.h) */
+    if (!c->is_me && (st & (CS_STEP | CS_EVENT | CS_TERMINATED)) && m->origin != s->origin)
+        return "the model's and the solver's time origins differ";
     if (s->pending != 0 && (s->pending != 1 || c->is_me)) return "bad pending-event flag";
     if (s->inputs_changed != 0 && s->inputs_changed != 1) return "bad input flag";
     return NULL;

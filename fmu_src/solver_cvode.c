@@ -61,6 +61,12 @@ static int rhs(realtype t, N_Vector y, N_Vector ydot, void *user_data) {
     else
         model_derivatives((const ModelData *)user_data, t, N_VGetArrayPointer(y),
                           N_VGetArrayPointer(ydot));
+    /* A non-finite derivative (a trial state far outside the valid range) is reported as a
+     * recoverable failure: CVODE retries with a smaller step, and stops with a message if it
+     * persists, instead of carrying inf/NaN into its history. */
+    const double *dy = N_VGetArrayPointer(ydot);
+    for (sunindextype i = 0; i < N_VGetLength(ydot); ++i)
+        if (!isfinite(dy[i])) return 1;
     return 0;
 }
 

@@ -346,26 +346,27 @@ class ExactOscillator:
                     return st
                 u, v = seg.state(np.array([tau_end]))
                 return _State(T, float(u[0]), float(v[0]), st.mode)
-            t_c = st.t + tau
-            _, v = seg.state(np.array([tau]))
-            vc = float(v[0])
-            if self.wall == "compliant":
-                if st.mode == "out":
-                    events.append((t_c, "enter"))
-                    st = _State(t_c, 0.0, self.r * vc, "in")
-                    if st.v == 0.0 and self.net_wall_force(t_c) <= 0.0:
-                        # r = 0: the entry leaves the mass on the wall at rest, and the net
-                        # force pulls it out at once: a contact of zero duration. (Left "in",
-                        # its exit at tau = 0 is invisible to _first_crossing, which ignores
-                        # crossings in the first grid step of a start at rest, and the wall's
-                        # spring would act on u < 0.)
-                        events.append((t_c, "exit"))
-                        st = _State(t_c, 0.0, 0.0, "out")
-                else:
-                    events.append((t_c, "exit"))
-                    st = _State(t_c, 0.0, vc, "out")
-            else:
-                st = self._impact(_State(t_c, 0.0, vc, "out"), events)
+            st = self._cross(st, seg, tau, events)
+
+    def _cross(self, st: _State, seg: _Segment, tau: float, events: list) -> _State:
+        """The state just after the wall event found at st.t + tau on seg (appended to events)."""
+        t_c = st.t + tau
+        _, v = seg.state(np.array([tau]))
+        vc = float(v[0])
+        if self.wall == "rigid":
+            return self._impact(_State(t_c, 0.0, vc, "out"), events)
+        if st.mode == "in":
+            events.append((t_c, "exit"))
+            return _State(t_c, 0.0, vc, "out")
+        events.append((t_c, "enter"))
+        if self.r * vc == 0.0 and self.net_wall_force(t_c) <= 0.0:
+            # r = 0: the entry leaves the mass on the wall at rest, and the net force pulls it
+            # out at once: a contact of zero duration. (Left "in", its exit at tau = 0 would be
+            # invisible to _first_crossing, which ignores crossings in the first grid step of a
+            # start at rest, and the wall's spring would act on u < 0.)
+            events.append((t_c, "exit"))
+            return _State(t_c, 0.0, 0.0, "out")
+        return _State(t_c, 0.0, self.r * vc, "in")
 
     # ------------------------------------------------------------------ public API
     def strobe(self, u0: float, v0: float, times, t0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
@@ -407,6 +408,55 @@ class ExactOscillator:
             n_seen = len(events)
             states[k] = st.u, st.v
             counts[k] = count
+        return states, counts
+
+    def dense(self, u0: float, v0: float, times, t0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Exact states at many sorted times, as :meth:`strobe`, but fast for dense grids.
+
+        The crossings are searched once over [t0, times[-1]] and each smooth stretch between
+        two wall events is evaluated at all of its times at once (the closed form anchored at
+        the event, vectorised), so 10^4 communication points cost about one strobe call.
+        A time equal to an event time gets the state after the event, as in strobe.
+
+        Returns
+        -------
+        states : ndarray, shape (len(times), 2)
+        impacts : ndarray of int, shape (len(times),)
+            Cumulative wall entries/impacts since t0.
+        """
+        times = np.asarray(times, dtype=float).reshape(-1)
+        if times.size and (np.any(np.diff(times) < 0) or times[0] < t0):
+            raise ValueError("times must be sorted and >= t0")
+        events: list = []
+        st, events = self._initial_state(float(u0), float(v0), float(t0))
+        n = times.size
+        states = np.empty((n, 2))
+        counts = np.empty(n, dtype=int)
+        t_last = float(times[-1]) if n else float(t0)
+        i, count, n_seen = 0, 0, 0
+        while i < n:
+            count += sum(1 for _, kind in events[n_seen:] if kind in ("enter", "impact"))
+            n_seen = len(events)
+            if st.mode == "stuck":
+                j = int(np.searchsorted(times, st.t_release, side="left"))
+                states[i:j] = 0.0
+                counts[i:j] = count
+                i = j
+                events.append((st.t_release, "release"))
+                st = _State(st.t_release, 0.0, 0.0, "out")
+                continue
+            seg = _Segment(self._wall if st.mode == "in" else self._free, st.t, st.u, st.v)
+            tau = None
+            if self.wall != "none" and t_last > st.t:
+                tau = _first_crossing(seg, -1.0 if st.mode == "in" else 1.0, t_last - st.t)
+            j = n if tau is None else int(np.searchsorted(times, st.t + tau, side="left"))
+            if j > i:
+                u, v = seg.state(times[i:j] - st.t)
+                states[i:j, 0], states[i:j, 1] = u, v
+                counts[i:j] = count
+                i = j
+            if tau is not None:
+                st = self._cross(st, seg, tau, events)
         return states, counts
 
     def crossings(self, u0: float, v0: float, t0: float, t1: float) -> list[tuple[float, str]]:

@@ -11,7 +11,8 @@ cd "$root"
 log() { printf '[setup] %s\n' "$*" >&2; }
 
 # --- 1. Debian packages -------------------------------------------------------------------
-apt_pkgs=(libsundials-dev build-essential cmake zip valgrind)
+# libtbb12: the ecos co-simulation master (ecospy, a test dependency) links against it.
+apt_pkgs=(libsundials-dev build-essential cmake zip valgrind libtbb12)
 missing=()
 for p in "${apt_pkgs[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -62,4 +63,13 @@ if [[ -f $twin_src/build.py ]]; then
         .venv/bin/python "$twin_src/build.py" --out "$twin_fmu" >/dev/null
         log "twin FMU ready: $twin_fmu"
     fi
+fi
+
+# The AFM example's PI controller FMU (examples/afm): plain C, build/afm/AmplitudeController.fmu.
+if [[ -f examples/afm/controller/CMakeLists.txt ]]; then
+    if [[ ! -f build/afm/CMakeCache.txt ]]; then
+        cmake -S examples/afm/controller -B build/afm -DCMAKE_BUILD_TYPE=Release >/dev/null
+    fi
+    cmake --build build/afm >/dev/null
+    log "controller FMU ready: build/afm/AmplitudeController.fmu"
 fi

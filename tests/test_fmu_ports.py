@@ -287,6 +287,9 @@ def test_compliant_wall_jumping_into_the_mass_starts_a_contact_without_a_jump(fm
     fmu.step_to(0.05)
     u, v = fmu.state()
     fmu.set(u_wall=u - 0.01)
+    # direct feedthrough: F_contact answers the new wall position before the next step
+    k2 = 1000.0 * UNDERDAMPED["Omega"] ** 2
+    assert fmu.get("F_contact") == pytest.approx(k2 * 0.01, rel=1e-9)
     fmu.step_to(0.05 + 1e-12)
     assert fmu.in_contact() and fmu.impacts() == 0
     assert fmu.state() == pytest.approx([u, v], abs=1e-9)  # no jump in the state

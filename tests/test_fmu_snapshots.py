@@ -195,3 +195,26 @@ def test_fmi3_refuses_fmi2_states_and_corrupted_ones(running):
     finally:
         s.terminate()
         s.freeInstance()
+
+
+def test_own_states_always_round_trip_after_reset():
+    """The fuzzer's F12 family: an instance's own state must always be accepted back, here
+    after a run started at a negative time and a reset (the time origins were left apart)."""
+    s = LoggedSlave(name="own")
+    try:
+        s.start(t0=-5.962808076885404)
+        s.step_to(-4.5)
+        s.slave.reset()
+        st = s.slave.getFMUstate()
+        back = s.slave.deSerializeFMUstate(s.slave.serializeFMUstate(st))
+        s.slave.setFMUstate(back)
+        s.slave.freeFMUstate(st)
+        s.slave.freeFMUstate(back)
+        s.start(t0=2.5)
+        s.step_to(3.7)
+        st = s.slave.getFMUstate()
+        back = s.slave.deSerializeFMUstate(s.slave.serializeFMUstate(st))
+        s.slave.setFMUstate(back)
+        s.step_to(4.0)
+    finally:
+        s.close()

@@ -30,9 +30,7 @@ CORPUS = sorted((ROOT / "tests" / "fuzz_corpus").glob("*.json"))
 # Findings still open in fmu_src (see the "finding" field of each corpus file and
 # /work/coord/findings_fuzz.md); an entry here marks its corpus files xfail (not strict) until
 # the fix lands, then it is deleted.
-OPEN_FINDINGS: dict[str, str] = {
-    "F12": "core: an ME instance's own state past t = 1 is refused on deserialisation",
-}
+OPEN_FINDINGS: dict[str, str] = {}
 
 needs_toolchain = pytest.mark.skipif(shutil.which("cmake") is None or shutil.which("gcc") is None,
                                      reason="cmake/gcc missing (scripts/setup.sh installs them)")
@@ -66,7 +64,6 @@ def test_corpus(asan_build: Path, path: Path) -> None:
 
 
 @needs_toolchain
-@pytest.mark.xfail("F12" in OPEN_FINDINGS, reason="F12 open (found by this test)", strict=False)
 def test_fuzz(asan_build: Path) -> None:
     n = int(os.environ.get("IMPACT_FUZZ_SEQUENCES", "2000"))
     seed = int(os.environ.get("IMPACT_FUZZ_SEED", "13"))

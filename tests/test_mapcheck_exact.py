@@ -159,3 +159,26 @@ def test_stepwise_strobing_equals_one_call():
     last, c2 = osc.strobe(-0.5, 1.0, times[-1:])
     assert np.max(np.abs(all_at_once[-1] - last[0])) < 1e-11
     assert c1[-1] == c2[-1]
+
+
+FIG9_NU_OMEGA = dict(nu=FIG9[0], Omega=FIG9[1])
+
+
+@pytest.mark.parametrize("wall,r,sigma,lin,Gamma,u0", [
+    ("compliant", 0.9, 0.5, FIG9_NU_OMEGA, 10.0, -2.5),
+    ("rigid", 0.9, 0.5, FIG9_NU_OMEGA, 10.0, -2.5),
+    ("none", 0.9, 0.5, FIG9_NU_OMEGA, 10.0, -2.5),
+    ("rigid", 0.5, 10.0, dict(nu=0.196, Omega=7.368), 10.0, -0.03),  # chatter and sticking
+    ("compliant", 0.0, 0.2, FIG9_NU_OMEGA, 10.0, -1.0),  # r = 0: contacts of zero duration
+])
+def test_dense_evaluation_equals_strobe(wall, r, sigma, lin, Gamma, u0):
+    """ExactOscillator.dense (one crossing search, vectorised stretches) against strobe (one
+    search per requested time), including times 1e-9 either side of wall events."""
+    osc = ExactOscillator(lin["nu"], lin["Omega"], sigma, r=r, Gamma=Gamma, wall=wall)
+    times = np.sort(np.random.default_rng(3).uniform(0.5, 8.5, 200))
+    events = [t for t, _ in osc.crossings(u0, 0.0, 0.5, 8.5)]
+    times = np.union1d(times, [t + d for t in events[:5] for d in (-1e-9, 1e-9)])
+    a, ca = osc.strobe(u0, 0.0, times, t0=0.5)
+    b, cb = osc.dense(u0, 0.0, times, t0=0.5)
+    assert np.max(np.abs(a - b)) < 1e-11
+    np.testing.assert_array_equal(ca, cb)
