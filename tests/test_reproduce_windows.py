@@ -74,7 +74,8 @@ def test_scans_confirm_the_shooting(run) -> None:
             assert cf["scan_upper"] <= hi * (1 + h) + 1e-12, (M, cf)
 
 
-@pytest.mark.parametrize("extra", [["--nu", "3.0"], ["--r", "1.5"], ["--Gamma", "-1"], ["--wall", "soft"]])
+@pytest.mark.parametrize("extra", [["--nu", "3.0"], ["--r", "1.5"], ["--Gamma", "-1"], ["--wall", "soft"],
+                                   ["--map", "soft"]])
 def test_bad_parameters_are_input_errors(extra, tmp_path) -> None:
     """One line on stderr, exit status 2 (argparse's choices, or the harness's input check),
     and nothing run."""
@@ -97,3 +98,20 @@ def test_rigid_wall_problem() -> None:
     st = default_settings(pr, quick=True)
     assert st.sigma_range[0] < st.scan_grid[0] < st.scan_grid[-1] < st.sigma_range[1]
     assert set(st.xtol) <= {1, 2, 3} and all(0 < t <= 1e-4 for t in st.xtol.values())
+
+
+def test_map_coefficients_follow_the_wall_or_are_chosen() -> None:
+    """By default the maps take the wall's coefficients ((48) compliant, (39) rigid); --map
+    compliant-high takes (39) for a stiff compliant wall (high-velocity impacts): then rho per
+    sigma is the rigid wall's, smaller by (1 - r)^2 / (1 + r)^2."""
+    from mapcheck.coeffs import coefficients
+
+    soft = WindowProblem.from_alpha_gamma(0.5, 0.05, r=0.8)
+    stiff = WindowProblem.from_alpha_gamma(0.5, 0.05, r=0.8, map_wall="compliant-high", Gamma=1e4)
+    rigid = WindowProblem.from_alpha_gamma(0.5, 0.05, r=0.8, wall="rigid")
+    assert (soft.coefficient_eq(), stiff.coefficient_eq(), rigid.coefficient_eq()) == ("(48)", "(39)", "(39)")
+    assert stiff.fmu_params()["wall"] == 1 and stiff.fmu_params()["Gamma"] == 1e4
+    ratio = stiff.coefficients().rho_per_sigma / soft.coefficients().rho_per_sigma
+    assert ratio == pytest.approx((1 - 0.8) ** 2 / (1 + 0.8) ** 2, rel=1e-12)
+    assert stiff.coefficients().rho_per_sigma == coefficients(stiff.nu, stiff.Omega, 0.8, "rigid").rho_per_sigma
+

@@ -48,6 +48,8 @@ __all__ = ["WindowProblem", "WindowSettings", "compare_windows", "run_windows", 
 
 #: FMU ``wall`` parameter codes.
 WALL_CODES = {"compliant": 1, "rigid": 2}
+#: Coefficients of the maps: "auto" (from the wall), or a ``wall`` of :func:`mapcheck.coeffs.coefficients`.
+MAP_WALLS = ("auto", "compliant", "compliant-high", "rigid")
 #: Map variants (key in the JSON) -> label; the coefficient equation depends on the wall.
 VARIANT_KEYS = ("theory_64", "map", "map_A_tilde")
 #: Classification tolerance of the scans (relative to the orbit's size ~ 1 + sigma).
@@ -80,10 +82,13 @@ class WindowProblem:
     Gamma: float = 10.0
     M_max: int = 4
     theta: float = 0.5
+    map_wall: str = "auto"
 
     def __post_init__(self) -> None:
         if self.wall not in WALL_CODES:
             raise HarnessInputError("--wall", f"must be compliant or rigid, got {self.wall!r}")
+        if self.map_wall not in MAP_WALLS:
+            raise HarnessInputError("--map", f"must be one of {', '.join(MAP_WALLS)}, got {self.map_wall!r}")
         if not (0.0 < self.r <= 1.0):
             raise HarnessInputError("--r", f"must be in (0, 1], got {self.r}")
         if self.wall == "compliant" and not self.Gamma > 0:
@@ -109,8 +114,15 @@ class WindowProblem:
         a, g = alpha_gamma(self.nu, self.Omega)
         return float(a), float(g)
 
+    @property
+    def map_coefficients_wall(self) -> str:
+        """The ``wall`` of :func:`mapcheck.coeffs.coefficients` for the maps: by default the FMU's
+        wall ((48) low-velocity map for compliant, (39) for rigid); ``map_wall`` overrides it,
+        e.g. "compliant-high" ((39): high-velocity impacts on a stiff compliant wall)."""
+        return self.wall if self.map_wall == "auto" else self.map_wall
+
     def coefficients(self) -> Coefficients:
-        return coefficients(self.nu, self.Omega, self.r, self.wall)
+        return coefficients(self.nu, self.Omega, self.r, self.map_coefficients_wall)
 
     def fmu_params(self) -> dict[str, Any]:
         p: dict[str, Any] = {"nu": self.nu, "Omega": self.Omega, "r": self.r, "wall": WALL_CODES[self.wall]}
@@ -124,7 +136,7 @@ class WindowProblem:
         return f"(alpha, gamma) = ({a:.4g}, {g:.4g}), r = {self.r:g}, {wall}"
 
     def coefficient_eq(self) -> str:
-        return "(48)" if self.wall == "compliant" else "(39)"
+        return "(48)" if self.map_coefficients_wall == "compliant" else "(39)"
 
 
 @dataclass
@@ -291,6 +303,7 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
         "timings_s": timings,
         "parameters": {
             "alpha": a, "gamma": g, "nu": problem.nu, "Omega": problem.Omega, "r": problem.r, "wall": problem.wall,
+            "map_coefficients": f"{problem.coefficient_eq()} (coefficients wall={problem.map_coefficients_wall!r})",
             "Gamma": problem.Gamma if problem.wall == "compliant" else None, "M_max": problem.M_max,
             "rho_per_sigma": c.rho_per_sigma, "theta": problem.theta,
             "sigma_grid": [float(grid[0]), float(grid[-1]), int(len(grid))], "transient": st.transient,
@@ -425,7 +438,7 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
                     Omega: float | None = None, r: float = 0.9, wall: str = "compliant", Gamma: float = 10.0,
                     M_max: int = 4, quick: bool = False, out: str | Path = "results/windows",
                     workers: int | None = None, progress: bool = False, fmu_path: str | None = None,
-                    solver: str = "cvode") -> dict[str, Any]:
+                    solver: str = "cvode", map_wall: str = "auto") -> dict[str, Any]:
     """Window edges of the maps and of the ODE (FMU) for one parameter set.
 
     Give either (``alpha``, ``gamma``) of the map (9) or (``nu``, ``Omega``) of the ODE.
@@ -433,13 +446,15 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     returns the result (the JSON's content): ``result["windows"]["ode"][M] = (lo, hi)``
     (an edge None: unresolved, or no upper edge for M = 1), the same for ``"theory_64"``,
     ``"map"``, ``"map_A_tilde"``; ``result["edge_kinds"]["ode"]``, ``result["parameters"]``.
+    ``map_wall`` chooses the maps' coefficients: "auto" follows ``wall`` ((48) compliant, (39)
+    rigid); "compliant-high" uses (39) with a compliant wall (high-velocity impacts, stiff wall).
 
     A worker pool is used for the scans and the shooting: call it from a script under
     ``if __name__ == "__main__":`` (the workers re-import the main module).
     """
     if (alpha is None) != (gamma is None) or (nu is None) != (Omega is None) or (alpha is None) == (nu is None):
         raise HarnessInputError("--alpha/--gamma, --nu/--Omega", "give exactly one pair: (alpha, gamma) or (nu, Omega)")
-    kw = dict(r=float(r), wall=wall, Gamma=float(Gamma), M_max=int(M_max))
+    kw = dict(r=float(r), wall=wall, Gamma=float(Gamma), M_max=int(M_max), map_wall=map_wall)
     problem = (WindowProblem.from_alpha_gamma(float(alpha), float(gamma), **kw) if alpha is not None
                else WindowProblem(float(nu), float(Omega), **kw))
     if workers is not None and workers < 1:
@@ -454,6 +469,8 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
 def _command_line(problem: WindowProblem, quick: bool, out: Any) -> str:
     a, g = problem.alpha_gamma
     wall = f"--wall compliant --Gamma {problem.Gamma:g}" if problem.wall == "compliant" else "--wall rigid"
+    if problem.map_wall != "auto":
+        wall += f" --map {problem.map_wall}"
     return (f"windows --nu {problem.nu!r} --Omega {problem.Omega!r} --r {problem.r:g} {wall} --M-max {problem.M_max}"
             f"{' --quick' if quick else ''} --out {out}")
 
@@ -475,6 +492,10 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     p.add_argument("--wall", choices=sorted(WALL_CODES), default="compliant",
                    help="compliant (map coefficients (48)) or rigid ((39)); default compliant")
     p.add_argument("--Gamma", type=float, default=10.0, help="compliant wall stiffness (default 10)")
+    p.add_argument("--map", choices=MAP_WALLS, default="auto", dest="map_wall",
+                   help="the maps' coefficients: auto (from --wall: (48) compliant, (39) rigid), or "
+                   "compliant ((48), low-velocity impacts), compliant-high ((39), high-velocity impacts on a stiff "
+                   "compliant wall), rigid ((39))")
     p.add_argument("--M-max", type=int, default=4, dest="M_max", help="highest period (default 4)")
     p.add_argument("--out", "-o", metavar="DIR", default="results/windows", help="output directory")
     p.add_argument("--quick", action="store_true", help="coarse scans and tolerances (seconds to a minute)")
@@ -490,7 +511,8 @@ def cmd_windows(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     res = compare_windows(args.alpha, args.gamma, nu=args.nu, Omega=args.Omega, r=args.r, wall=args.wall,
                           Gamma=args.Gamma, M_max=args.M_max, quick=args.quick, out=args.out, workers=args.workers,
-                          progress=not args.no_progress, fmu_path=args.fmu, solver=args.solver)
+                          progress=not args.no_progress, fmu_path=args.fmu, solver=args.solver,
+                          map_wall=args.map_wall)
     print(res["verdict"])
     print(markdown_window_table(res["windows"]))
     print(f"wrote {Path(args.out) / 'report.md'} and {Path(args.out) / 'windows.json'} "

@@ -108,11 +108,33 @@ class Generator:
             vals = [rng.random() < 0.5 for _ in chosen]
         return {"op": "set", "kind": kind, "vrs": vrs, "values": vals}
 
+    def regime(self, rng: random.Random) -> list[dict[str, Any]]:
+        """Sets of a physically meaningful operating point (damping regime, wall model, solver,
+        sensitivities), so that valid runs reach every event and solver path, not only the
+        default one. Names missing from the description are skipped."""
+        by_name = {v.name: v for v in self.desc.variables}
+        nu, omega = rng.choice(((0.196, 7.368), (100.0, 2 ** 0.5), (4.605170185988091, 0.3059),
+                                (1.0, 3.0), (0.0, 5.0), (2.0, 1.0)))
+        values = {"nu": nu, "Omega": omega, "sigma": rng.choice((-0.5, 0.0, 0.2, 1.0, 10.0)),
+                  "r": rng.choice((0.0, 0.5, 0.9, 1.0)), "Gamma": rng.choice((10.0, 1e3, 1e6)),
+                  "wall": rng.randrange(3), "solver": rng.randrange(2),
+                  "sensitivities": rng.random() < 0.5, "u0": rng.uniform(-2.0, 0.0),
+                  "v0": rng.uniform(-3.0, 3.0)}
+        acts = []
+        for name, x in values.items():
+            v = by_name.get(name)
+            if v is not None and rng.random() < 0.8:
+                val: Any = float(x) if v.kind == "real" else (bool(x) if v.kind == "bool" else int(x))
+                acts.append({"op": "set", "kind": v.kind, "vrs": [v.vr], "values": [val]})
+        return acts
+
     def prefix(self, rng: random.Random, interface: str) -> list[dict[str, Any]]:
         start = rng.choice((0.0, 0.0, 0.0, rng.uniform(-10, 10), 1e6, rng.choice(EXTREMES)))
         tol = rng.choice((None, None, 1e-8, 1e-4, 1e-12, rng.choice(EXTREMES)))
         acts: list[dict[str, Any]] = [{"op": "setup", "start": start, "tol": tol},
                                       {"op": "enter_init", "start": start, "tol": tol}]
+        if rng.random() < 0.5:
+            acts += self.regime(rng)
         for _ in range(rng.randint(0, 4)):
             acts.append(self.set_action(rng, realistic=rng.random() < 0.7))
         acts.append({"op": "exit_init"})
