@@ -96,6 +96,7 @@ int main(int argc, char **argv) {
             if (closed_form_advance(&s, &m, t0 + (double)(k + 1), 0) != 0) {
 #endif
                 fprintf(stderr, "period %ld: %s\n", k, s.msg);
+                free(out);
                 return 1;
             }
             double *o = out + 9 * k;
