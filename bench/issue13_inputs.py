@@ -149,6 +149,54 @@ def run_cli(args: list[str], timeout: float, cwd: Path, tmpdir: Path) -> dict[st
             "traceback": "Traceback" in err, "maxrss_mb": ru.ru_maxrss / 1024 if ru else 0.0}
 
 
+def _session(sid: int) -> list[str]:
+    """Command lines of the live processes of session `sid` (zombies excluded)."""
+    out = []
+    for proc in Path("/proc").iterdir():
+        if not proc.name.isdigit():
+            continue
+        try:
+            stat = (proc / "stat").read_text()
+            fields = stat[stat.rindex(")") + 2:].split()
+            if int(fields[3]) == sid and fields[0] != "Z":
+                out.append((proc / "cmdline").read_bytes().replace(b"\0", b" ").decode()[:60])
+        except (OSError, ValueError, IndexError):
+            continue
+    return out
+
+
+def interrupt_run(sig: signal.Signals, tmp: Path, tmpdir: Path) -> str:
+    """A 2-worker sweep, signalled once its workers run: what is left 3 s later."""
+    o = tmp / f"kill_{sig.name}.nc"
+    p = subprocess.Popen([sys.executable, "-m", "harness", "sweep", "--num", "60", "--workers", "2",
+                          "--transient", "100", "--samples", "50", "--out", str(o), "--no-plot",
+                          "--no-progress"], cwd=tmp, stdout=subprocess.DEVNULL,
+                         stderr=subprocess.PIPE, text=True, preexec_fn=os.setsid,
+                         env={**os.environ, "PYTHONPATH": str(ROOT), "TMPDIR": str(tmpdir)})
+    t0 = time.perf_counter()
+    while len(_session(p.pid)) < 3 and time.perf_counter() - t0 < 30 and p.poll() is None:
+        time.sleep(0.1)
+    time.sleep(1.0)
+    n_before = len(_session(p.pid))
+    if p.poll() is not None:
+        return f"finished before the signal (exit {p.returncode}): {p.stderr.read()[-200:]}"
+    if sig == signal.SIGKILL:
+        os.kill(p.pid, sig)  # the main process only, as a crash or the OOM killer would
+    else:
+        os.killpg(p.pid, sig)  # Ctrl-C reaches the whole foreground group
+    try:
+        _, err = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        err = "(no exit within 60 s)"
+    time.sleep(3.0)
+    left = _session(p.pid)
+    if left:
+        os.killpg(p.pid, signal.SIGKILL)  # clean up what we started
+    first = next((ln for ln in err.splitlines() if ln.strip()), "")[:120]
+    return (f"{n_before} processes before, exit {p.returncode}, {len(left)} left 3 s later"
+            f"{' (' + '; '.join(left) + ')' if left else ''}; stderr: {first}")
+
+
 def cli_rows(tmp: Path) -> list[tuple[str, list[str]]]:
     fmu = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
     garbage = tmp / "garbage.fmu"
@@ -220,6 +268,10 @@ def main() -> int:
             lines.append(f"| simulate --out /tmp | {r['rc']} | {r['seconds']:.1f} | {r['lines']} | "
                          f"{'yes' if r['traceback'] else 'no'} | {r['maxrss_mb']:.0f} | {r['first']}; "
                          f"/tmp.tmp left: {'yes' if left else 'no'} |")
+            for sig in (signal.SIGKILL, signal.SIGINT):
+                lines.append(f"| sweep --workers 2, {sig.name} once running | "
+                             f"{interrupt_run(sig, tmp, private)} | | | | | |")
+                print(lines[-1], flush=True)
             left_tmp = sorted(p.name for p in private.iterdir())
             lines.append(f"\nleft in the CLI's TMPDIR by these runs: {left_tmp or 'nothing'}")
     text = "\n".join(lines)
