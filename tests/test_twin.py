@@ -5,7 +5,8 @@
   bounds) are exactly the C FMU's, so the harness drives either unchanged.
 * Cross-check: both FMUs are driven by the *harness* (``harness.simulator.FmuSimulator``, the
   same code path for both) over 50 periods for the compliant, rigid and no wall; stroboscopic
-  states agree to 1e-7 and impact counts exactly.  Also with sigma tuned mid-run.
+  states agree to 5e-8 (``TWIN_AGREEMENT``: not bit for bit since the C FMU's one-step CVODE
+  loop) and impact counts exactly.  Also with sigma tuned mid-run.
 * Oracle: the twin alone against ``mapcheck.exact.ExactOscillator`` (closed form, sharing no
   code with either FMU): one-period maps, 1e-9-deep grazing contacts at several phases, rigid
   chatter ending in sticking, the local time origin at t = 1e6.
@@ -16,6 +17,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import os
 import subprocess
 import sys
 import time
@@ -191,6 +193,15 @@ def test_interface_is_the_c_fmus(twin_fmu: Path, c_fmu: Path) -> None:
 # ---------------------------------------------------------------------------------------------
 # cross-check against the C FMU, both driven by the harness
 # ---------------------------------------------------------------------------------------------
+#: How close the twin and the C FMU must be over 50 periods.  They were bit for bit while both
+#: stopped CVODE at each communication point; since the time-grid fix (issue 14) the C FMU
+#: steps CVODE in one-step mode and reads each communication point from its interpolant, the
+#: twin still stops at it (scikit-sundae exposes no CVodeGetDky), so the step sequences, and
+#: the last digits, differ.  Same model, events and tolerances: they agree to the integrators'
+#: own error (each is within 1e-8 per period of the closed form, tested separately), which is
+#: what this bound says; the twin is a packaging cross-check, not an independent physics check.
+TWIN_AGREEMENT = 5e-8
+
 XCASES = [
     # wall, sigma, linear part, Gamma, r, start state at THETA (None: on the wall-free orbit)
     ("compliant", 0.2, FIG9, 10.0, 0.9, None),            # period-3 window of Fig. 9
@@ -214,7 +225,9 @@ def test_twin_agrees_with_c_fmu_over_50_periods(twin_fmu, c_fmu, wall, sigma, li
     record_property("us_per_period_twin", round(t_cost * 1e6, 1))
     diff = np.max(np.abs(t_states - c_states))
     record_property("max_state_difference", float(diff))
-    assert diff <= 1e-7, f"max state difference {diff:.2e}"
+    # Not bit for bit (see TWIN_AGREEMENT): measured 1.4e-10 (no wall) .. 2.1e-8 (rigid wall,
+    # contacts 1e-4 deep, where the stroboscopic map's square-root singularity amplifies)
+    assert diff <= TWIN_AGREEMENT, f"max state difference {diff:.2e}"
     np.testing.assert_array_equal(t_counts, c_counts)
     if wall != "none":
         assert c_counts[-1] > 0, "the case was meant to hit the wall"
@@ -232,7 +245,7 @@ def test_twin_agrees_with_c_fmu_through_chatter_and_sticking(twin_fmu, c_fmu) ->
     params = dict(wall=WALLS["rigid"], sigma=sigma, r=r, **FIG9)
     t_states, t_counts, _ = harness_strobe(twin_fmu, params, THETA, state, 10)
     c_states, c_counts, _ = harness_strobe(c_fmu, params, THETA, state, 10)
-    assert np.max(np.abs(t_states - c_states)) <= 1e-7
+    assert np.max(np.abs(t_states - c_states)) <= 1e-9  # measured 1.7e-10
     osc = ExactOscillator(FIG9["nu"], FIG9["Omega"], sigma, r=r, wall="rigid")
     _, exact_counts = osc.strobe(*state, THETA + np.arange(1, 11), THETA)
     np.testing.assert_array_equal(t_counts, exact_counts)
@@ -248,7 +261,7 @@ def test_twin_agrees_with_c_fmu_when_sigma_is_tuned_mid_run(twin_fmu, c_fmu) -> 
     state = on_orbit(THETA, 0.2)
     c_states, c_counts, _ = harness_strobe(c_fmu, params, THETA, state, 40, tune)
     t_states, t_counts, _ = harness_strobe(twin_fmu, params, THETA, state, 40, tune)
-    assert np.max(np.abs(t_states - c_states)) <= 1e-7
+    assert np.max(np.abs(t_states - c_states)) <= 1e-9  # measured 1.7e-10
     np.testing.assert_array_equal(t_counts, c_counts)
     # the change did something: impacts per period differ between the windows
     per_period = np.diff(c_counts)
@@ -665,3 +678,38 @@ def test_non_python_importer_with_ld_preload(twin_fmu: Path, tmp_path: Path) -> 
         np.testing.assert_allclose(got, s.state(), rtol=0, atol=1e-12)
     finally:
         s.close()
+
+
+@pytest.mark.skipif(os.environ.get("IMPACT_VALGRIND") != "1",
+                    reason="about 70 s under valgrind: set IMPACT_VALGRIND=1")
+def test_c_importer_exit_has_no_use_after_free(twin_fmu: Path, tmp_path: Path) -> None:
+    """pythonfmu 0.7's library destructor reads the freed PyState at exit in a C host too (an
+    abort in about one fmusim run in sixty).  The twin registers pythonfmu's
+    finalizePythonInterpreter as a C exit handler there (ImpactOscillatorPy
+    ._guard_pythonfmu_exit); valgrind must show no invalid access in it.  (Python's own
+    teardown under valgrind reports a read in scipy's _uarray module dealloc and the dynamic
+    loader's rpath strncmp, both outside pythonfmu; they are not asserted on.)"""
+    import shutil
+    import sysconfig
+
+    cc, vg = shutil.which("cc") or shutil.which("gcc"), shutil.which("valgrind")
+    if cc is None or vg is None:
+        pytest.skip("needs a C compiler and valgrind")
+    src, exe = tmp_path / "importer.c", tmp_path / "importer"
+    src.write_text(_C_IMPORTER)
+    subprocess.run([cc, "-O1", "-I", str(ROOT / "fmu_src" / "include" / "fmi2"), str(src),
+                    "-o", str(exe), "-ldl"], check=True, capture_output=True)
+    unzipdir = Path(extract(str(twin_fmu), unzipdir=str(tmp_path / "fmu")))
+    guid = read_model_description(str(twin_fmu)).guid
+    libpython = Path(sysconfig.get_config_var("LIBDIR")) / sysconfig.get_config_var("INSTSONAME")
+    env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path), "LD_PRELOAD": str(libpython),
+           "PYTHONPATH": sysconfig.get_paths()["purelib"], "PYTHONHOME": sys.base_prefix,
+           "PYTHONMALLOC": "malloc"}
+    run = subprocess.run([vg, "-q", str(exe),
+                          str(unzipdir / "binaries" / "linux64" / "ImpactOscillatorPy.so"), guid,
+                          (unzipdir / "resources").as_uri()],
+                         env=env, capture_output=True, text=True, timeout=600)
+    assert run.returncode == 0 and "state" in run.stdout, run.stdout[-2000:] + run.stderr[-2000:]
+    blocks = run.stderr.split("==\n")
+    bad = [b for b in blocks if "Invalid" in b and "finalizePythonInterpreter" in b]
+    assert not bad, bad[0]

@@ -100,23 +100,45 @@ def _guard_pythonfmu_exit(resources: Optional[str]) -> None:
     Python process that instantiated the FMU does this; in our pytest runs about one process in
     fifteen to twenty aborted at exit ("corrupted double-linked list", exit status 134).
 
-    Calling the exported ``finalizePythonInterpreter`` once from a Python ``atexit`` handler
-    empties the global before the C++ destructors run, so both later steps see an empty
-    pointer.  Only where the importer is a Python process (``sys.orig_argv`` non-empty): when
-    pythonfmu itself started the interpreter (a non-Python importer), that same function
-    finalises Python, which must not be re-entered from an atexit handler.
+    The cure is to call the exported ``finalizePythonInterpreter`` once *before* the C++
+    destructors run: it empties the global, so both later steps see an empty pointer.
+
+    - Python importer (``sys.orig_argv`` non-empty): from a Python ``atexit`` handler (Python
+      finalises before the C exit handlers run).
+    - C/C++ importer (pythonfmu started the interpreter, ``sys.orig_argv`` empty; the same
+      abort, about one run in sixty with fmusim): Python code must not finalise the interpreter
+      it runs in, so the C function itself is registered as a C exit handler (``__cxa_atexit``).  C exit
+      handlers run in reverse order of registration, and this one is registered at the first
+      ``fmi2Instantiate``, after the library's static shared_ptr was constructed, so it runs
+      before that object's destructor: the interpreter is finalised (on pythonfmu's own
+      thread, as in a normal unload) and the pointer emptied while its memory is still valid.
+      The binary is never unloaded (above), so the function pointer stays valid until exit.
 
     Parameters
     ----------
     resources : str or None
         The FMU's unpacked ``resources`` folder (pythonfmu's ``resources`` argument).
     """
-    if not (sys.platform.startswith("linux") and getattr(sys, "orig_argv", None) and resources):
+    if not (sys.platform.startswith("linux") and resources):
         return
     lib = str(Path(resources).resolve().parent / "binaries" / "linux64" / "ImpactOscillatorPy.so")
     if lib in _EXIT_GUARDED:
         return
     _EXIT_GUARDED.add(lib)
+
+    if not getattr(sys, "orig_argv", None):  # a C/C++ importer: libc's atexit, see above
+        try:
+            fmu = ctypes.CDLL(lib, mode=os.RTLD_NOLOAD | os.RTLD_NOW)
+            # glibc exports no dynamic "atexit" (it is a static stub in libc_nonshared.a
+            # around __cxa_atexit); register with __cxa_atexit, no argument and no DSO (run
+            # at exit).  The extra argument it passes is ignored by a function of no arguments.
+            libc = ctypes.CDLL(None)
+            libc.__cxa_atexit.argtypes = [ctypes.c_void_p, ctypes.c_void_p, ctypes.c_void_p]
+            libc.__cxa_atexit(ctypes.cast(fmu.finalizePythonInterpreter, ctypes.c_void_p),
+                              None, None)
+        except (OSError, AttributeError):
+            pass
+        return
 
     def release() -> None:
         try:  # RTLD_NOLOAD: only the copy that is loaded, never a fresh one at exit
