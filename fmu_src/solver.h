@@ -64,7 +64,10 @@ int solver_advance(Solver *s, ModelData *m, double t_end);
 /* As solver_advance, but with stop_at_event it stops at the first wall event in (now, t_end]
  * and returns 1: solver_time() is the event time, the model holds the state at the crossing
  * before the jump, and s->pending is set. The jump is applied by solver_apply_pending (FMI 3.0
- * event mode), or at the start of the next advance. stop_at_event = 0 is solver_advance. */
+ * event mode), or at the start of the next advance. stop_at_event = 0 is solver_advance.
+ * With m->solver == SOLVER_CLOSED_FORM both hand over to closed_form_advance (closed_form.h):
+ * same contract, no CVODE. With m->sensitivities the state carries J and S (sens.h); every
+ * jump goes through sens_event_update (its saltation matrix). */
 int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event);
 /* Applies a pending event's jump (no-op without one); returns 1 if there was one. */
 int solver_apply_pending(Solver *s, ModelData *m);

@@ -29,7 +29,8 @@ def test_example_runs_in_one_command(tmp_path: Path) -> None:
     assert np.all(np.abs(rows[3.0] - 3.0) < 1e-6)
     # below: the loop pushes the surface into the orbit and the amplitude jumps by > 0.1
     assert any(np.max(np.abs(rows[a] - 3.0)) > 0.1 for a in rows if a <= 2.92)
-    # the open-loop curve: the free amplitude above grazing, a drop within 0.02 below it
+    # the open-loop diagram: the free amplitude above grazing, scattered below it
     curve = data["open_loop"]
     w, A = np.array(curve["u_wall"]), np.array(curve["amplitude"])
     assert np.all(np.abs(A[w > 0.51] - 3.0) < 1e-6)
+    assert np.ptp(A[w < 0.45]) > 0.1  # below grazing: no longer the free period-1 orbit

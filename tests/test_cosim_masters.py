@@ -169,3 +169,80 @@ def test_closed_loop_matches_monolithic_in_each_master(master: str, tmp_path: Pa
     err, ref = _run(master, True, 12.0, tmp_path)
     assert np.ptp(ref.u_wall) > 0.1, "the loop was meant to move the wall"
     assert max(err.values()) <= 1e-6, err
+
+
+# ------------------------------------------------------------------------- the controller FMU
+def test_controller_fmu_is_the_reference_law_bit_for_bit() -> None:
+    """The C controller against monolithic.ControllerState on the same input sequence (a
+    swept sine sampled at t += h, windows of several lengths and phases, a step that is not a
+    divisor of T): the same wall positions and amplitudes to the last bit."""
+    from fmpy import extract
+    from fmpy.fmi2 import FMU2Slave
+
+    from examples.afm.monolithic import ControllerState
+
+    md = read_model_description(str(CTRL_FMU))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    d = extract(str(CTRL_FMU))
+    for T, theta, h, t0 in [(1.0, 0.4, 0.01, 0.0), (0.5, 0.1, 0.003, 0.25), (2.0, 0.0, 0.07, 1.0)]:
+        ctrl = Controller(A_set=1.7, Kp=0.2, Ki=0.5, T=T, theta=theta, u_wall_start=0.3)
+        s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier="AmplitudeController",
+                      instanceName="c")
+        s.instantiate()
+        s.setupExperiment(startTime=t0)
+        s.enterInitializationMode()
+        for k in ("A_set", "Kp", "Ki", "T", "theta", "u_wall_start"):
+            s.setReal([vr[k]], [getattr(ctrl, k)])
+        s.exitInitializationMode()
+        ref = ControllerState(ctrl, t_start=t0)
+        t, moves = t0, 0
+        for k in range(int(10 * T / h)):
+            u = (1.0 + 0.05 * t) * math.sin(2 * math.pi * 1.3 * t)
+            s.setReal([vr["u"]], [u])
+            s.doStep(t, h)
+            moves += ref.step(t, h, u)
+            t += h
+            got = s.getReal([vr["u_wall"], vr["amplitude"], vr["integral"]])
+            assert got == [ref.u_wall, ref.amplitude, ref.integral], (T, k)
+        assert moves >= 8 and s.getInteger([vr["windows"]])[0] == ref.windows == moves
+        s.terminate()
+        s.freeInstance()
+
+
+def test_controller_fmu_validates_and_rejects_bad_input() -> None:
+    """``fmpy validate`` is clean; T <= 0 fails initialisation with fmi2Error; a fixed
+    parameter cannot change after initialisation."""
+    from fmpy import extract
+    from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import FMU2Slave
+    from fmpy.validation import validate_fmu
+
+    assert validate_fmu(str(CTRL_FMU)) == []
+    md = read_model_description(str(CTRL_FMU))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = FMU2Slave(guid=md.guid, unzipDirectory=extract(str(CTRL_FMU)),
+                  modelIdentifier="AmplitudeController", instanceName="c")
+    s.instantiate()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.setReal([vr["T"]], [0.0])
+    with pytest.raises(FMICallException):
+        s.exitInitializationMode()
+    s.reset()
+    s.setupExperiment(startTime=0.0)
+    s.enterInitializationMode()
+    s.exitInitializationMode()
+    s.setReal([vr["A_set"]], [2.0])  # tunable
+    with pytest.raises(FMICallException):
+        s.setReal([vr["theta"]], [0.1])  # fixed
+    s.freeInstance()
+
+
+def test_committed_ssd_is_what_write_ssp_writes(tmp_path: Path) -> None:
+    """examples/afm/SystemStructure.ssd (for readers and other SSP tools) is the closed-loop
+    SSD that masters.write_ssp packs."""
+    import zipfile
+
+    ssp = M.write_ssp(tmp_path / "afm.ssp", FMU_PATH, CTRL_FMU)
+    packed = zipfile.ZipFile(ssp).read("SystemStructure.ssd").decode()
+    assert packed == (ROOT / "examples" / "afm" / "SystemStructure.ssd").read_text()

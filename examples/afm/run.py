@@ -68,8 +68,9 @@ def settle(t1: float, work: Path) -> dict:
 
 
 def open_loop_curve(osc: Oscillator, walls: np.ndarray, periods: int) -> np.ndarray:
-    """Amplitude (max - min of u at the samples) against a fixed surface position, the FMU
-    alone through fmpy, stepping the wall quasi-statically (each from the previous orbit)."""
+    """Amplitude (max - min of u at the samples, per period) against a fixed surface position,
+    the FMU alone through fmpy, stepping the wall quasi-statically (each from the previous
+    orbit): the last 5 periods' amplitudes per position, a bifurcation diagram."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
@@ -83,7 +84,7 @@ def open_loop_curve(osc: Oscillator, walls: np.ndarray, periods: int) -> np.ndar
     for k, x in {**vars(osc), "u0": osc.sigma, "v0": 0.0}.items():
         s.setReal([vr[k]], [float(x)])
     s.exitInitializationMode()
-    n, t, amps = int(round(1 / H)), 0.0, []
+    n, t, amps, last = int(round(1 / H)), 0.0, [], []
     for w in walls:
         s.setReal([vr["u_wall"]], [float(w)])
         for _ in range(periods):
@@ -92,15 +93,17 @@ def open_loop_curve(osc: Oscillator, walls: np.ndarray, periods: int) -> np.ndar
                 us[k] = s.getReal([vr["u"]])[0]
                 s.doStep(t, H)
                 t += H
-        amps.append(float(np.ptp(us)))
+            last.append(float(np.ptp(us)))
+        amps.append(last[-5:])  # the last 5 periods: one value if period-1, a spread if not
+        last = []
     s.terminate()
     s.freeInstance()
     return np.array(amps)
 
 
 def sweep(set_points: np.ndarray, periods: int) -> dict:
-    """ecos: the loop on a stiff sample, A_set stepped down; per set-point the last
-    window's amplitude and wall position."""
+    """ecos: the loop on a stiff sample, A_set stepped down; per set-point the amplitudes of
+    the last 5 windows and the surface position during each."""
     from ecospy import EcosLib, EcosSimulation, EcosSimulationStructure
 
     osc, ctrl = Oscillator(Gamma=1000.0), Controller(A_set=float(set_points[0]), u_wall_start=0.6)
@@ -124,7 +127,10 @@ def sweep(set_points: np.ndarray, periods: int) -> dict:
                     if (k + 1) % int(round(1 / H)) == 0:
                         amps.append(sim.get_real(f"{M.CTRL}::amplitude"))
                         walls.append(sim.get_real(f"{M.CTRL}::u_wall"))
-                rows.append({"A_set": float(A_set), "amplitude": amps[-5:], "u_wall": walls[-5:]})
+                # each amplitude with the surface position held while it was measured: the
+                # output before that window's update
+                rows.append({"A_set": float(A_set), "amplitude": amps[-5:],
+                             "u_wall": walls[-6:-1]})
             sim.terminate()
     return {"oscillator": vars(osc), "controller": vars(ctrl), "periods": periods, "rows": rows}
 
@@ -156,7 +162,9 @@ def plot(res: dict, sw: dict, curve: tuple, out: Path) -> None:
 
     walls, amps = curve
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
-    ax[0].plot(walls, amps, ".-", ms=3, label="open loop (FMU alone)")
+    for i in range(amps.shape[1]):
+        ax[0].plot(walls, amps[:, i], ".", color="C0", ms=3,
+                   label="open loop (FMU alone), last 5 periods" if i == 0 else None)
     for r in sw["rows"]:
         ax[0].plot(r["u_wall"], r["amplitude"], "x", color="C3", ms=4)
     ax[0].plot([], [], "x", color="C3", label="closed loop (ecos), last 5 windows")
@@ -208,8 +216,8 @@ def main(argv: list[str] | None = None) -> int:
     last = res["updates"][-1]
     lines += ["", f"Last window (t = {last[0]:.2f}): amplitude {last[1]:.6f}, surface at "
               f"{last[2]:.6f} (set-point {res['parameters']['controller']['A_set']}).", "",
-              "Set-point sweep (ecos, Gamma = 1000): A_set, last amplitudes, last wall positions",
-              "", "| A_set | amplitude (last 5 windows) | u_wall (last 5) |", "|---|---|---|"]
+              "Set-point sweep (ecos, Gamma = 1000): A_set, the last 5 windows' amplitudes and the surface position during each",
+              "", "| A_set | amplitude (last 5 windows) | u_wall during them |", "|---|---|---|"]
     for r in sw["rows"]:
         lines.append(f"| {r['A_set']:.2f} | {' '.join(f'{a:.3f}' for a in r['amplitude'])} | "
                      f"{' '.join(f'{w:.3f}' for w in r['u_wall'])} |")
