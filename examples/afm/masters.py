@@ -154,6 +154,10 @@ def run_ecos(osc_fmu: Path, ctrl_fmu: Path, values: dict[str, float], t1: float,
 
 
 # ---------------------------------------------------------------------- Container FMU (fmpy)
+#: FMI 3.0 type names of a component's variables -> the FMI 2.0 container's
+_FMI2_TYPE = {"Float64": "Real", "Int32": "Integer"}
+
+
 def build_container(path: Path, osc_fmu: Path, ctrl_fmu: Path, values: dict[str, float],
                     h: float, feedback: bool = True) -> Path:
     """An FMI 2.0 Container FMU (fmpy.container_fmu) holding both FMUs, fixed step h.
@@ -177,9 +181,10 @@ def build_container(path: Path, osc_fmu: Path, ctrl_fmu: Path, values: dict[str,
     for key, x in values.items():
         inst, name = key.split(".", 1)
         inner = mvars[inst][name]
-        mv = ModelVariable(type=inner.type, variability=inner.variability, causality="parameter",
+        typ = _FMI2_TYPE.get(inner.type, inner.type)  # the container is FMI 2.0
+        mv = ModelVariable(type=typ, variability=inner.variability, causality="parameter",
                            initial="exact", name=key,
-                           start=str(int(x)) if inner.type == "Integer" else repr(float(x)))
+                           start=str(int(x)) if typ == "Integer" else repr(float(x)))
         variables.append(mv)
         mappings[mv] = [(comps[inst], inner)]
     for inst, name in RECORDED:

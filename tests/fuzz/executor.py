@@ -45,8 +45,26 @@ def _same(a: list, b: list) -> bool:
 
 
 def corrupt(data: bytes, how: str, pos: float, bit: int, offset: int | None = None) -> bytes:
-    """`data` damaged in one of the ways of sequences.CORRUPTIONS (deterministic) at the relative
-    position `pos`, or at byte `offset` where given."""
+    """A serialised FMU state damaged in one way, deterministically.
+
+    Parameters
+    ----------
+    data : bytes
+        The serialised state.
+    how : str
+        One of sequences.CORRUPTIONS, or "none".
+    pos : float
+        Where, as a fraction of the length (ignored where `offset` is given).
+    bit : int
+        Which bit to flip (bitflip), or a small variation for the other kinds.
+    offset : int, optional
+        Where, as a byte offset.
+
+    Returns
+    -------
+    bytes
+        The damaged copy.
+    """
     if not data or how == "none":
         return data
     b = bytearray(data)

@@ -103,7 +103,22 @@ class Child:
 
 def minimise(seq: dict[str, Any], fails: Callable[[dict[str, Any]], bool],
              budget: int = 400) -> dict[str, Any]:
-    """Deletes chunks of actions, then single ones, while `fails` still holds (ddmin-like)."""
+    """Deletes chunks of actions, then single ones, while `fails` still holds (ddmin-like).
+
+    Parameters
+    ----------
+    seq : dict
+        A sequence ({"interface", "actions", ...}).
+    fails : callable
+        True where a candidate still shows the failure (same rule or same crash).
+    budget : int
+        Most candidates tried.
+
+    Returns
+    -------
+    dict
+        `seq` with the fewest actions found that still fail.
+    """
     acts = list(seq["actions"])
     chunk = max(1, len(acts) // 2)
     tries = 0
@@ -223,7 +238,26 @@ def _child(build: Path, argv: list[str], timeout: float) -> subprocess.Completed
 
 def fuzz(build: Path, sequences: int, seed: int = 13, timeout: float = 20.0,
          minimise_crashes: bool = True) -> Report:
-    """Runs `sequences` sequences, restarting the child after every crash."""
+    """Runs `sequences` sequences, restarting the child after every crash.
+
+    Parameters
+    ----------
+    build : Path
+        CMake build directory of the FMU (build/asan: sanitizers preloaded in the child).
+    sequences : int
+        Number of sequences; sequence i has seed ``seed_of(seed, i)``.
+    seed : int
+        Base seed of the run.
+    timeout : float
+        Seconds one sequence may take before it counts as a hang.
+    minimise_crashes : bool
+        Minimise the first crash of each kind and place (one subprocess per try).
+
+    Returns
+    -------
+    Report
+        Counts of sequences and FMI calls, oracle violations and crashes, each with its seed.
+    """
     rep = Report()
     start, t0 = 0, time.perf_counter()
     while start < sequences:
@@ -275,7 +309,24 @@ def sequence_of(build: Path, seed: int) -> dict[str, Any]:
 
 
 def replay(build: Path, seq: dict[str, Any], timeout: float = 20.0) -> dict[str, Any]:
-    """Runs one sequence in a fresh child; returns {"kind": rule/crash kind or None, ...}."""
+    """Runs one sequence in a fresh child process.
+
+    Parameters
+    ----------
+    build : Path
+        CMake build directory of the FMU.
+    seq : dict
+        The sequence ({"interface", "actions", optional "expect_error"}).
+    timeout : float
+        Seconds before the sequence counts as a hang.
+
+    Returns
+    -------
+    dict
+        "kind" (None, the violated rule, or the crash kind: asan, ubsan, timeout ...),
+        "message", "calls", and for a completed run "errors" (the FMU's refusals) and "final"
+        (all variables after the last action).
+    """
     with tempfile.TemporaryDirectory() as tmp:
         f = Path(tmp) / "seq.json"
         f.write_text(json.dumps(seq))

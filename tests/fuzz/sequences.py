@@ -194,7 +194,18 @@ class Generator:
         return {"op": op}
 
     def sequence(self, seed: int) -> dict[str, Any]:
-        """The sequence of `seed`: {"seed", "interface", "actions"}."""
+        """The sequence of `seed`.
+
+        Parameters
+        ----------
+        seed : int
+            Seed of ``random.Random``; the same seed always gives the same sequence.
+
+        Returns
+        -------
+        dict
+            {"seed", "interface", "actions"}, plain JSON.
+        """
         rng = random.Random(seed)
         version = self.desc.version
         interface = rng.choice([i for i in INTERFACES if version_of(i) == version])
