@@ -165,3 +165,25 @@ def test_zero_velocity_start_on_the_wall(fmu):
             exact, exact_counts = osc.strobe(0.0, 0.0, times, t0=t0)
             assert np.max(np.abs(np.array(got) - exact)) < 1e-7, (wall, t0)
             assert counts == list(exact_counts), (wall, t0)
+
+
+@pytest.mark.parametrize("u_wall,F_ext", [(0.3, 0.0), (-0.4, 20.0)])
+def test_a_moved_rigid_wall_is_never_penetrated(fmu, u_wall, F_ext):
+    """The wall at u_wall (an input) with the chatter of the issue, stepped on a dense grid: no
+    state beyond the wall at any communication point, and the closed form (the ports map onto
+    the port-free problem by an exact scaling) at every one."""
+    lin, sigma, r = UNDERDAMPED, 10.0, 0.5
+    start = dict(u0=u_wall - 0.03, v0=0.0)
+    fmu.start(t0=0.0, wall="rigid", sigma=sigma, r=r, u_wall=u_wall, F_ext=F_ext, **start, **lin)
+    times = np.arange(1, 2001) * 1e-3
+    got = []
+    for t in times:
+        fmu.step_to(float(t))
+        got.append(fmu.state())
+    got = np.array(got)
+    assert np.all(got[:, 0] <= u_wall)
+    osc = ExactOscillator(lin["nu"], lin["Omega"], sigma, r=r, wall="rigid", u_wall=u_wall,
+                          F_ext=F_ext)
+    assert "stick" in [k for _, k in osc.crossings(start["u0"], 0.0, 0.0, 2.0)]
+    exact, _ = osc.dense(start["u0"], 0.0, times, t0=0.0)
+    assert np.max(np.abs(got - exact)) < 1e-7
