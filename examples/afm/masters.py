@@ -4,7 +4,8 @@ Each ``run_*`` function takes the two FMUs, the parameters (``monolithic.Oscilla
 ``monolithic.Controller``), the start state and the grid, and returns a ``Trace``: the values at
 the communication points t_k (after the step that ends at t_k), k = 1..n.  All three masters
 are Jacobi (every FMU steps from t_k with the inputs of t_k; the connections are updated
-after all steps) and compute t_{k+1} = t_k + h by summing.
+after all steps); ecos and the SSP loop compute t_{k+1} = t_k + h by summing, the Container
+FMU gives its components t0 + k h (a few ulps apart: the FMU's results do not depend on it).
 
 ``feedback=False`` leaves the controller's u_wall unconnected (the wall stays at the FMU's
 default u_wall = 0): the controller only measures.
