@@ -27,11 +27,6 @@ UNDERDAMPED = dict(nu=0.196, Omega=7.368)
 ecospy = pytest.importorskip("ecospy", reason="ecospy is a dev extra: pip install -e '.[dev]'")
 
 
-def has_ports() -> bool:
-    names = {v.name for v in read_model_description(str(FMU_PATH)).modelVariables}
-    return "u_wall" in names
-
-
 # ------------------------------------------------------------------------- ecos, FMU alone
 @pytest.mark.parametrize("fmu", [FMU_PATH, FMU3_PATH], ids=["fmi2", "fmi3"])
 @pytest.mark.parametrize("wall", ["compliant", "rigid"])
@@ -168,8 +163,6 @@ def test_closed_loop_matches_monolithic_in_each_master(master: str, tmp_path: Pa
     """The AFM loop (the controller moves the wall through the oscillator's u_wall input)
     over 12 periods, while the loop is still moving the wall: at every communication point
     within 1e-6 of the monolithic reference."""
-    if not has_ports():
-        pytest.skip("the oscillator FMU has no u_wall input yet (issue 14 item 2)")
     err, ref = _run(master, True, 12.0, tmp_path)
     assert np.ptp(ref.u_wall) > 0.1, "the loop was meant to move the wall"
     assert max(err.values()) <= 1e-6, err

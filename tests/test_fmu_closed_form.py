@@ -112,8 +112,6 @@ def test_nonlinear_contact_laws_are_refused(fmu2, contact, capsys):
 
 
 def test_fmi3_closed_form_equals_fmi2():
-    if not FMU3_PATH.exists():
-        pytest.skip("FMI 3.0 FMU not built")
     f2, f3 = Fmu(2), Fmu(3)
     try:
         p = CASES["underdamped_rigid"]
@@ -182,7 +180,6 @@ def test_ramped_ports_closed_form_equals_cvode(wall):
     assert np.max(np.abs(runs[0][:, :2] - runs[1][:, :2])) < 1e-8
 
 
-@pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
 @pytest.mark.parametrize("wall,sigma", [("compliant", 0.5), ("rigid", 0.3)])
 def test_fmi3_early_return_at_every_event_in_closed_form(wall, sigma):
     """FMI 3.0 event mode with early return: the closed form stops at each wall event (the jump
