@@ -13,6 +13,7 @@ import gc
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 from fmpy import extract, read_model_description
@@ -81,3 +82,16 @@ def test_refused_init_reproducer_in_a_subprocess() -> None:
     assert res.returncode == 0, f"rc {res.returncode}\n{res.stdout[-2000:]}\n{res.stderr[-2000:]}"
     assert res.stdout.count("needs the linear contact law") == 4 * 4  # rounds x interfaces
     assert "round 3 done" in res.stdout
+
+
+def test_no_other_code_hands_fmpy_a_logger_of_its_own() -> None:
+    """Only harness/fmi2_logging.py calls fmpy's addLoggerProxy (and the reproducer, for its
+    "old" mode): any other ctypes logger given to the proxy would dangle again."""
+    allowed = {ROOT / "harness" / "fmi2_logging.py", ROOT / "tests" / "refused_init_repro.py"}
+    offenders = [str(p.relative_to(ROOT))
+                 for d in ("harness", "tests", "examples", "bench", "mapcheck", "scripts")
+                 for p in sorted((ROOT / d).rglob("*.py"))
+                 if p not in allowed and p != Path(__file__).resolve()
+                 and ("addLoggerProxy" in p.read_text() or "logger=" in p.read_text()
+                      and "simulate_fmu" in p.read_text())]
+    assert not offenders, offenders
