@@ -245,6 +245,22 @@ def accuracy() -> dict:
     return out
 
 
+def fig9_both(workdir: Path) -> dict:
+    """`reproduce fig9 --quick` with each solver (one worker): wall and CPU seconds, ODE edges."""
+    out = {}
+    for solver in ("cvode", "closed-form"):
+        dest = workdir / f"fig9_{solver}"
+        t0, c0 = time.perf_counter(), os.times()
+        subprocess.run([sys.executable, "-m", "harness", "reproduce", "fig9", "--quick", "--workers", "1",
+                        "--solver", solver, "--out", str(dest)], check=True, cwd=ROOT, capture_output=True)
+        c1 = os.times()
+        out[solver] = dict(wall=time.perf_counter() - t0, cpu=c1.children_user + c1.children_system
+                           - c0.children_user - c0.children_system,
+                           edges=json.loads((dest / "fig9.json").read_text())["windows"]["ode"])
+    out["same_edges"] = out["cvode"]["edges"] == out["closed-form"]["edges"]
+    return out
+
+
 def section(res: dict) -> str:
     M = res["methods"]
     L = [BEGIN, "## Solver modes and sensitivities (issue 11)", "",
@@ -281,6 +297,14 @@ def section(res: dict) -> str:
             L.append(f"| {'compliant' if r['wall'] == 1 else 'rigid'} | {r['depth']:.0e} | {r['norm']:.3g} | "
                      f"{r['cvode_vs_closed']:.1e} | {'' if d is None else f'{d:.1e}'} |")
         L.append("")
+    F = res.get("fig9")
+    if F:
+        L += [f"`python -m harness reproduce fig9 --quick --workers 1`: CVODE {F['cvode']['wall']:.1f} s wall "
+              f"({F['cvode']['cpu']:.1f} s CPU), closed form {F['closed-form']['wall']:.1f} s wall "
+              f"({F['closed-form']['cpu']:.1f} s CPU); the ODE's window edges "
+              f"{'are identical' if F['same_edges'] else 'differ'} (M: [lo, hi] "
+              + "; ".join(f"{k}: [" + ", ".join("none" if x is None else f"{x:.5f}" for x in v) + "]"
+                          for k, v in sorted(F['cvode']['edges'].items())) + ").", ""]
     L.append(END)
     return "\n".join(L)
 
@@ -297,10 +321,14 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="smoke test: few periods, print only")
     ap.add_argument("--json", help="also write all numbers as JSON")
+    ap.add_argument("--fig9", action="store_true", help="with --quick: also time reproduce fig9 in both modes")
     ap.add_argument("--out", help="markdown file to update (default BENCHMARKS.md, none with --quick)")
     args = ap.parse_args(argv)
     res = measure(args.quick)
     res["accuracy"] = accuracy()
+    if args.fig9 or not args.quick:
+        with tempfile.TemporaryDirectory(prefix="sens-fig9-") as tmp:
+            res["fig9"] = fig9_both(Path(tmp))
     text = section(res)
     print(text)
     if args.json:

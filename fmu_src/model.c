@@ -16,6 +16,8 @@
  * incoming one, floored at 1) and the wall force pushes inwards, the impacts would accumulate
  * in finite time; the mass is taken to stick instead (Zeno truncation). */
 static const double STICK_VELOCITY = 1e-9;
+/* ... or once a rebound's flight would rise less than this many ulps of the wall position. */
+static const double STICK_ULPS = 16.0;
 
 /* Where an event leaves the mass on the wall, u is put a hair on the side of its new mode rather
  * than at 0: CVODE deactivates a root function that is exactly zero at the restart and takes its
@@ -252,8 +254,14 @@ static void rigid_impact(ModelData *m, double tau, double y[2], double w, double
     const double vc = y[1] - dw;
     y[0] = beside_wall(w, -1.0);
     y[1] = dw == 0.0 ? -m->r * vc : dw - m->r * vc; /* (11) */
-    if (fabs(y[1] - dw) <= STICK_VELOCITY * fmax(1.0, fabs(vc)) &&
-        model_wall_force(m, tau) > 0.0) {
+    const double push = model_wall_force(m, tau), vr = y[1] - dw;
+    /* A wall at w != 0 resolves u only to ulp(w): a rebound rising less than a few ulps (v^2/2
+     * push) cannot be represented, its crossings are found late, and the late finds pump energy
+     * into a chatter that then never ends. Sticking is the limit of that chatter too. (w = 0:
+     * u has full relative precision; only the velocity threshold acts, as before the ports.) */
+    const double res = w == 0.0 ? 0.0 : STICK_ULPS * (nextafter(fabs(w), INFINITY) - fabs(w));
+    if (push > 0.0 &&
+        (fabs(vr) <= STICK_VELOCITY * fmax(1.0, fabs(vc)) || vr * vr <= 2.0 * push * res)) {
         y[0] = w;
         y[1] = dw;
         m->mode = MODE_STICK;

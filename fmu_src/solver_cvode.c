@@ -349,6 +349,8 @@ static int take_event(Solver *s, ModelData *m, int stop_at_event) {
     set_model_state(s, m, s->y_next); /* J, S at the crossing too */
     s->has_next = 0;
     s->needs_reinit = 1;
+    s->events_used += 1.0; /* counted once, whoever applies the jump */
+    if (over_budget(s, m, 1)) return -1;
     if (stop_at_event) { /* FMI 3.0 early return: the jump is the importer's event mode */
         s->pending = 1;
         return 1;
@@ -358,8 +360,6 @@ static int take_event(Solver *s, ModelData *m, int stop_at_event) {
     m->u = y[0];
     m->v = y[1];
     s->events++;
-    s->events_used += 1.0;
-    if (over_budget(s, m, 1)) return -1;
     return reinit(s, m);
 }
 

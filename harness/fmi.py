@@ -368,6 +368,9 @@ class _SlaveBase(_LogMixin):
             pass
         finally:
             self._fmu.freeInstance()
+            release = getattr(getattr(self, "_callbacks", None), "release", None)
+            if release is not None:  # FMI 2.0 (fmi2_logging): the handler is not needed now
+                release()
 
 
 def _group_by_type(values: Mapping[VariableInfo, Any]) -> dict[str, tuple[list[int], list[Any]]]:
@@ -389,17 +392,9 @@ class Fmi2Slave(_SlaveBase):
     """
 
     def __init__(self, model: FmuModel, unzipdir: str, instance_name: str) -> None:
-        from ctypes import byref
+        from fmpy.fmi2 import FMU2Slave
 
-        from fmpy import calloc, free
-        from fmpy.fmi2 import (
-            FMU2Slave,
-            fmi2CallbackAllocateMemoryTYPE,
-            fmi2CallbackFreeMemoryTYPE,
-            fmi2CallbackFunctions,
-            fmi2CallbackLoggerTYPE,
-        )
-        from fmpy.logging import addLoggerProxy
+        from harness.fmi2_logging import Fmi2Callbacks
 
         self.messages = collections.deque(maxlen=50)
         self._fmu = FMU2Slave(
@@ -408,17 +403,11 @@ class Fmi2Slave(_SlaveBase):
             modelIdentifier=model.model_identifier,
             instanceName=instance_name,
         )
-
-        def logger(env: Any, instance: Any, status: int, category: bytes, message: bytes) -> None:
-            self._log(status, category, message)
-
-        callbacks = fmi2CallbackFunctions()
-        callbacks.logger = fmi2CallbackLoggerTYPE(logger)
-        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-        addLoggerProxy(byref(callbacks))  # formats the FMU's printf-style messages
-        self._callbacks = (callbacks, logger)  # must outlive the instance
-        self._fmu.instantiate(callbacks=callbacks, loggingOn=False)
+        # Not a ctypes logger of our own: fmpy's proxy keeps one process-wide pointer to it,
+        # which dangled once this slave was collected (harness/fmi2_logging.py).
+        self._callbacks = Fmi2Callbacks(  # must outlive the instance; released by close()
+            lambda _name, status, category, message: self._log(status, category, message))
+        self._fmu.instantiate(callbacks=self._callbacks.functions, loggingOn=False)
         self._needs_reset = False
 
     def initialize(self, t0: float, values: Mapping[VariableInfo, Any]) -> None:

@@ -59,7 +59,53 @@ class Simulator(Protocol):
         """Return (u, v, wall entries since the first ``start`` of this run)."""
 
 
-class FmuSimulator:
+class _DerivativeChain:
+    """The derivatives of the map accumulated over steps, shared by both simulators.
+
+    Over steps x_{k+1} = F_k(x_k, sigma) the chain rule gives J = J_k ... J_1 and
+    S <- J_k S + S_k; a subclass calls :meth:`_chain` with each step's (J_k, S_k).
+    """
+
+    derivatives_available: bool = False
+    _track: bool = False
+
+    def _refuse_derivatives(self) -> str:
+        """Why this simulator cannot track derivatives (the message of the refusal)."""
+        return "no derivatives available"
+
+    def track_derivatives(self, on: bool = True) -> None:
+        """Integrate the variational equations from the next ``start`` on (``on``), or not.
+
+        Raises
+        ------
+        HarnessInputError
+            If ``on`` and the simulator cannot report derivatives.
+        """
+        if on and not self.derivatives_available:
+            raise HarnessInputError("derivatives", self._refuse_derivatives())
+        self._track = bool(on)
+
+    @property
+    def tracking(self) -> bool:
+        """True while the variational equations are integrated."""
+        return self._track
+
+    def reset_derivatives(self) -> None:
+        """Start accumulating the derivatives afresh at the current time."""
+        self._J = np.eye(2)
+        self._S = np.zeros(2)
+
+    def derivatives(self) -> tuple[np.ndarray, np.ndarray]:
+        """(J, S): d(u, v)/d(u, v) and d(u, v)/d sigma from the last mark to now (copies)."""
+        return self._J.copy(), self._S.copy()
+
+    def _chain(self, Jk: np.ndarray, Sk: np.ndarray) -> None:
+        """Append one step's Jacobian ``Jk`` and sigma-derivative ``Sk`` to the chain."""
+        self._S = Jk @ self._S + Sk
+        self._J = Jk @ self._J
+
+
+class FmuSimulator(_DerivativeChain):
     """Drive one FMU instance; :meth:`start` resets and re-initializes it.
 
     Parameters
@@ -96,37 +142,11 @@ class FmuSimulator:
         self._track = False
         self._get_sens = (self._slave.getter([v[n] for n in SENSITIVITY_OUTPUTS])
                           if self.derivatives_available else None)
-        self._J = np.eye(2)
-        self._S = np.zeros(2)
+        self.reset_derivatives()
 
-    # -- derivatives ---------------------------------------------------------------------
-    def track_derivatives(self, on: bool = True) -> None:
-        """Integrate the variational equations from the next :meth:`start` on (``on``), or not.
-
-        Raises
-        ------
-        HarnessInputError
-            If ``on`` and the FMU has no sensitivity outputs.
-        """
-        if on and not self.derivatives_available:
-            raise HarnessInputError(
-                "derivatives", f"{self.model.path.name} does not report the derivatives of its map "
+    def _refuse_derivatives(self) -> str:
+        return (f"{self.model.path.name} does not report the derivatives of its map "
                 f"(no variables {SENSITIVITY_SWITCH!r}, {', '.join(SENSITIVITY_OUTPUTS)})")
-        self._track = bool(on)
-
-    @property
-    def tracking(self) -> bool:
-        """True while the variational equations are integrated."""
-        return self._track
-
-    def reset_derivatives(self) -> None:
-        """Start accumulating the derivatives afresh at the current time."""
-        self._J = np.eye(2)
-        self._S = np.zeros(2)
-
-    def derivatives(self) -> tuple[np.ndarray, np.ndarray]:
-        """(J, S): d(u, v)/d(u, v) and d(u, v)/d sigma from the last mark to now (copies)."""
-        return self._J.copy(), self._S.copy()
 
     # -- life cycle ----------------------------------------------------------------------
     def start(self, params: Params, t0: float, state: tuple[float, float]) -> None:
@@ -170,9 +190,7 @@ class FmuSimulator:
             if self._track:
                 # chain rule over the steps: x_{k+1} = F_k(x_k, sigma)
                 juu, juv, jvu, jvv, su, sv = self._get_sens()
-                Jk = np.array([[juu, juv], [jvu, jvv]])
-                self._S = Jk @ self._S + np.array([su, sv])
-                self._J = Jk @ self._J
+                self._chain(np.array([[juu, juv], [jvu, jvv]]), np.array([su, sv]))
 
     def set_parameter(self, name: str, value: Any) -> None:
         var = self.model.check_settable(name)
@@ -216,7 +234,7 @@ class FmuSimulator:
 OneStepMap = Callable[[float, float, float, Mapping[str, Any]], tuple[float, float, int]]
 
 
-class MappingSimulator:
+class MappingSimulator(_DerivativeChain):
     """A user-given one-period map seen as a simulator.
 
     Parameters
@@ -238,8 +256,7 @@ class MappingSimulator:
         self._derivative = derivative
         self.derivatives_available = derivative is not None
         self._track = False
-        self._J = np.eye(2)
-        self._S = np.zeros(2)
+        self.reset_derivatives()
         self._defaults = dict(defaults or {})
         self._params: dict[str, Any] = {}
         self._u = self._v = math.nan
@@ -253,22 +270,8 @@ class MappingSimulator:
         self.time = float(t0)
         self.reset_derivatives()
 
-    def track_derivatives(self, on: bool = True) -> None:
-        """As :meth:`FmuSimulator.track_derivatives`."""
-        if on and not self.derivatives_available:
-            raise HarnessInputError("derivatives", "this mapping was given no derivative")
-        self._track = bool(on)
-
-    @property
-    def tracking(self) -> bool:
-        return self._track
-
-    def reset_derivatives(self) -> None:
-        self._J = np.eye(2)
-        self._S = np.zeros(2)
-
-    def derivatives(self) -> tuple[np.ndarray, np.ndarray]:
-        return self._J.copy(), self._S.copy()
+    def _refuse_derivatives(self) -> str:
+        return "this mapping was given no derivative"
 
     def advance(self, t: float) -> None:
         periods = t - self.time
@@ -278,9 +281,8 @@ class MappingSimulator:
         for _ in range(k):
             if self._track:
                 Jk, Sk = self._derivative(self._u, self._v, self.time, self._params)
-                Jk = np.asarray(Jk, dtype=float)
-                self._S = Jk @ self._S + (np.zeros(2) if Sk is None else np.asarray(Sk, dtype=float))
-                self._J = Jk @ self._J
+                self._chain(np.asarray(Jk, dtype=float),
+                            np.zeros(2) if Sk is None else np.asarray(Sk, dtype=float))
             self._u, self._v, m = self._step(self._u, self._v, self.time, self._params)
             self._n += int(m)
             self.time += 1.0

@@ -369,6 +369,16 @@ class ExactOscillator:
         return _State(t_c, 0.0, self.r * vc, "in")
 
     # ------------------------------------------------------------------ public API
+    def _through_scaling(self, method, u0: float, v0: float, times,
+                         t0: float) -> tuple[np.ndarray, np.ndarray]:
+        """The ports by the exact scaling (see the class): ``method`` (strobe or dense) of the
+        port-free oscillator from the scaled start, mapped back by u = u_wall + c y, v = c y'."""
+        c = self._scale
+        states, counts = method((u0 - self.u_wall) / c, v0 / c, times, t0)
+        states = states * c
+        states[:, 0] += self.u_wall
+        return states, counts
+
     def strobe(self, u0: float, v0: float, times, t0: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """Exact states at the requested times.
 
@@ -389,11 +399,7 @@ class ExactOscillator:
             impacts, every chattering impact counted).
         """
         if self._inner is not None:
-            c = self._scale
-            states, counts = self._inner.strobe((u0 - self.u_wall) / c, v0 / c, times, t0)
-            states = states * c
-            states[:, 0] += self.u_wall
-            return states, counts
+            return self._through_scaling(self._inner.strobe, u0, v0, times, t0)
         times = np.asarray(times, dtype=float).reshape(-1)
         if times.size and (np.any(np.diff(times) < 0) or times[0] < t0):
             raise ValueError("times must be sorted and >= t0")
@@ -424,6 +430,8 @@ class ExactOscillator:
         impacts : ndarray of int, shape (len(times),)
             Cumulative wall entries/impacts since t0.
         """
+        if self._inner is not None:
+            return self._through_scaling(self._inner.dense, u0, v0, times, t0)
         times = np.asarray(times, dtype=float).reshape(-1)
         if times.size and (np.any(np.diff(times) < 0) or times[0] < t0):
             raise ValueError("times must be sorted and >= t0")

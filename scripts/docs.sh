@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # API reference from the docstrings (pdoc, numpy docstring style) -> build/docs/index.html.
-# Extra arguments go to pdoc (e.g. `bash scripts/docs.sh --no-search`).
+# Extra arguments go to pdoc (e.g. `bash scripts/docs.sh --no-search`); DOCS_OUT=DIR writes
+# elsewhere (tests/test_api_docs.py builds into a temporary folder).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
 bash scripts/setup.sh
-rm -rf build/docs
+out="${DOCS_OUT:-build/docs}"
+rm -rf "$out"
 # every module by name: pdoc follows __all__, which lists the packages' re-exports, not their
 # submodules (harness.__main__ would run the CLI on import: left out)
 mapfile -t modules < <(.venv/bin/python - <<'PY'
@@ -21,5 +23,5 @@ for pkg in (harness, mapcheck):
             print(m.name)
 PY
 )
-.venv/bin/python -m pdoc --docformat numpy --output-directory build/docs "$@" "${modules[@]}"
-echo "API reference: build/docs/index.html"
+.venv/bin/python -m pdoc --docformat numpy --output-directory "$out" "$@" "${modules[@]}"
+echo "API reference: $out/index.html"

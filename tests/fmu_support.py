@@ -5,29 +5,19 @@ in the harness cannot hide one in the FMU, and they capture the FMU's log messag
 """
 from __future__ import annotations
 
-import ctypes
+import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import (
-    FMU2Slave,
-    fmi2CallbackAllocateMemoryTYPE,
-    fmi2CallbackFreeMemoryTYPE,
-    fmi2CallbackFunctions,
-    fmi2CallbackLoggerTYPE,
-)
-from fmpy.logging import addLoggerProxy
+from fmpy.fmi2 import FMU2Slave
+
+from harness.fmi2_logging import Fmi2Callbacks
 
 ROOT = Path(__file__).resolve().parents[1]
 FMU_PATH = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
-
-_libc = ctypes.CDLL(None)
-_libc.calloc.restype = ctypes.c_void_p
-_libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
-_libc.free.argtypes = [ctypes.c_void_p]
 
 WALLS = {"none": 0, "compliant": 1, "rigid": 2}
 
@@ -49,17 +39,14 @@ class LoggedSlave:
                                modelIdentifier=self.md.coSimulation.modelIdentifier,
                                instanceName=self.name)
 
-        def log(env, instance, status, category, message):  # noqa: ANN001 (ctypes callback)
-            # pythonfmu passes a NULL category with its own fatal message
-            self.messages.append((status, (category or b"").decode(), (message or b"").decode()))
-
-        cb = fmi2CallbackFunctions()
-        cb.logger = fmi2CallbackLoggerTYPE(log)
-        cb.allocateMemory = fmi2CallbackAllocateMemoryTYPE(_libc.calloc)
-        cb.freeMemory = fmi2CallbackFreeMemoryTYPE(_libc.free)
-        addLoggerProxy(ctypes.byref(cb))
-        self._keep = (cb, log)  # the callbacks must outlive the instance
-        self.slave.instantiate(callbacks=cb, loggingOn=self.logging)
+        # fmpy's logger proxy keeps ONE process-wide logger: a per-instance ctypes callback
+        # given to it dangled once collected (harness/fmi2_logging.py), so the messages go
+        # through the project's immortal dispatcher to this instance's list.
+        messages = self.messages  # not self: the handler must not keep the slave alive
+        self._callbacks = Fmi2Callbacks(lambda _name, status, category, text:
+                                        messages.append((status, category, text)))
+        weakref.finalize(self, self._callbacks.release)
+        self.slave.instantiate(callbacks=self._callbacks.functions, loggingOn=self.logging)
         self.t = 0.0
 
     # -- set-up ---------------------------------------------------------------------------------

@@ -80,3 +80,36 @@ def test_docstring_examples(module: str, monkeypatch) -> None:
     res = doctest.testmod(mod, optionflags=doctest.NORMALIZE_WHITESPACE | doctest.ELLIPSIS)
     assert res.attempted > 0, f"{module} has no examples"
     assert res.failed == 0
+
+
+SHELL_BLOCK = re.compile(r"```bash\n(.*?)```", re.S)
+
+
+def _readme_cli_commands() -> list[str]:
+    out = []
+    for readme in ("README.md", "harness/README.md"):
+        for code in SHELL_BLOCK.findall((ROOT / readme).read_text()):
+            for line in code.splitlines():
+                line = line.split("#", 1)[0].strip()
+                if line.startswith(("impact-harness ", "python -m harness ")):
+                    out.append(line)
+    return out
+
+
+def test_readme_cli_commands_parse() -> None:
+    """Every harness command line shown in the READMEs is accepted by the current CLI parser
+    (flags and choices; running them all would take hours)."""
+    import shlex
+
+    from harness.cli import _join_list_values, build_parser
+
+    commands = _readme_cli_commands()
+    assert len(commands) >= 10
+    parser = build_parser()
+    for line in commands:
+        argv = shlex.split(line)
+        argv = argv[1:] if argv[0] == "impact-harness" else argv[3:]
+        try:
+            parser.parse_args(_join_list_values(argv))
+        except SystemExit as exc:
+            raise AssertionError(f"README command no longer parses: {line}") from exc

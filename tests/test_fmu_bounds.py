@@ -10,9 +10,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
+from fmpy.fmi3 import FMU3Slave
 
-from tests.fmu_support import LoggedSlave, on_orbit
+from tests.fmu_support import FMU3_PATH, LoggedSlave, on_orbit
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)
@@ -75,3 +77,39 @@ def test_a_huge_step_stops_at_the_cap_not_an_overflow(fmu):
     fmu.start(t0=0.0, wall="none")
     msg = failed_step(fmu, 0.0, 1e9)
     assert "more than 2000000 CVODE steps in this doStep" in msg and "cap" in msg, msg
+
+
+@pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
+def test_the_event_bound_counts_the_whole_doStep_across_intermediate_updates():
+    """FMI 3.0 with intermediate updates: the solver stops at every event to call back, and
+    resumes towards the same end; the bound is on the whole doStep, not on each stretch."""
+    md = read_model_description(str(FMU3_PATH))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    calls: list[float] = []
+
+    def cb(env, t, set_req, get_ok, finished, can_return, early_req, early_time):  # noqa: ANN001
+        calls.append(t)
+
+    results = {}
+    for limit in (5.0, 1e5):
+        calls.clear()
+        s = FMU3Slave(guid=md.guid, unzipDirectory=extract(str(FMU3_PATH)),
+                      modelIdentifier=md.coSimulation.modelIdentifier, instanceName="bound3")
+        s.instantiate(eventModeUsed=False, earlyReturnAllowed=True, intermediateUpdate=cb)
+        try:
+            s.enterInitializationMode(startTime=0.0)
+            reals = dict(sigma=10.0, r=0.5, u0=-0.03, v0=0.0, max_events_per_time=limit,
+                         **UNDERDAMPED)
+            s.setFloat64([vr[k] for k in reals], list(reals.values()))
+            s.setInt32([vr["wall"]], [2])
+            s.exitInitializationMode()
+            try:
+                s.doStep(0.0, 1.0)
+                results[limit] = "ok"
+            except FMICallException:
+                results[limit] = "error"
+        finally:
+            s.freeInstance()
+        results[limit, "calls"] = len(calls)
+    assert results[5.0] == "error" and results[5.0, "calls"] <= 6
+    assert results[1e5] == "ok" and results[1e5, "calls"] > 5

@@ -99,20 +99,19 @@ def test_sticking_on_the_rigid_wall_matches_the_oracle(fmu2):
 
 
 @pytest.mark.parametrize("contact", [1, 2])
-def test_nonlinear_contact_laws_are_refused(contact):
-    from tests.fmu_support import LoggedSlave
-    f = LoggedSlave(name="refused")
-    try:
-        with pytest.raises(FMICallException):
-            f.start(0.0, **dict(FIG9, wall=1), contact=contact, solver=1)
-        assert "solver = 1 (closed form) needs the linear contact law" in f.errors()[-1]
-    finally:
-        f.close()
+def test_nonlinear_contact_laws_are_refused(fmu2, contact, capsys):
+    """Refused at fmi2ExitInitializationMode through plain fmpy, whose default logger prints the
+    message. (This crashed when another test's logger had been handed to fmpy's logger proxy
+    and collected; see harness/fmi2_logging.py and tests/test_fmi2_logging.py.)"""
+    with pytest.raises(FMICallException):
+        fmu2.start(0.0, **dict(FIG9, wall=1), contact=contact, solver=1)
+    fmu2.started = True
+    law = "Hertz" if contact == 1 else "Hunt-Crossley"
+    assert (f"solver = 1 (closed form) needs the linear contact law, not contact = {contact} "
+            f"({law})") in capsys.readouterr().out
 
 
 def test_fmi3_closed_form_equals_fmi2():
-    if not FMU3_PATH.exists():
-        pytest.skip("FMI 3.0 FMU not built")
     f2, f3 = Fmu(2), Fmu(3)
     try:
         p = CASES["underdamped_rigid"]
@@ -181,7 +180,6 @@ def test_ramped_ports_closed_form_equals_cvode(wall):
     assert np.max(np.abs(runs[0][:, :2] - runs[1][:, :2])) < 1e-8
 
 
-@pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
 @pytest.mark.parametrize("wall,sigma", [("compliant", 0.5), ("rigid", 0.3)])
 def test_fmi3_early_return_at_every_event_in_closed_form(wall, sigma):
     """FMI 3.0 event mode with early return: the closed form stops at each wall event (the jump

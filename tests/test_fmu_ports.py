@@ -50,8 +50,6 @@ def test_constant_ports_match_the_closed_form(fmu, wall, lin, sigma, Gamma, r, F
     """FMI 2.0 CS with constant F_ext, u_wall against the exact solution (the scaled oracle),
     20 periods, with either of the FMU's solvers (CVODE; its own closed form, which takes the
     ports as a shifted equilibrium and wall in its particular solution)."""
-    if "solver" not in fmu.vr:
-        pytest.skip("this FMU has no solver parameter")
     if solver:
         lin = dict(lin, solver=solver)
     _start(fmu, wall, lin, sigma, Gamma, r, F, w, start)
@@ -70,7 +68,6 @@ def test_constant_ports_match_the_closed_form(fmu, wall, lin, sigma, Gamma, r, F
         assert impacts[-1] > 0  # the wall is exercised
 
 
-@pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
 @pytest.mark.parametrize("fmi_type", ["CoSimulation", "ModelExchange"])
 @pytest.mark.parametrize("case", [CASES[0], CASES[3]], ids=[IDS[0], IDS[3]])
 def test_fmi3_ports_match_the_closed_form(fmi_type, case):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.fmu_support import FMU3_PATH, on_orbit
+from tests.fmu_support import on_orbit
 from tests.sens_support import FIG9, UNDERDAMPED, Fmu, exact_derivatives, one_period, oracle
 
 # (name, parameters, starts (t0, sigma-orbit phase)): every case has wall events in its period
@@ -105,8 +105,6 @@ def test_sensitivities_off_leave_identity_and_the_same_state(fmu2, solver):
 @pytest.mark.parametrize("version", [2, 3])
 @pytest.mark.parametrize("solver", [0, 1])
 def test_fmu_state_and_serialisation_carry_the_matrix(version, solver):
-    if version == 3 and not FMU3_PATH.exists():
-        pytest.skip("FMI 3.0 FMU not built")
     f = Fmu(version)
     s = f.slave
     try:
@@ -139,8 +137,6 @@ def test_fmu_state_and_serialisation_carry_the_matrix(version, solver):
 
 
 def test_fmi3_sensitivities_equal_fmi2(fmu2):
-    if not FMU3_PATH.exists():
-        pytest.skip("FMI 3.0 FMU not built")
     f3 = Fmu(3)
     try:
         p = dict(UNDERDAMPED, sigma=0.05, wall=1)

@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Model, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Slave
-from fmpy.logging import addLoggerProxy
 
+from harness.fmi2_logging import Fmi2Callbacks
 from tests.fmu_support import FMU3_PATH, FMU_PATH, LoggedSlave, expect_error
 
 OUTPUTS_REAL = ("u", "v", "F_contact", "v_impact", "t_impact", "F_g", "phi", "kappa")
@@ -74,14 +74,11 @@ def _me_instance(msgs):
     md = read_model_description(str(FMU_PATH))
     me = FMU2Model(guid=md.guid, unzipDirectory=extract(str(FMU_PATH)),
                    modelIdentifier=md.modelExchange.modelIdentifier, instanceName="me")
-    cb = fmi2CallbackFunctions()
-
-    def log(env, inst, status, cat, msg):  # noqa: ANN001
-        msgs.append(msg.decode())
-    cb.logger = fmi2CallbackLoggerTYPE(log)
-    addLoggerProxy(ctypes.byref(cb))
-    me.instantiate(callbacks=cb)
-    me._keep = (cb, log)
+    # not a ctypes logger of its own: fmpy's proxy would keep it past this instance
+    # (harness/fmi2_logging.py)
+    cb = Fmi2Callbacks(lambda _name, _status, _category, text: msgs.append(text))
+    me.instantiate(callbacks=cb.functions)
+    me._keep = cb
     return me
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 import xarray as xr
 
-from harness.cli import main
+from tests.cli_support import run_main as _run_main
 
 ROOT = Path(__file__).resolve().parents[1]
 FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
@@ -30,15 +30,6 @@ def me_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
                 data = re.sub(rb"<CoSimulation[^>]*/>", b'<ModelExchange modelIdentifier="ImpactOscillator"/>', data)
             dst.writestr(item, data)
     return out
-
-
-def _run_main(argv: list[str], capsys) -> tuple[int, str, str]:
-    try:
-        code = main(argv)
-    except SystemExit as exc:  # argparse's own errors
-        code = exc.code
-    cap = capsys.readouterr()
-    return code, cap.out, cap.err
 
 
 BAD_INPUT = [

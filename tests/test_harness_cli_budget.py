@@ -12,18 +12,9 @@ import pytest
 import xarray as xr
 
 from harness.budget import Budget, parse_size, simulate_estimate, sweep_estimate
-from harness.cli import main
+from tests.cli_support import run_main as _run_main
 
 ROOT = Path(__file__).resolve().parents[1]
-
-
-def _run_main(argv: list[str], capsys) -> tuple[int, str, str]:
-    try:
-        code = main(argv)
-    except SystemExit as exc:
-        code = exc.code
-    cap = capsys.readouterr()
-    return code, cap.out, cap.err
 
 
 # The inputs of issue 13's "Why", each with the flag the refusal must name and what it says.

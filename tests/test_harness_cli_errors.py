@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from harness.cli import main
+from tests.cli_support import run_main as _run_main
 
 ROOT = Path(__file__).resolve().parents[1]
 FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
@@ -49,15 +49,6 @@ def crc_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
     with zipfile.ZipFile(out) as check:  # the damage is in the data, not the directory
         assert check.testzip() is not None
     return out
-
-
-def _run_main(argv: list[str], capsys) -> tuple[int, str, str]:
-    try:
-        code = main(argv)
-    except SystemExit as exc:
-        code = exc.code
-    cap = capsys.readouterr()
-    return code, cap.out, cap.err
 
 
 def _one_line(err: str) -> str:

@@ -20,6 +20,7 @@ from harness.shooting import StroboscopicMap
 from harness.simulator import MappingSimulator
 from mapcheck.linear import propagator
 from mapcheck.orbits import solve_periodic_orbit
+from tests.cli_support import run_main as _run_main
 from tests.fmu_support import harness_params as _params
 
 HENON_A, HENON_B = 1.4, 0.3
@@ -124,17 +125,6 @@ def test_classification_rules() -> None:
 
 
 # -- the sweep output and the CLI ---------------------------------------------------------
-def _run_main(argv: list[str], capsys) -> tuple[int, str, str]:
-    from harness.cli import main
-
-    try:
-        code = main(argv)
-    except SystemExit as exc:  # argparse's own errors
-        code = exc.code
-    captured = capsys.readouterr()
-    return code, captured.out, captured.err
-
-
 def test_sweep_writes_exponents_and_dynamics(tmp_path, capsys) -> None:
     """``sweep --lyapunov N``: NetCDF variables lyapunov, lyapunov_err (exponent = 1, 2) and
     dynamics with CF flag attributes; periodic at sigma = 0.5, chaotic at 0.03."""
@@ -181,8 +171,6 @@ def test_closed_form_solver_gives_the_same_exponents(model, sim) -> None:
     """solver = 1 (closed form) against CVODE: the periodic orbit's exponents to 1e-6; the
     chaotic orbits part ways after a few dozen periods (chaos), their exponents agree within
     the combined uncertainty."""
-    if "solver" not in model.variables:
-        pytest.skip("the FMU has no closed-form solver mode")
     res = {}
     for solver in (0, 1):
         for sigma, n in ((0.5, 200), (0.03, 600)):

@@ -4,8 +4,8 @@ The harness detects the FMU's sensitivity outputs (``sensitivities``, ``J_uu`` .
 by name; with them a Jacobian is one run of the variational equations, without them it is
 central differences.  Independent truths: the free-flight propagator P(1) (closed form),
 det J = r^2 e^{-nu} per impact, the finite differences themselves away from grazing (the
-cross-check), and the x^(-1/2) singularity near grazing.  Tests of the exact path are
-skipped on an FMU without sensitivity outputs; the fallback is tested on every FMU.
+cross-check), and the x^(-1/2) singularity near grazing.  The project's FMU must report
+its derivatives (a build without them fails here rather than skipping the exact path).
 """
 from __future__ import annotations
 
@@ -21,30 +21,15 @@ from mapcheck.linear import propagator
 from mapcheck.orbits import solve_periodic_orbit
 from tests.fmu_support import harness_params as _params
 
-needs_sens = pytest.mark.skipif("not config._sens", reason="the FMU has no sensitivity outputs")
-
-
-@pytest.fixture(scope="module", autouse=True)
-def _flag(request, model) -> None:
-    request.config._sens = model.has_sensitivities
-
-
-def _exact(model) -> bool:
-    return model.has_sensitivities
-
-
 # -- fallback and feature detection (every FMU) ------------------------------------------
 def test_auto_method_follows_the_fmu(model, sim) -> None:
     p = _params(model, wall=0, sigma=0.2)
     res = map_jacobian(sim, p, (-0.7, 0.4), theta=0.3)
-    assert res.method == ("exact" if _exact(model) else "fd")
+    assert model.has_sensitivities and res.method == "exact"
     np.testing.assert_allclose(res.J, propagator(1.0, p["nu"], p["Omega"]), atol=1e-6)
     fd = map_jacobian(sim, p, (-0.7, 0.4), theta=0.3, method="fd")
     assert fd.method == "fd" and fd.S is None
     np.testing.assert_allclose(fd.J, propagator(1.0, p["nu"], p["Omega"]), atol=1e-6)
-    if not _exact(model):
-        with pytest.raises(HarnessInputError, match="does not report"):
-            map_jacobian(sim, p, (-0.7, 0.4), theta=0.3, method="exact")
     with pytest.raises(HarnessInputError, match="unknown Jacobian method"):
         map_jacobian(sim, p, (-0.7, 0.4), method="complex-step")
 
@@ -119,7 +104,6 @@ REGULAR = [  # (overrides, state at theta, theta): free flight, one compliant / 
 ]
 
 
-@needs_sens
 @pytest.mark.parametrize("over, state, theta", REGULAR)
 def test_exact_jacobian_agrees_with_differences(model, sim, over, state, theta) -> None:
     p = _params(model, **over)
@@ -136,7 +120,6 @@ def test_exact_jacobian_agrees_with_differences(model, sim, over, state, theta) 
     np.testing.assert_allclose(ex.S, (plus - minus) / (2 * h), rtol=1e-5, atol=3e-6)
 
 
-@needs_sens
 def test_derivatives_chain_over_several_doSteps(model) -> None:
     """A period in 7 doSteps gives the same J and S as one doStep (the harness chains the
     per-step matrices the FMU reports)."""
@@ -154,7 +137,6 @@ def test_derivatives_chain_over_several_doSteps(model) -> None:
     np.testing.assert_allclose(b.S, a.S, rtol=1e-6, atol=1e-8)
 
 
-@needs_sens
 def test_exact_singularity_reaches_1e_minus_9(model, sim) -> None:
     """J11 - P11 ~ x^(-1/2) at t = n (Figure 9, r = 0.9) over x = 1e-9 .. 1e-4: five decades
     below the differences' limit."""
@@ -168,7 +150,6 @@ def test_exact_singularity_reaches_1e_minus_9(model, sim) -> None:
     np.testing.assert_allclose(np.linalg.det(s.J), p["r"] ** 2 * math.exp(-p["nu"]), rtol=1e-6)
 
 
-@needs_sens
 def test_newton_exact_and_fd_find_the_same_orbit(model, sim) -> None:
     """Same orbit and multipliers from exact derivatives and from differences; the exact
     path needs a fraction of the FMU runs."""

@@ -2,12 +2,19 @@
 
 The driver (tests/fuzz/valgrind_driver.c) takes every life-cycle path of FMI 2.0 and 3.0
 Co-Simulation and Model Exchange once, including FMU states and a corrupted one; any invalid
-read/write, use of uninitialised memory or definite/indirect leak fails the test.
+read/write, use of uninitialised memory or definite/indirect leak fails the test. It also takes
+the refused initialisation (closed form with a nonlinear contact law) on all four interfaces and
+every way on from the Error state. The last two tests run the Python reproducer of the segfault
+that refusal once caused (a dangling logger in fmpy's proxy, harness/fmi2_logging.py) under
+memcheck, and check that memcheck sees the old callbacks' fault.
 """
 from __future__ import annotations
 
+import os
+import re
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -49,3 +56,38 @@ def test_memcheck_sees_a_leak(driver: Path) -> None:
     res = _run(driver, "leak")
     assert res.returncode == 99, res.stderr[-2000:]
     assert "definitely lost" in res.stderr
+
+
+# -- the refused initialisation through fmpy (tests/refused_init_repro.py) ----------------------
+# CPython itself has benign memcheck reports (e.g. int.from_bytes on a partly uninitialised
+# buffer); only errors whose stack passes through the FMU's binary or fmpy's logger proxy count.
+_OURS = re.compile(r"ImpactOscillator|fmpy/logging|logMessage")
+_ERROR = re.compile(r"Invalid (read|write|free)|uninitialised|Jump to|Process terminating")
+
+
+def _memcheck_repro(*extra: str) -> tuple[subprocess.CompletedProcess, list[str]]:
+    env = dict(os.environ, PYTHONMALLOC="malloc", PYTHONPATH=str(ROOT))
+    res = subprocess.run(["valgrind", "-q", sys.executable, "-m", "tests.refused_init_repro", "1",
+                          *extra], cwd=ROOT, env=env, capture_output=True, text=True,
+                         timeout=600)
+    blocks = re.split(r"\n==\d+== \n", res.stderr)
+    return res, [b for b in blocks if _OURS.search(b) and _ERROR.search(b)]
+
+
+def test_refused_init_through_fmpy_is_memcheck_clean() -> None:
+    """FMI 2.0 and 3.0, CS and ME, refused at fmi*ExitInitializationMode and freed, through
+    plain fmpy after a logged instance was collected: no memory error in the FMU or the proxy."""
+    res, ours = _memcheck_repro()
+    assert res.returncode == 0, res.stderr[-3000:]
+    assert not ours, "\n\n".join(ours[:3])
+    assert res.stdout.count("needs the linear contact law") == 4
+
+
+def test_memcheck_sees_the_dangling_logger() -> None:
+    """The same run with a ctypes logger per instance handed to fmpy's proxy (the project's
+    callbacks before harness/fmi2_logging.py): the refusal's message is sent through the freed
+    callback, which memcheck reports (under valgrind it does not crash: the freed block is
+    still readable)."""
+    _, ours = _memcheck_repro("old")
+    assert any("logMessage" in b and "free'd" in b for b in ours), \
+        "memcheck did not see the read of the collected logger (fmpy's proxy changed?)"

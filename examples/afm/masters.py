@@ -4,7 +4,8 @@ Each ``run_*`` function takes the two FMUs, the parameters (``monolithic.Oscilla
 ``monolithic.Controller``), the start state and the grid, and returns a ``Trace``: the values at
 the communication points t_k (after the step that ends at t_k), k = 1..n.  All three masters
 are Jacobi (every FMU steps from t_k with the inputs of t_k; the connections are updated
-after all steps) and compute t_{k+1} = t_k + h by summing.
+after all steps); ecos and the SSP loop compute t_{k+1} = t_k + h by summing, the Container
+FMU gives its components t0 + k h (a few ulps apart: the FMU's results do not depend on it).
 
 ``feedback=False`` leaves the controller's u_wall unconnected (the wall stays at the FMU's
 default u_wall = 0): the controller only measures.
@@ -154,6 +155,10 @@ def run_ecos(osc_fmu: Path, ctrl_fmu: Path, values: dict[str, float], t1: float,
 
 
 # ---------------------------------------------------------------------- Container FMU (fmpy)
+#: FMI 3.0 type names of a component's variables -> the FMI 2.0 container's
+_FMI2_TYPE = {"Float64": "Real", "Int32": "Integer"}
+
+
 def build_container(path: Path, osc_fmu: Path, ctrl_fmu: Path, values: dict[str, float],
                     h: float, feedback: bool = True) -> Path:
     """An FMI 2.0 Container FMU (fmpy.container_fmu) holding both FMUs, fixed step h.
@@ -177,9 +182,10 @@ def build_container(path: Path, osc_fmu: Path, ctrl_fmu: Path, values: dict[str,
     for key, x in values.items():
         inst, name = key.split(".", 1)
         inner = mvars[inst][name]
-        mv = ModelVariable(type=inner.type, variability=inner.variability, causality="parameter",
+        typ = _FMI2_TYPE.get(inner.type, inner.type)  # the container is FMI 2.0
+        mv = ModelVariable(type=typ, variability=inner.variability, causality="parameter",
                            initial="exact", name=key,
-                           start=str(int(x)) if inner.type == "Integer" else repr(float(x)))
+                           start=str(int(x)) if typ == "Integer" else repr(float(x)))
         variables.append(mv)
         mappings[mv] = [(comps[inst], inner)]
     for inst, name in RECORDED:

@@ -125,8 +125,9 @@ class LoopResult:
 
 
 def grid(t0: float, h: float, n: int) -> np.ndarray:
-    """Communication points t_k by summing t += h, as ecos, fmpy's SSP loop and the Container
-    FMU compute them (not t0 + k h)."""
+    """Communication points t_k by summing t += h, as ecos and fmpy's SSP loop compute them
+    (the Container FMU's t0 + k h differ by ulps, which neither the FMU's results nor the
+    controller's window count, floor(... + 1e-9), notice)."""
     t = np.empty(n + 1)
     t[0] = x = t0
     for k in range(1, n + 1):
