@@ -331,6 +331,9 @@ static double release_time(const ModelData *m, double tau0, double tau_end) {
             b = fmin(b, a + d / TWO_PI);
         }
         b = fmin(b, tau_end);
+        /* a on a turning point up to rounding: d is a few ulps and a + d / 2 pi == a; step past
+         * it, or the loop never moves (fuzzer find F13) */
+        if (!(b > a)) b = fmin(nextafter(a, HUGE_VAL), tau_end);
         if (model_wall_force(m, b) <= 0.0) {
             double lo = a, hi = b; /* f(lo) > 0 >= f(hi), f monotone */
             for (int it = 0; it < 200 && hi - lo > 2.0 * DBL_EPSILON * fabs(hi); ++it) {

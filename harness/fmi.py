@@ -22,6 +22,7 @@ import hashlib
 import os
 import threading
 import zipfile
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -75,7 +76,8 @@ def check_archive(path: str | os.PathLike, argument: str = "--fmu") -> None:
     try:
         with zipfile.ZipFile(path) as archive:
             bad = archive.testzip()
-    except (zipfile.BadZipFile, OSError, EOFError, RuntimeError, NotImplementedError) as exc:
+    except (zipfile.BadZipFile, zlib.error, OSError, EOFError, RuntimeError,
+            NotImplementedError) as exc:  # zlib.error: a flip inside the deflate stream
         raise HarnessInputError(argument, f"{str(path)!r} is a damaged FMU archive: {exc}") from None
     if bad is not None:
         raise HarnessInputError(argument, f"{str(path)!r} is a damaged FMU archive: bad CRC-32 for {bad!r}")
