@@ -507,6 +507,7 @@ class CvodeDriver:
         self.tau_good: float = 0.0
         self.y_good: list[float] = [model.u, model.v]
         self.needs_reinit: bool = True
+        self._fresh: bool = True
         self.events: int = 0
         self.guard_hits: int = 0  # crossings the grazing guard recovered
 
@@ -547,6 +548,7 @@ class CvodeDriver:
         self.tau_good = self.tau
         self.y_good = [m.u, m.v]
         self.needs_reinit = False
+        self._fresh = True  # the next CVODE call takes the first step (see _cvode_step)
 
     def _locate_missed_crossing(self, tau_turn: float) -> Optional[tuple[float, list[float]]]:
         """Re-integrate from the last good point to the turning point ``tau_turn``.
@@ -583,6 +585,38 @@ class CvodeDriver:
         return None
 
     # -- the communication step ------------------------------------------------------------
+    def _cvode_step(self, tau_end: float):
+        """One call into CVODE towards ``tau_end``; never a stop time at a communication point.
+
+        The C FMU steps CVODE in one-step mode past the communication points and reads the
+        state there from CVODE's interpolant (``CVodeGetDky``).  scikit-sundae exposes neither
+        ``CVodeGetDky`` nor a persistent stop time, but ``CVode(tout, CV_NORMAL)`` without a
+        stop time is the same thing: CVODE takes its own steps until it passes ``tout`` and
+        returns ``CVodeGetDky(tout)``, checking roots only up to ``tout`` (so no event past the
+        point is returned).  Setting ``tout`` as a stop time instead (as before) made the result
+        depend on the importer's time arithmetic: a point a few ulps past a step end gave a
+        ~1e-14 "sliver" step that spoiled the variable-step Adams history (u off by 5e-5 after
+        100 periods on the grid t0 + k 0.01, 4e-11 on t += 0.01).  The only stop time is the
+        re-origin time, the same for every grid.
+
+        The first step after a restart is taken in one-step mode with ``tout = tau + 1`` (as
+        the C FMU), because CVODE's initial step size depends on ``tout``.  If that step ends
+        past ``tau_end`` the next (normal-mode) call only interpolates; if it returns a root
+        past ``tau_end`` (an event within the first step, after the point) CVODE is restarted
+        and the step is taken in normal mode (grid-dependent initial step, in that rare case).
+        """
+        cvode = self._cvode
+        if self._fresh:
+            self._fresh = False
+            res = cvode.step(self.tau + 1.0, method="onestep", tstop=self.REORIGIN_AFTER)
+            if res.status != 2 or float(res.t) <= tau_end:
+                return res
+            self._clear_event_log()
+            res = cvode.init_step(self.tau, np.array([self.model.u, self.model.v]))
+            if not res.success:
+                raise SolverError(f"CVODE re-initialisation failed: {res.message}")
+        return cvode.step(tau_end, method="normal", tstop=self.REORIGIN_AFTER)
+
     def advance(self, t_end: float) -> None:
         """Integrate to absolute time ``t_end``, applying every wall event on the way.
 
@@ -593,7 +627,7 @@ class CvodeDriver:
             does not settle).
         """
         m = self.model
-        if self.needs_reinit or self.tau > self.REORIGIN_AFTER:
+        if self.needs_reinit or self.tau >= self.REORIGIN_AFTER:
             self._reinit()
         tau_end = t_end - self.origin
         if tau_end < self.tau:
@@ -601,21 +635,29 @@ class CvodeDriver:
         span = max(1.0, math.ceil(tau_end - self.tau))
         max_events = int(self.MAX_EVENTS_PER_UNIT_TIME * span)
         n_events = 0
-        cvode = self._cvode
 
         while self.tau < tau_end:
-            res = cvode.step(tau_end, method="normal", tstop=tau_end)
+            res = self._cvode_step(tau_end)
             if res.status < 0:
                 raise SolverError(
                     f"CVODE failed near t = {self.origin + float(res.t)!r}: {res.message}"
                 )
             tret = float(res.t)
             y = [float(res.y[0]), float(res.y[1])]
+            if res.status == 0 and tret > tau_end:
+                # the first step after a restart ended past the point: interpolate next call
+                continue
             self.tau = tret
             m.u, m.v = y
-            if res.status != 2:  # success or tstop: tret == tau_end
-                # A tstop return lies on the mode's side of the wall (else g0 would have
-                # changed sign in the last step and been returned as a root first).
+            if res.status == 1:
+                # the re-origin time (CV_TSTOP_RETURN): restart there, the same for every grid
+                self.tau_good, self.y_good = tret, y
+                self._reinit()
+                tau_end = t_end - self.origin
+                continue
+            if res.status != 2:  # success: tret == tau_end, or a step end before it
+                # A return lies on the mode's side of the wall (else g0 would have changed
+                # sign in the last step and been returned as a root first).
                 self.tau_good, self.y_good = tret, y
                 continue
             info = res.i_events[-1]
