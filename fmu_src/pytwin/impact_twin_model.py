@@ -461,8 +461,9 @@ class CvodeDriver:
     """Integrates an :class:`OscillatorModel` between communication points with CVODE.
 
     Mirrors ``fmu_src/solver_cvode.c``: the same re-origin rule, maximum step, root indicators,
-    event handling and work bounds.  The one difference is how a crossing stepped over by the
-    solver is located: CVODE's interpolant (``CVodeGetDky``) is not exposed by scikit-sundae,
+    event handling and work bounds, and CVODE steps past the communication points and
+    interpolates there (see :meth:`_cvode_step`).  The one difference is how a crossing stepped
+    over by the solver is located: CVODE's interpolant (``CVodeGetDky``) is not exposed by scikit-sundae,
     so the twin re-integrates from the last point known to lie on the correct side of the wall
     (a return of CVODE at most one doStep back, in practice the previous turning point) up to
     the turning point that revealed the miss, with CVODE's root finding on.  That re-integration
