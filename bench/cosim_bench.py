@@ -22,12 +22,14 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import re
 import sys
 import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "bench"))
+from sections import write_section  # noqa: E402  (bench/sections.py: the marked sections)
+
 FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
 BEGIN, END = "<!-- cosim:begin -->", "<!-- cosim:end -->"
 SIGMA = 0.5
@@ -125,14 +127,6 @@ def section(rows: list[dict]) -> str:
     return "\n".join(L)
 
 
-def write_section(text: str, path: Path) -> None:
-    """Replace the cosim section of BENCHMARKS.md (append it if there is none)."""
-    old = path.read_text() if path.exists() else ""
-    pat = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.S)
-    new = pat.sub(lambda _: text, old) if pat.search(old) else old.rstrip() + "\n\n" + text + "\n"
-    path.write_text(new)
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="smoke test: short runs, print only")
@@ -145,7 +139,7 @@ def main(argv: list[str] | None = None) -> int:
     print(text)
     out = args.out or (None if args.quick else ROOT / "BENCHMARKS.md")
     if out:
-        write_section(text, Path(out))
+        write_section(Path(out), text)
     return 0
 
 

@@ -34,7 +34,6 @@ import json
 import math
 import os
 import platform
-import re
 import shlex
 import subprocess
 import sys
@@ -57,6 +56,7 @@ from harness.fmi import FmuModel, open_source  # noqa: E402
 from harness.sampling import sample_periods, strobe  # noqa: E402
 from harness.simulator import FmuSimulator  # noqa: E402
 from mapcheck.exact import ExactOscillator, forcing_amplitude_phase  # noqa: E402
+from sections import keep_sections  # noqa: E402  (bench/sections.py, next to this script)
 
 C_FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
 PY_FMU = ROOT / "build" / "fmu" / "ImpactOscillatorPy.fmu"
@@ -615,19 +615,6 @@ def report(res: dict, command: str) -> str:
     if notes.exists():
         L += [notes.read_text().rstrip(), ""]
     return "\n".join(L)
-
-
-_SECTION = re.compile(r"<!-- (\w+):begin -->.*?<!-- \1:end -->", re.S)
-
-
-def keep_sections(path: Path, text: str) -> str:
-    """`text` with the marked sections (<!-- NAME:begin --> ... <!-- NAME:end -->) that other
-    benchmark scripts wrote into the existing `path` appended, so that a rewrite keeps them."""
-    if not path.exists():
-        return text
-    found = [m.group(0) for m in _SECTION.finditer(path.read_text())]
-    kept = [sec for sec in found if sec not in text]
-    return text.rstrip() + ("\n\n" + "\n\n".join(kept) + "\n" if kept else "\n")
 
 
 def main(argv: list[str] | None = None) -> int:

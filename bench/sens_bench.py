@@ -22,7 +22,6 @@ import argparse
 import datetime as _dt
 import json
 import os
-import re
 import subprocess
 import sys
 import tempfile
@@ -38,6 +37,7 @@ from fmpy import extract, read_model_description  # noqa: E402
 from fmpy.fmi2 import FMU2Slave  # noqa: E402
 
 from mapcheck.exact import ExactOscillator  # noqa: E402
+from sections import write_section  # noqa: E402
 
 FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112, sigma=0.5, r=0.9, Gamma=10.0, wall=1)
@@ -309,14 +309,6 @@ def section(res: dict) -> str:
     return "\n".join(L)
 
 
-def write_section(text: str, path: Path) -> None:
-    """Replaces the sens section of BENCHMARKS.md (appends it if there is none)."""
-    old = path.read_text() if path.exists() else ""
-    pat = re.compile(re.escape(BEGIN) + ".*?" + re.escape(END), re.S)
-    new = pat.sub(lambda _: text, old) if pat.search(old) else old.rstrip() + "\n\n" + text + "\n"
-    path.write_text(new)
-
-
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true", help="smoke test: few periods, print only")
@@ -335,7 +327,7 @@ def main(argv: list[str] | None = None) -> int:
         Path(args.json).write_text(json.dumps(res, indent=1))
     out = args.out or (None if args.quick else str(ROOT / "BENCHMARKS.md"))
     if out:
-        write_section(text, Path(out))
+        write_section(Path(out), text)
     return 0
 
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import math
 import platform
-import re
 import time
 from pathlib import Path
 
@@ -24,6 +23,7 @@ from harness.lyapunov import lyapunov_exponents
 from harness.reproduce.fig9 import problem, settings
 from harness.reproduce.windows import predicted_windows
 from harness.shooting import StroboscopicMap, map_guided_windows
+from sections import write_section as write_marked_section  # bench/sections.py, next to this script
 from harness.simulator import FmuSimulator
 
 
@@ -114,12 +114,8 @@ def write_section(out: dict, lyap: dict, worst: float, xtol, quick: bool) -> Non
         L.append(f"| {sigma:g} | {method} | {r.exponents[0]:+.6f} +- {r.uncertainty[0]:.1e} | "
                  f"{r.exponents[1]:+.4f} +- {r.uncertainty[1]:.1e} | {r.periods} | {dev:+.1e} | {wall:.1f} |")
     L += ["<!-- senspy:end -->"]
-    section = "\n".join(L)
     path = Path(__file__).resolve().parents[1] / "BENCHMARKS.md"
-    text = path.read_text() if path.exists() else ""
-    pat = re.compile(r"<!-- senspy:begin -->.*?<!-- senspy:end -->", re.S)
-    text = pat.sub(lambda _m: section, text) if pat.search(text) else text.rstrip() + "\n\n" + section + "\n"
-    path.write_text(text)
+    write_marked_section(path, "\n".join(L))
     print(f"wrote {path}")
 
 

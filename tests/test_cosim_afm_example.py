@@ -13,8 +13,8 @@ from examples.afm import run  # noqa: E402
 
 
 def test_example_runs_in_one_command(tmp_path: Path) -> None:
-    """The example writes its plots, numbers and report; every master is within 1e-6 of
-    the monolithic reference; the sweep shows the loop holding the free amplitude above
+    """The example writes its plots, numbers and report; every master is within the FMU's
+    budget of the monolithic reference (1e-8 in u, 1e-7 in v; the issue asks for 1e-6); the sweep shows the loop holding the free amplitude above
     grazing and losing it (the amplitude jumps away from 3) once the set-point asks for a
     contact with the stiff sample."""
     assert run.main(["--quick", "--out", str(tmp_path)]) == 0
@@ -23,7 +23,7 @@ def test_example_runs_in_one_command(tmp_path: Path) -> None:
     data = json.loads((tmp_path / "afm.json").read_text())
     assert set(data["masters"]) == {"ecos", "fmpy SSP", "fmpy Container FMU"}
     for name, e in data["masters"].items():
-        assert max(e["u"], e["v"], e["u_wall"], e["amplitude"]) <= 1e-6, (name, e)
+        assert max(e["u"], e["u_wall"], e["amplitude"]) <= 1e-8 and e["v"] <= 1e-7, (name, e)
     rows = {round(r["A_set"], 2): np.array(r["amplitude"]) for r in data["sweep"]["rows"]}
     # above grazing (A_set >= free amplitude 3 - a little): no contact, amplitude exactly free
     assert np.all(np.abs(rows[3.0] - 3.0) < 1e-6)

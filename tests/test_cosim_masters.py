@@ -162,10 +162,12 @@ def test_open_loop_controller_measures_in_each_master(master: str, tmp_path: Pat
 def test_closed_loop_matches_monolithic_in_each_master(master: str, tmp_path: Path) -> None:
     """The AFM loop (the controller moves the wall through the oscillator's u_wall input)
     over 12 periods, while the loop is still moving the wall: at every communication point
-    within 1e-6 of the monolithic reference."""
+    within the FMU's own budget of the monolithic reference (the issue asks for 1e-6)."""
     err, ref = _run(master, True, 12.0, tmp_path)
     assert np.ptp(ref.u_wall) > 0.1, "the loop was meant to move the wall"
-    assert max(err.values()) <= 1e-6, err
+    # measured 4.5e-11 in u, 5.5e-10 in v in every master: held to the bounds of the open loop
+    assert err["u"] <= 1e-8 and err["v"] <= 1e-7, err
+    assert err["amplitude"] <= 1e-8 and err["u_wall"] <= 1e-8, err
 
 
 # ------------------------------------------------------------------------- the controller FMU

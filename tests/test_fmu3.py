@@ -19,8 +19,6 @@ FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)
 T0 = 0.5
 
-pytestmark = pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
-
 
 def test_fmpy_validate_reports_no_problem_on_both_fmus():
     assert validate_fmu(str(FMU3_PATH)) == []

@@ -79,7 +79,6 @@ def test_a_huge_step_stops_at_the_cap_not_an_overflow(fmu):
     assert "more than 2000000 CVODE steps in this doStep" in msg and "cap" in msg, msg
 
 
-@pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
 def test_the_event_bound_counts_the_whole_doStep_across_intermediate_updates():
     """FMI 3.0 with intermediate updates: the solver stops at every event to call back, and
     resumes towards the same end; the bound is on the whole doStep, not on each stretch."""

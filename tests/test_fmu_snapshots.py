@@ -165,7 +165,6 @@ def test_a_cs_state_is_refused_by_a_model_exchange_instance(running):
         cb.release()
 
 
-@pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
 def test_fmi3_refuses_fmi2_states_and_corrupted_ones(running):
     _, blob2 = running
     md = read_model_description(str(FMU3_PATH))

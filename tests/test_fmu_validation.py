@@ -113,7 +113,6 @@ def test_model_exchange_states_and_time_are_checked():
         me.freeInstance()
 
 
-@pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
 def test_fmi3_refuses_the_same_values():
     md = read_model_description(str(FMU3_PATH))
     vr = {v.name: v.valueReference for v in md.modelVariables}
