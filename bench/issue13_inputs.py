@@ -237,6 +237,8 @@ def main() -> int:
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--skip-cli", action="store_true")
     ap.add_argument("--skip-asan", action="store_true")
+    ap.add_argument("--benchmarks", action="store_true",
+                    help="also write the table as the 'fuzz' section of BENCHMARKS.md")
     args = ap.parse_args()
     release = runner.RELEASE
     asan = None if args.skip_asan else runner.build_sanitized()
@@ -279,6 +281,14 @@ def main() -> int:
     if args.out:
         args.out.parent.mkdir(parents=True, exist_ok=True)
         args.out.write_text(text + "\n")
+    if args.benchmarks:
+        from bench.sections import write_section
+
+        write_section(ROOT / "BENCHMARKS.md", "<!-- fuzz:begin -->\n## Issue 13: every input of its "
+                      "\"Why\" and the answer it gets now\n\n`.venv/bin/python bench/issue13_inputs.py "
+                      "--benchmarks` (one run; FMU rows: release build for the answer and its seconds, "
+                      "ASan + UBSan build for the sanitizer column; \"oracle\" is the fuzzer's verdict, "
+                      "tests/fuzz/executor.py).\n\n" + text + "\n<!-- fuzz:end -->")
     return 0
 
 
