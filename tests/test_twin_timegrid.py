@@ -14,7 +14,9 @@ Checks, with the grids and the closed form of tests/test_fmu_timegrid.py:
   against the summed grid, and against the C FMU on the same grid;
 * every grid of the C FMU's time-grid test (t0 + k h for h = 1e-4 .. 10, summed, random
   variable steps, points a few ulps off the integers), every wall model: every communication
-  point within the FMU's budget of the closed form, and equal to the C FMU's result.
+  point within the FMU's budget of the closed form, and equal to the C FMU's result;
+* the driver's rare branch: a point a few ulps after a restart, inside CVODE's first step and
+  before a wall entry in that step.
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ from typing import Iterator
 import numpy as np
 import pytest
 
+from mapcheck.exact import ExactOscillator
 from tests.test_fmu_timegrid import BUDGET, GRIDS, Driver, exact_on, fixed, summed
 from tests.fmu_support import FMU_PATH
 
@@ -91,3 +94,43 @@ def test_every_grid_matches_the_closed_form_and_the_c_fmu(twin, c_driver, grid, 
     if wall == "rigid":
         assert np.all(got[:, 0] <= 0.0)  # never inside the rigid wall at a point
     assert np.max(np.abs(got - c_driver.run(wall, points))) <= TWIN_VS_C[wall]
+
+
+def _load_twin_model():
+    """impact_twin_model loaded under another name (the twin FMU, running in this process,
+    imports its own copy as ``impact_twin_model``; see tests/test_twin.py)."""
+    import importlib.util
+    path = Path(__file__).resolve().parents[1] / "fmu_src" / "pytwin" / "impact_twin_model.py"
+    spec = importlib.util.spec_from_file_location("twin_model_timegrid", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.mark.parametrize("ulps", [1, 2, 45])
+def test_a_point_inside_the_first_step_before_a_wall_entry(ulps) -> None:
+    """The rare branch of CvodeDriver._cvode_step: right after a restart CVODE's first step
+    (~4e-14 here) holds a wall entry 1e-14 ahead, and the communication point lies a few ulps
+    after the restart, before the entry.  The driver retakes the step stopped at the point (a
+    normal-mode tout that close is refused by CVODE as "too close") and goes on: the states at
+    the point and 0.1 later match the closed form, with the one wall entry."""
+    mod = _load_twin_model()
+    t0, depth = 0.5, 1e-14
+    m = mod.OscillatorModel()
+    for name, x in dict(sigma=0.5, u0=-depth, v0=1.0, nu=4.605170185988091,
+                        Omega=0.3059238689620112).items():
+        m.set_real(name, x)
+    m.set_wall(mod.WALL_COMPLIANT)
+    drv = mod.CvodeDriver(m)
+    drv.start(t0)
+    m.initialize_state(drv.tau)
+    t1 = t0 + ulps * np.spacing(t0)
+    got = []
+    for t in (t1, t0 + 0.1):
+        drv.advance(t)
+        got.append((m.u, m.v))
+    assert drv.first_step_retries == 1  # the branch under test was taken
+    assert drv.events == m.impacts == 1
+    osc = ExactOscillator(m.nu, m.Omega, 0.5, r=m.r, Gamma=m.Gamma, wall="compliant")
+    exact = osc.dense(-depth, 1.0, np.array([t1, t0 + 0.1]), t0=t0)[0]
+    assert np.max(np.abs(np.array(got) - exact)) <= 1e-10

@@ -511,6 +511,7 @@ class CvodeDriver:
         self._fresh: bool = True
         self.events: int = 0
         self.guard_hits: int = 0  # crossings the grazing guard recovered
+        self.first_step_retries: int = 0  # see _cvode_step: a root past the point in step 1
 
     # -- time ------------------------------------------------------------------------------
     def start(self, t: float) -> None:
@@ -602,9 +603,10 @@ class CvodeDriver:
 
         The first step after a restart is taken in one-step mode with ``tout = tau + 1`` (as
         the C FMU), because CVODE's initial step size depends on ``tout``.  If that step ends
-        past ``tau_end`` the next (normal-mode) call only interpolates; if it returns a root
-        past ``tau_end`` (an event within the first step, after the point) CVODE is restarted
-        and the step is taken in normal mode (grid-dependent initial step, in that rare case).
+        past ``tau_end`` the next (normal-mode) call only interpolates.  If it returns a root
+        past ``tau_end`` (a wall event within the first step after a restart, some 1e-14 long,
+        with the point in between) CVODE is restarted and the step retaken with ``tau_end`` as
+        its stop time, and the caller restarts at the point: grid-dependent, in that rare case.
         """
         cvode = self._cvode
         if self._fresh:
@@ -612,10 +614,14 @@ class CvodeDriver:
             res = cvode.step(self.tau + 1.0, method="onestep", tstop=self.REORIGIN_AFTER)
             if res.status != 2 or float(res.t) <= tau_end:
                 return res
+            # Restart and take the first step again, stopped at the point (a tout that close
+            # would be refused as "too close" in normal mode); the caller restarts there.
             self._clear_event_log()
+            self.first_step_retries += 1
             res = cvode.init_step(self.tau, np.array([self.model.u, self.model.v]))
             if not res.success:
                 raise SolverError(f"CVODE re-initialisation failed: {res.message}")
+            return cvode.step(self.tau + 1.0, method="onestep", tstop=tau_end)
         return cvode.step(tau_end, method="normal", tstop=self.REORIGIN_AFTER)
 
     def advance(self, t_end: float) -> None:
@@ -651,7 +657,8 @@ class CvodeDriver:
             self.tau = tret
             m.u, m.v = y
             if res.status == 1:
-                # the re-origin time (CV_TSTOP_RETURN): restart there, the same for every grid
+                # a stop time (CV_TSTOP_RETURN): the re-origin time, the same for every grid,
+                # or the point itself in _cvode_step's rare retry; restart there
                 self.tau_good, self.y_good = tret, y
                 self._reinit()
                 tau_end = t_end - self.origin
