@@ -604,7 +604,7 @@ class CvodeDriver:
         The first step after a restart is taken in one-step mode with ``tout = tau + 1`` (as
         the C FMU), because CVODE's initial step size depends on ``tout``.  If that step ends
         past ``tau_end`` the next (normal-mode) call only interpolates.  If it returns a root
-        past ``tau_end`` (a wall event within the first step after a restart, some 1e-14 long,
+        past ``tau_end`` (a wall crossing or turning point within the first step after a restart, some 1e-14 long,
         with the point in between) CVODE is restarted and the step retaken with ``tau_end`` as
         its stop time, and the caller restarts at the point: grid-dependent, in that rare case.
         """
