@@ -27,13 +27,24 @@ from tests.fuzz.sequences import Generator
 
 CORPUS = sorted((ROOT / "tests" / "fuzz_corpus").glob("*.json"))
 
-# Findings still open in fmu_src (see the "finding" field of each corpus file and
-# /work/coord/findings_fuzz.md); an entry here marks its corpus files xfail (not strict) until
+# Findings still open in fmu_src (see the "finding" field of each corpus file); an entry here marks its corpus files xfail (not strict) until
 # the fix lands, then it is deleted.
 OPEN_FINDINGS: dict[str, str] = {}
 
-needs_toolchain = pytest.mark.skipif(shutil.which("cmake") is None or shutil.which("gcc") is None,
-                                     reason="cmake/gcc missing (scripts/setup.sh installs them)")
+def _require_toolchain(fn):
+    """Fail (not skip) without cmake/gcc: the sanitizer checks must be able to fail CI."""
+    import functools
+
+    @functools.wraps(fn)
+    def wrapper(*args, **kwargs):
+        missing = [t for t in ("cmake", "gcc") if shutil.which(t) is None]
+        if missing:
+            pytest.fail(f"{', '.join(missing)} missing: run scripts/setup.sh (it installs them)")
+        return fn(*args, **kwargs)
+    return wrapper
+
+
+needs_toolchain = _require_toolchain
 
 
 @pytest.fixture(scope="session")
