@@ -463,12 +463,12 @@ class CvodeDriver:
     Mirrors ``fmu_src/solver_cvode.c``: the same re-origin rule, maximum step, root indicators,
     event handling and work bounds, and CVODE steps past the communication points and
     interpolates there (see :meth:`_cvode_step`).  The one difference is how a crossing stepped
-    over by the solver is located: CVODE's interpolant (``CVodeGetDky``) is not exposed by scikit-sundae,
-    so the twin re-integrates from the last point known to lie on the correct side of the wall
-    (a return of CVODE at most one doStep back, in practice the previous turning point) up to
-    the turning point that revealed the miss, with CVODE's root finding on.  That re-integration
-    ends on the wrong side of the wall, so the sign change of g0 is bracketed by some step and
-    CVODE locates it.
+    over by the solver is located: CVODE's interpolant (``CVodeGetDky``) is not exposed by
+    scikit-sundae, so the twin re-integrates from the last point known to lie on the correct
+    side of the wall (a return of CVODE at most one doStep back, in practice the previous
+    turning point) up to the turning point that revealed the miss, with CVODE's root finding
+    on.  That re-integration ends on the wrong side of the wall, so the sign change of g0 is
+    bracketed by some step and CVODE locates it.
 
     Parameters
     ----------
@@ -604,9 +604,10 @@ class CvodeDriver:
         The first step after a restart is taken in one-step mode with ``tout = tau + 1`` (as
         the C FMU), because CVODE's initial step size depends on ``tout``.  If that step ends
         past ``tau_end`` the next (normal-mode) call only interpolates.  If it returns a root
-        past ``tau_end`` (a wall crossing or turning point within the first step after a restart, some 1e-14 long,
-        with the point in between) CVODE is restarted and the step retaken with ``tau_end`` as
-        its stop time, and the caller restarts at the point: grid-dependent, in that rare case.
+        past ``tau_end`` (a wall crossing or turning point within the first step after a
+        restart, some 1e-14 long, with the point in between) CVODE is restarted and the step
+        retaken with ``tau_end`` as its stop time, and the caller restarts at the point:
+        grid-dependent, in that rare case.
         """
         cvode = self._cvode
         if self._fresh:
