@@ -624,16 +624,11 @@ int main(int argc, char **argv) {
 """
 
 
-def test_non_python_importer_with_ld_preload(twin_fmu: Path, tmp_path: Path) -> None:
-    """A C program that dlopens the twin needs libpython preloaded, PYTHONHOME at its
-    installation and PYTHONPATH at the packages, exactly as the README says; then it computes
-    what fmpy gets in-process."""
-    import shutil
+def _c_importer(twin_fmu: Path, tmp_path: Path, cc: str) -> tuple[list[str], dict[str, str]]:
+    """Compile the C importer and extract the twin: the command line that runs it, and the
+    environment a C host needs for the twin (libpython preloaded, PYTHONHOME, PYTHONPATH)."""
     import sysconfig
 
-    cc = shutil.which("cc") or shutil.which("gcc")
-    if cc is None:
-        pytest.skip("no C compiler")
     src, exe = tmp_path / "importer.c", tmp_path / "importer"
     src.write_text(_C_IMPORTER)
     subprocess.run([cc, "-O1", "-I", str(ROOT / "fmu_src" / "include" / "fmi2"), str(src),
@@ -643,16 +638,29 @@ def test_non_python_importer_with_ld_preload(twin_fmu: Path, tmp_path: Path) -> 
     args = [str(exe), str(unzipdir / "binaries" / "linux64" / "ImpactOscillatorPy.so"), guid,
             (unzipdir / "resources").as_uri()]
     libpython = Path(sysconfig.get_config_var("LIBDIR")) / sysconfig.get_config_var("INSTSONAME")
-    site = sysconfig.get_paths()["purelib"]
+    # PYTHONHOME: the embedded interpreter would otherwise look for its standard library next
+    # to whichever "python3" comes first on PATH (here maybe a different installation).
+    python_env = {"LD_PRELOAD": str(libpython), "PYTHONPATH": sysconfig.get_paths()["purelib"],
+                  "PYTHONHOME": sys.base_prefix}
+    return args, python_env
+
+
+def test_non_python_importer_with_ld_preload(twin_fmu: Path, tmp_path: Path) -> None:
+    """A C program that dlopens the twin needs libpython preloaded, PYTHONHOME at its
+    installation and PYTHONPATH at the packages, exactly as the README says; then it computes
+    what fmpy gets in-process."""
+    import shutil
+
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    args, python_env = _c_importer(twin_fmu, tmp_path, cc)
     env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
 
     bare = subprocess.run(args, env=env, capture_output=True, text=True, timeout=60)
     assert bare.returncode != 0 and "undefined symbol" in bare.stdout
 
-    # PYTHONHOME: the embedded interpreter would otherwise look for its standard library next
-    # to whichever "python3" comes first on PATH (here maybe a different installation).
-    run = subprocess.run(args, env={**env, "LD_PRELOAD": str(libpython), "PYTHONPATH": site,
-                                    "PYTHONHOME": sys.base_prefix},
+    run = subprocess.run(args, env={**env, **python_env},
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stdout + run.stderr
     got = [float(x) for x in run.stdout.split("state")[1].split()]
@@ -677,25 +685,13 @@ def test_c_importer_exit_has_no_use_after_free(twin_fmu: Path, tmp_path: Path) -
     teardown under valgrind reports a read in scipy's _uarray module dealloc and the dynamic
     loader's rpath strncmp, both outside pythonfmu; they are not asserted on.)"""
     import shutil
-    import sysconfig
 
     cc, vg = shutil.which("cc") or shutil.which("gcc"), shutil.which("valgrind")
     if cc is None or vg is None:
         pytest.skip("needs a C compiler and valgrind")
-    src, exe = tmp_path / "importer.c", tmp_path / "importer"
-    src.write_text(_C_IMPORTER)
-    subprocess.run([cc, "-O1", "-I", str(ROOT / "fmu_src" / "include" / "fmi2"), str(src),
-                    "-o", str(exe), "-ldl"], check=True, capture_output=True)
-    unzipdir = Path(extract(str(twin_fmu), unzipdir=str(tmp_path / "fmu")))
-    guid = read_model_description(str(twin_fmu)).guid
-    libpython = Path(sysconfig.get_config_var("LIBDIR")) / sysconfig.get_config_var("INSTSONAME")
-    env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path), "LD_PRELOAD": str(libpython),
-           "PYTHONPATH": sysconfig.get_paths()["purelib"], "PYTHONHOME": sys.base_prefix,
-           "PYTHONMALLOC": "malloc"}
-    run = subprocess.run([vg, "-q", str(exe),
-                          str(unzipdir / "binaries" / "linux64" / "ImpactOscillatorPy.so"), guid,
-                          (unzipdir / "resources").as_uri()],
-                         env=env, capture_output=True, text=True, timeout=600)
+    args, python_env = _c_importer(twin_fmu, tmp_path, cc)
+    env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path), **python_env, "PYTHONMALLOC": "malloc"}
+    run = subprocess.run([vg, "-q", *args], env=env, capture_output=True, text=True, timeout=600)
     assert run.returncode == 0 and "state" in run.stdout, run.stdout[-2000:] + run.stderr[-2000:]
     blocks = run.stderr.split("==\n")
     bad = [b for b in blocks if "Invalid" in b and "finalizePythonInterpreter" in b]
