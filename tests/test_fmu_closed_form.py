@@ -123,35 +123,8 @@ def test_fmi3_closed_form_equals_fmi2():
         f3.close()
 
 
-# (wall, sigma, Gamma, r, F_ext, u_wall, start): the ports shift the equilibrium and the wall
-PORT_CASES = [
-    ("compliant", FIG9, 0.5, 10.0, 0.9, 0.02, -0.1, (-0.4, 0.0)),
-    ("rigid", FIG9, 0.5, 10.0, 0.9, 0.02, -0.1, (-0.4, 0.0)),
-    ("compliant", UNDERDAMPED, 0.1, 1000.0, 0.9, 5.0, 0.2, (-0.5, 1.0)),
-    ("rigid", UNDERDAMPED, 0.1, 1000.0, 0.7, -3.0, 0.3, (-0.5, 1.0)),
-]
-
-
-@pytest.mark.parametrize("wall,lin,sigma,Gamma,r,F,w,start", PORT_CASES)
-def test_constant_ports_match_the_oracle(wall, lin, sigma, Gamma, r, F, w, start):
-    from mapcheck.exact import ExactOscillator
-    from tests.fmu_support import WALLS, LoggedSlave
-    f = LoggedSlave(name="cf-ports")
-    try:
-        lin = {k: lin[k] for k in ("nu", "Omega")}
-        f.start(wall=WALLS[wall], sigma=sigma, Gamma=Gamma, r=r, u0=start[0], v0=start[1],
-                F_ext=F, u_wall=w, solver=1, **lin)
-        ex = ExactOscillator(sigma=sigma, r=r, Gamma=Gamma, wall=wall, F_ext=F, u_wall=w, **lin)
-        times = np.arange(1.0, 21.0)
-        want, impacts = ex.strobe(start[0], start[1], times)
-        got = []
-        for t in times:
-            f.step_to(t)
-            got.append(f.state())
-        assert np.max(np.abs(np.array(got) - want)) < 1e-10
-        assert f.impacts() == impacts[-1] > 0
-    finally:
-        f.close()
+# Constant ports in closed-form mode against the oracle: tests/test_fmu_ports.py
+# (test_constant_ports_match_the_closed_form, solver = 1).
 
 
 @pytest.mark.parametrize("wall", ["compliant", "rigid"])
