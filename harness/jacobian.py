@@ -100,6 +100,15 @@ def one_period(sim: Simulator, params: Mapping[str, Any], state: Sequence[float]
     return np.array([u, v])
 
 
+def central_difference(sim: Simulator, params: Mapping[str, Any], state: np.ndarray, t0: float,
+                       j: int, step: float) -> np.ndarray:
+    """Column ``j`` of the one-period map's Jacobian by a central difference of absolute
+    ``step`` in component ``j`` of ``state`` (two restarts)."""
+    dx = np.zeros(2)
+    dx[j] = step
+    return (one_period(sim, params, state + dx, t0) - one_period(sim, params, state - dx, t0)) / (2.0 * step)
+
+
 def exact_jacobian(sim: Simulator, params: Mapping[str, Any], state: Sequence[float],
                    theta: float = 0.0) -> JacobianResult:
     """J and dF/d sigma of the one-period map from the FMU's variational equations (one run)."""
@@ -160,9 +169,7 @@ def map_jacobian(
     for j in range(2):
         cols = []
         for h in steps:
-            dx = np.zeros(2)
-            dx[j] = h * scale[j]
-            cols.append((one_period(sim, params, x + dx, theta) - one_period(sim, params, x - dx, theta)) / (2 * dx[j]))
+            cols.append(central_difference(sim, params, x, theta, j, h * scale[j]))
         diffs = [float(np.max(np.abs(cols[k + 1] - cols[k]))) for k in range(len(steps) - 1)]
         best = int(np.argmin(diffs))
         J[:, j] = cols[best + 1]

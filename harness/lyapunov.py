@@ -139,13 +139,11 @@ def lyapunov_from_jacobians(jacobians: Sequence[np.ndarray] | np.ndarray, blocks
 
 
 def _fd_jacobian(sim: Simulator, params: Mapping[str, Any], t0: float, x: np.ndarray, h: float) -> np.ndarray:
-    from .jacobian import one_period
+    from .jacobian import central_difference
 
     J = np.empty((2, 2))
     for j, scale in enumerate((1.0, 2.0 * math.pi)):
-        dx = np.zeros(2)
-        dx[j] = h * scale
-        J[:, j] = (one_period(sim, params, x + dx, t0) - one_period(sim, params, x - dx, t0)) / (2.0 * dx[j])
+        J[:, j] = central_difference(sim, params, x, t0, j, h * scale)
     return J
 
 
