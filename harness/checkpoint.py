@@ -77,12 +77,16 @@ class Checkpoint:
         """True when task ``key`` is finished and stored."""
         return self._file(key).exists()
 
-    def save(self, key: str, arrays: dict[str, np.ndarray]) -> None:
-        """Store one finished task atomically."""
-        target = self._file(key)
+    @staticmethod
+    def _write(target: Path, arrays: dict[str, np.ndarray]) -> None:
+        """Write ``arrays`` to ``target`` atomically (a killed run leaves the old file or none)."""
         tmp = target.with_suffix(".tmp.npz")
         np.savez(tmp, **arrays)
         os.replace(tmp, target)
+
+    def save(self, key: str, arrays: dict[str, np.ndarray]) -> None:
+        """Store one finished task atomically."""
+        self._write(self._file(key), arrays)
 
     # -- unfinished chains ------------------------------------------------------------------
     def _partial_file(self, key: str) -> Path:
@@ -91,10 +95,7 @@ class Checkpoint:
     def save_partial(self, key: str, arrays: dict[str, np.ndarray]) -> None:
         """Store the finished leading points of an unfinished chain (rows of each array),
         atomically, replacing the previous ones."""
-        target = self._partial_file(key)
-        tmp = target.with_suffix(".tmp.npz")
-        np.savez(tmp, **arrays)
-        os.replace(tmp, target)
+        self._write(self._partial_file(key), arrays)
 
     def load_partial(self, key: str) -> dict[str, np.ndarray] | None:
         """The stored leading points of chain ``key`` (None if there are none)."""
