@@ -1,8 +1,8 @@
 /*
  * Bare C driver of the ImpactOscillator FMU (FMI 2.0 Co-Simulation): no Python, no fmpy.
  *
- * It does the same FMI calls per period as the harness (harness.sampling.strobe on
- * harness.simulator.FmuSimulator): one fmi2DoStep of exactly one period, then one fmi2GetReal of
+ * It does the same FMI calls per period as the harness (harness.dynamics.sampling.strobe on
+ * harness.fmu.simulator.FmuSimulator): one fmi2DoStep of exactly one period, then one fmi2GetReal of
  * (u, v) and one fmi2GetInteger of (impacts). Set-up is also the same: fmi2SetupExperiment(t0),
  * enter initialization, one fmi2SetReal and one fmi2SetInteger of all parameters, exit.
  *

@@ -21,7 +21,7 @@ The public entry points, grouped as you look for them:
 * `strobe` -> `StrobeResult` -- samples at t = n + theta after a transient;
 * `SamplingSpec` -- transient, samples, tolerance, section phase;
 * `classify_orbit` -> `OrbitClass`, `classify_samples` -- period and impacts per period (codes in
-  `harness.classify`: period > 0 periodic, <= 0 not periodic or not converged);
+  `harness.dynamics.classify`: period > 0 periodic, <= 0 not periodic or not converged);
 * `windows` -- runs of equal period along a scan.
 
 # Sweeps
@@ -32,11 +32,11 @@ The public entry points, grouped as you look for them:
 
 # Shooting
 
-* `harness.shooting.StroboscopicMap` -- the FMU's one-period map in coordinates relative to the
+* `harness.dynamics.shooting.StroboscopicMap` -- the FMU's one-period map in coordinates relative to the
   wall-free orbit;
 * `map_guided_windows` -- ODE window edges of maximal period-M orbits, started in a map's
   windows; each edge the midpoint of a bracket the shooting bisected, or unresolved;
-* `harness.shooting.window_edges`, `harness.shooting.Edge`.
+* `harness.dynamics.shooting.window_edges`, `harness.dynamics.shooting.Edge`.
 
 # Jacobians
 
@@ -80,20 +80,20 @@ except _metadata.PackageNotFoundError:  # pragma: no cover - running from a bare
     __version__ = "0+unknown"
 
 # Public names -> defining module.  Loaded lazily (PEP 562) so that a worker process that
-# only needs harness.tasks does not import xarray, matplotlib or Dask.
+# only needs harness.runs.tasks does not import xarray, matplotlib or Dask.
 _EXPORTS = {
-    "OrbitClass": "classify", "classify_orbit": "classify", "classify_samples": "classify", "windows": "classify",
-    "Experiment": "config", "SamplingSpec": "config", "SweepSpec": "config",
+    "OrbitClass": "dynamics.classify", "classify_orbit": "dynamics.classify", "classify_samples": "dynamics.classify", "windows": "dynamics.classify",
+    "Experiment": "runs.experiment", "SamplingSpec": "config", "SweepSpec": "config",
     "FmuError": "errors", "HarnessInputError": "errors",
-    "FmuModel": "fmi", "FmuSource": "fmi",
-    "JacobianResult": "jacobian", "JacobianScan": "jacobian", "jacobian_vs_x": "jacobian", "map_jacobian": "jacobian",
-    "LyapunovResult": "lyapunov", "lyapunov_exponents": "lyapunov", "lyapunov_from_jacobians": "lyapunov",
-    "classify_dynamics": "classify",
-    "read_netcdf": "results", "write_netcdf": "results",
-    "StrobeResult": "sampling", "simulate": "sampling", "strobe": "sampling",
-    "FmuSimulator": "simulator", "MappingSimulator": "simulator", "Simulator": "simulator",
-    "SweepStats": "sweeps", "run_sweep": "sweeps",
-    "StroboscopicMap": "shooting", "map_guided_windows": "shooting",
+    "FmuModel": "fmu.fmi", "FmuSource": "fmu.fmi",
+    "JacobianResult": "dynamics.jacobian", "JacobianScan": "dynamics.jacobian", "jacobian_vs_x": "dynamics.jacobian", "map_jacobian": "dynamics.jacobian",
+    "LyapunovResult": "dynamics.lyapunov", "lyapunov_exponents": "dynamics.lyapunov", "lyapunov_from_jacobians": "dynamics.lyapunov",
+    "classify_dynamics": "dynamics.classify",
+    "read_netcdf": "io.results", "write_netcdf": "io.results",
+    "StrobeResult": "dynamics.sampling", "simulate": "dynamics.sampling", "strobe": "dynamics.sampling",
+    "FmuSimulator": "fmu.simulator", "MappingSimulator": "fmu.simulator", "Simulator": "fmu.simulator",
+    "SweepStats": "runs.sweeps", "run_sweep": "runs.sweeps",
+    "StroboscopicMap": "dynamics.shooting", "map_guided_windows": "dynamics.shooting",
     "compare_windows": "reproduce.windows",
 }
 

@@ -57,214 +57,16 @@ came from so an error names the flag (``--theta``) or the file key
 """
 from __future__ import annotations
 
-import copy
-import os
-import sys
-from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Any, Mapping
+from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from .errors import HarnessInputError
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
-
-SWEEP_MODES = ("fresh", "up", "down", "both")
-BACKENDS = ("serial", "processes", "dask")
-
-
-def project_root() -> Path:
-    """The checkout the package lives in (an editable install points here)."""
-    return Path(__file__).resolve().parent.parent
-
-
-def default_fmu_path() -> str:
-    """``$IMPACT_HARNESS_FMU`` or ``build/fmu/ImpactOscillator.fmu`` in the checkout."""
-    env = os.environ.get("IMPACT_HARNESS_FMU")
-    if env:
-        return env
-    return str(project_root() / "build" / "fmu" / "ImpactOscillator.fmu")
-
-
-def default_workers() -> int:
-    """Cores this process may use (respects CPU affinity and container limits)."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not on Linux
-        return max(1, os.cpu_count() or 1)
-
-
-#: Built-in defaults of every section except ``[model]`` (which come from the FMU).
-DEFAULTS: dict[str, dict[str, Any]] = {
-    "fmu": {"path": None},
-    "model": {},
-    "initial": {"u0": None, "v0": None},
-    # 300 transient periods: the slow free-flight mode decays like 0.98^n at Figure 9's
-    # parameters, and orbits near window edges converge slowly.
-    "sampling": {"theta": 0.0, "transient": 300, "samples": 40, "tol": 1e-5, "max_period": None, "extend": 0,
-                 "lyapunov": 0},
-    # Default sweep: Figure 9 from period 1 (sigma > ~0.85) down through period 2 and 3.
-    "sweep": {
-        "param": "sigma",
-        "start": 1.0,
-        "stop": 0.1,
-        "num": 91,
-        "values": None,
-        "mode": "both",
-        "scan_param": None,
-        "scan_values": None,
-    },
-    "jacobian": {
-        "theta": 0.0,
-        "measure_theta": 0.5,
-        "x_start": 1e-6,
-        "x_stop": 1e-2,
-        "x_num": 25,
-        "state": None,
-        "method": "auto",  # exact (the FMU's derivatives), fd (differences), auto (exact when available)
-        "rtol": None,  # None: the FMU's own (tight) default tolerances
-        "atol": None,
-    },
-    "simulate": {"t0": 0.0, "t_end": 10.0, "dt": 0.01},
-    "run": {
-        "backend": None,
-        "workers": None,
-        "scheduler": None,
-        "out": None,
-        "plot": None,
-        "checkpoint": None,
-        "progress": True,
-    },
-}
-
-#: The CLI flag of each key, for error messages.
-CLI_FLAGS: dict[tuple[str, str], str] = {
-    ("fmu", "path"): "--fmu",
-    ("initial", "u0"): "--u0",
-    ("initial", "v0"): "--v0",
-    ("sampling", "theta"): "--theta",
-    ("sampling", "transient"): "--transient",
-    ("sampling", "samples"): "--samples",
-    ("sampling", "tol"): "--tol",
-    ("sampling", "max_period"): "--max-period",
-    ("sampling", "extend"): "--extend",
-    ("sampling", "lyapunov"): "--lyapunov",
-    ("sweep", "param"): "--param",
-    ("sweep", "start"): "--start",
-    ("sweep", "stop"): "--stop",
-    ("sweep", "num"): "--num",
-    ("sweep", "values"): "--values",
-    ("sweep", "mode"): "--mode",
-    ("sweep", "scan_param"): "--scan",
-    ("sweep", "scan_values"): "--scan",
-    ("jacobian", "theta"): "--theta",
-    ("jacobian", "measure_theta"): "--measure-theta",
-    ("jacobian", "x_start"): "--x-start",
-    ("jacobian", "x_stop"): "--x-stop",
-    ("jacobian", "x_num"): "--x-num",
-    ("jacobian", "state"): "--state",
-    ("jacobian", "method"): "--method",
-    ("simulate", "t0"): "--t0",
-    ("simulate", "t_end"): "--t-end",
-    ("simulate", "dt"): "--dt",
-    ("run", "backend"): "--backend",
-    ("run", "workers"): "--workers",
-    ("run", "scheduler"): "--scheduler",
-    ("run", "out"): "--out",
-    ("run", "plot"): "--plot",
-    ("run", "checkpoint"): "--checkpoint",
-}
-
-
-class Layered:
-    """Nested settings with the origin of each value (for error messages)."""
-
-    def __init__(self) -> None:
-        self.values: dict[str, dict[str, Any]] = copy.deepcopy(DEFAULTS)
-        self.origin: dict[tuple[str, str], str] = {}
-
-    def merge(self, layer: Mapping[str, Mapping[str, Any]], source: str) -> None:
-        """Overlay ``layer`` (``{section: {key: value}}``); ``source`` is ``"cli"`` or a file name.
-
-        Unknown sections and keys are rejected (except in ``[model]``, whose keys are FMU
-        variables checked later against the modelDescription).
-        """
-        for section, entries in layer.items():
-            if section not in DEFAULTS:
-                raise HarnessInputError(
-                    f"{source}: [{section}]",
-                    f"unknown section; known sections: {', '.join(DEFAULTS)}",
-                )
-            if not isinstance(entries, Mapping):
-                raise HarnessInputError(f"{source}: {section}", "must be a table")
-            for key, value in entries.items():
-                if section != "model" and key not in DEFAULTS[section]:
-                    raise HarnessInputError(
-                        f"{source}: {section}.{key}",
-                        f"unknown key; known keys of [{section}]: {', '.join(DEFAULTS[section])}",
-                    )
-                if value is None:
-                    continue  # "not given": keeps the lower layer
-                self.values[section][key] = value
-                self.origin[(section, key)] = source
-
-    def arg(self, section: str, key: str) -> str:
-        """How to name ``section.key`` in an error: its CLI flag or its file key."""
-        src = self.origin.get((section, key))
-        if src == "cli":
-            return CLI_FLAGS.get((section, key), f"--{key.replace('_', '-')}")
-        if src is None:
-            return f"{section}.{key}"
-        return f"{src}: {section}.{key}"
-
-    def get(self, section: str, key: str) -> Any:
-        """The current value of ``section.key``."""
-        return self.values[section][key]
-
-
-def load_toml(path: str | os.PathLike, argument: str = "--config") -> dict[str, Any]:
-    """Read an experiment file, turning I/O and syntax problems into clear errors."""
-    try:
-        with open(path, "rb") as fh:
-            return tomllib.load(fh)
-    except FileNotFoundError:
-        raise HarnessInputError(argument, f"no such file: {str(path)!r}") from None
-    except IsADirectoryError:
-        raise HarnessInputError(argument, f"{str(path)!r} is a directory, not an experiment file") from None
-    except UnicodeDecodeError as exc:  # TOML is UTF-8 by definition
-        raise HarnessInputError(argument, f"{path} is not UTF-8 text (byte {exc.start}: {exc.reason})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise HarnessInputError(argument, f"{path} is not valid TOML: {exc}") from None
-    except OSError as exc:  # permission denied, I/O errors
-        raise HarnessInputError(argument, f"cannot read {str(path)!r}: {exc.strerror or exc}") from None
-
-
-# ----------------------------------------------------------------------------------------
-# Typed, validated views
-# ----------------------------------------------------------------------------------------
-def _number(layers: Layered, section: str, key: str, positive: bool = False) -> float:
-    value = layers.get(section, key)
-    try:
-        if isinstance(value, bool):
-            raise ValueError
-        x = float(value)
-    except (TypeError, ValueError):
-        raise HarnessInputError(layers.arg(section, key), f"expected a number, got {value!r}") from None
-    if not np.isfinite(x):
-        raise HarnessInputError(layers.arg(section, key), f"must be finite, got {value!r}")
-    if positive and not x > 0:
-        raise HarnessInputError(layers.arg(section, key), f"must be > 0, got {value!r}")
-    return x
-
-
-def _count(layers: Layered, section: str, key: str, minimum: int = 0) -> int:
-    from .sampling import check_count
-
-    return check_count(layers.get(section, key), layers.arg(section, key), minimum)
+from .settings import (  # noqa: F401  (the defaults are part of this module's API)
+    BACKENDS, CLI_FLAGS, DEFAULTS, SWEEP_MODES, Layered, _count, _number, check_count, check_theta, default_fmu_path,
+    default_workers, load_toml, project_root,
+)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -287,8 +89,6 @@ class SamplingSpec:
     lyapunov: int = 0
 
     def __post_init__(self) -> None:
-        from .sampling import check_count, check_theta
-
         check_theta(self.theta, "theta")
         check_count(self.n_transient, "n_transient")
         check_count(self.n_samples, "n_samples", minimum=2)
@@ -303,8 +103,6 @@ class SamplingSpec:
     @classmethod
     def from_layers(cls, layers: Layered) -> "SamplingSpec":
         """Validated view of ``[sampling]`` (errors name the flag or file key)."""
-        from .sampling import check_theta
-
         theta = check_theta(layers.get("sampling", "theta"), layers.arg("sampling", "theta"))
         mp = layers.get("sampling", "max_period")
         return cls(
@@ -342,8 +140,6 @@ def parameter_values(start: Any, stop: Any, num: Any, values: Any, args: tuple[s
         if np.unique(arr).size != arr.size:
             raise HarnessInputError(a_values, "values must be distinct")
         return arr
-    from .sampling import check_count
-
     n = check_count(num, a_num)
     if n < 1:
         raise HarnessInputError(a_num, f"empty range: {a_num} must be >= 1, got {n}")
@@ -464,95 +260,3 @@ class RunSpec:
             checkpoint=layers.get(r, "checkpoint"),
             progress=bool(layers.get(r, "progress")),
         )
-
-
-@dataclass
-class Experiment:
-    """Everything a run needs, validated against the FMU.
-
-    Build it with :meth:`from_sources`; ``params`` maps FMU variable names to values of the
-    right type, ``state0`` is (u0, v0) at the first section time.
-    """
-
-    fmu_path: str
-    model: Any  # harness.fmi.FmuModel
-    params: dict[str, Any]
-    state0: tuple[float, float]
-    sampling: SamplingSpec
-    run: RunSpec
-    layers: Layered = field(repr=False)
-
-    @classmethod
-    def from_sources(
-        cls,
-        config: str | os.PathLike | None = None,
-        overrides: Mapping[str, Mapping[str, Any]] | None = None,
-        model: Any = None,
-    ) -> "Experiment":
-        """Defaults < TOML file ``config`` < ``overrides`` (CLI), validated.
-
-        Parameters
-        ----------
-        config : path, optional
-            Experiment file (TOML).
-        overrides : mapping, optional
-            ``{section: {key: value}}``; ``None`` values mean "not given".
-        model : FmuModel, optional
-            Already opened FMU (otherwise opened from ``fmu.path``).
-        """
-        from .fmi import FmuModel, INITIAL_STATE, SOLVER_PARAMETER
-
-        layers = Layered()
-        if config is not None:
-            layers.merge(load_toml(config), Path(config).name)
-        if overrides:
-            layers.merge(overrides, "cli")
-        path = layers.get("fmu", "path") or default_fmu_path()
-        if model is None:
-            model = FmuModel(path, argument=layers.arg("fmu", "path") if layers.origin.get(("fmu", "path")) else "--fmu")
-        params = model.defaults()
-        for name, value in layers.values["model"].items():
-            arg = (f"--set {name}" if layers.origin.get(("model", name)) == "cli"
-                   else layers.arg("model", name))
-            if name == SOLVER_PARAMETER and layers.origin.get(("model", name)) == "cli":
-                arg = "--solver"
-            if name == SOLVER_PARAMETER and name not in model.variables:
-                # an FMU without the parameter integrates with CVODE: that choice is a no-op
-                if str(value).lower() in ("cvode", "0"):
-                    continue
-                raise HarnessInputError(arg, f"{model.path.name} has no closed-form solver mode (no parameter "
-                                        f"{SOLVER_PARAMETER!r}); it integrates with CVODE only")
-            params[name] = model.coerce(name, value, arg)
-        state = []
-        for key in INITIAL_STATE:
-            given = layers.get("initial", key)
-            if given is None:
-                state.append(float(params.get(key, -1.0 if key == "u0" else 0.0)))
-            else:
-                state.append(_number(layers, "initial", key))
-        for key in INITIAL_STATE:
-            params.pop(key, None)  # the state travels separately
-        return cls(
-            fmu_path=str(model.path),
-            model=model,
-            params=params,
-            state0=(state[0], state[1]),
-            sampling=SamplingSpec.from_layers(layers),
-            run=RunSpec.from_layers(layers),
-            layers=layers,
-        )
-
-    def sweep_spec(self) -> SweepSpec:
-        """The ``[sweep]`` section, validated against this experiment's FMU."""
-        return SweepSpec.from_layers(self.layers, self.model)
-
-    def as_attrs(self) -> dict[str, Any]:
-        """Flat record of every setting (for the results' attributes)."""
-        out: dict[str, Any] = {"fmu_path": self.fmu_path}
-        for name, value in self.params.items():
-            out[f"model.{name}"] = value
-        out["initial.u0"], out["initial.v0"] = self.state0
-        for section in ("sampling", "run"):
-            for key, value in self.layers.values[section].items():
-                out[f"{section}.{key}"] = value
-        return out

@@ -14,7 +14,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 
-from harness.fmi2_logging import Fmi2Callbacks
+from harness.fmu.fmi2_logging import Fmi2Callbacks
 
 ROOT = Path(__file__).resolve().parents[1]
 FMU_PATH = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
@@ -40,7 +40,7 @@ class LoggedSlave:
                                instanceName=self.name)
 
         # fmpy's logger proxy keeps ONE process-wide logger: a per-instance ctypes callback
-        # given to it dangled once collected (harness/fmi2_logging.py), so the messages go
+        # given to it dangled once collected (harness/fmu/fmi2_logging.py), so the messages go
         # through the project's immortal dispatcher to this instance's list.
         messages = self.messages  # not self: the handler must not keep the slave alive
         self._callbacks = Fmi2Callbacks(lambda _name, status, category, text:

@@ -10,9 +10,9 @@ while another instance is alive, and each is freed. Every refusal is printed by 
 went to; the parent test counts them in stdout.
 
 With "old", the short-lived loggers are given to fmpy's proxy the way tests/fmu_support.py did
-before harness/fmi2_logging.py (a ctypes callback per instance): fmpy's process-global logger
+before harness/fmu/fmi2_logging.py (a ctypes callback per instance): fmpy's process-global logger
 then points at a collected callback when the plain instance reports its refusal (segfault,
-exit status -11, measured). Without "old" they go through harness.fmi2_logging.
+exit status -11, measured). Without "old" they go through harness.fmu.fmi2_logging.
 """
 from __future__ import annotations
 
@@ -34,7 +34,7 @@ from fmpy.fmi2 import (
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.logging import addLoggerProxy
 
-from harness.fmi2_logging import Fmi2Callbacks
+from harness.fmu.fmi2_logging import Fmi2Callbacks
 
 FMU_PATH = Path(__file__).resolve().parents[1] / "build" / "fmu" / "ImpactOscillator.fmu"
 FMU3_PATH = FMU_PATH.with_name("ImpactOscillator_fmi3.fmu")  # as tests/fmu_support.py, without

@@ -101,7 +101,7 @@ def test_readme_cli_commands_parse() -> None:
     (flags and choices; running them all would take hours)."""
     import shlex
 
-    from harness.cli import _join_list_values, build_parser
+    from harness.cli.main import _join_list_values, build_parser
 
     commands = _readme_cli_commands()
     assert len(commands) >= 10

@@ -1,4 +1,4 @@
-"""FMI 2.0 log messages through fmpy's logger proxy (harness/fmi2_logging.py).
+"""FMI 2.0 log messages through fmpy's logger proxy (harness/fmu/fmi2_logging.py).
 
 fmpy's proxy forwards every proxied FMI 2.0 instance's messages to ONE process-global logger,
 the one given last. The project used to give it a ctypes callback per instance: messages of
@@ -85,9 +85,9 @@ def test_refused_init_reproducer_in_a_subprocess() -> None:
 
 
 def test_no_other_code_hands_fmpy_a_logger_of_its_own() -> None:
-    """Only harness/fmi2_logging.py calls fmpy's addLoggerProxy (and the reproducer, for its
+    """Only harness/fmu/fmi2_logging.py calls fmpy's addLoggerProxy (and the reproducer, for its
     "old" mode): any other ctypes logger given to the proxy would dangle again."""
-    allowed = {ROOT / "harness" / "fmi2_logging.py", ROOT / "tests" / "refused_init_repro.py"}
+    allowed = {ROOT / "harness" / "fmu" / "fmi2_logging.py", ROOT / "tests" / "refused_init_repro.py"}
     offenders = [str(p.relative_to(ROOT))
                  for d in ("harness", "tests", "examples", "bench", "mapcheck", "scripts")
                  for p in sorted((ROOT / d).rglob("*.py"))

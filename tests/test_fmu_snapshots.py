@@ -141,7 +141,7 @@ def test_a_cs_state_is_refused_by_a_model_exchange_instance(running):
     me = FMU2Model(guid=md.guid, unzipDirectory=extract(str(FMU_PATH)),
                    modelIdentifier=md.modelExchange.modelIdentifier, instanceName="me")
     msgs = []
-    from harness.fmi2_logging import Fmi2Callbacks
+    from harness.fmu.fmi2_logging import Fmi2Callbacks
 
     cb = Fmi2Callbacks(lambda _name, _status, _category, text: msgs.append(text))
     me.instantiate(callbacks=cb.functions)

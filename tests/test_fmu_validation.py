@@ -16,7 +16,7 @@ from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Slave
 
-from harness.fmi2_logging import Fmi2Callbacks
+from harness.fmu.fmi2_logging import Fmi2Callbacks
 from tests.fmu_support import FMU3_PATH, FMU_PATH, LoggedSlave, expect_error
 
 OUTPUTS_REAL = ("u", "v", "F_contact", "v_impact", "t_impact", "F_g", "phi", "kappa")
@@ -75,7 +75,7 @@ def _me_instance(msgs):
     me = FMU2Model(guid=md.guid, unzipDirectory=extract(str(FMU_PATH)),
                    modelIdentifier=md.modelExchange.modelIdentifier, instanceName="me")
     # not a ctypes logger of its own: fmpy's proxy would keep it past this instance
-    # (harness/fmi2_logging.py)
+    # (harness/fmu/fmi2_logging.py)
     cb = Fmi2Callbacks(lambda _name, _status, _category, text: msgs.append(text))
     me.instantiate(callbacks=cb.functions)
     me._keep = cb

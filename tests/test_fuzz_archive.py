@@ -4,7 +4,7 @@ bench/issue13_inputs.py: a byte flipped inside the deflate stream of the binary 
 
 Every single-byte flip at 40 places spread over the archive (the compressed binary, the
 local headers, the central directory) either leaves a readable archive or raises
-HarnessInputError from ``harness.fmi.check_archive``; no other exception gets through.
+HarnessInputError from ``harness.fmu.fmi.check_archive``; no other exception gets through.
 """
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from harness.errors import HarnessInputError
-from harness.fmi import check_archive
+from harness.fmu.fmi import check_archive
 from tests.fmu_support import FMU_PATH
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.classify import NOT_PERIODIC, classify_orbit, classify_samples, windows
+from harness.dynamics.classify import NOT_PERIODIC, classify_orbit, classify_samples, windows
 
 
 def _cycle(points: list[tuple[float, float]], impacts: list[int], n: int, noise: float = 0.0, seed: int = 0):
@@ -82,7 +82,7 @@ def test_windows_groups_runs_of_maximal_orbits() -> None:
 
 
 def test_still_settling_tells_a_converging_alternation_from_a_true_period_two() -> None:
-    from harness.classify import still_settling
+    from harness.dynamics.classify import still_settling
 
     k = np.arange(40)
     converging = 0.5 + 1e-3 * (-0.97) ** k      # period 1 approached with multiplier -0.97

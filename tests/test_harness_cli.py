@@ -182,7 +182,7 @@ def test_stale_default_checkpoint_is_discarded_explicit_one_refused(tmp_path: Pa
 def test_default_sweep_shows_the_period_adding_windows(tmp_path: Path, capsys) -> None:
     """The default `impact-harness sweep` (Figure 9, up and down), on a coarser grid: in both
     directions the maximal orbits come as period 1, 2, 3 with decreasing sigma."""
-    from harness.classify import windows
+    from harness.dynamics.classify import windows
 
     out = tmp_path / "default.nc"
     code, stdout, err = _run_main(["sweep", "--num", "19", "--workers", "2", "--out", str(out), "--no-progress"], capsys)

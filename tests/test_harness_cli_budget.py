@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 import xarray as xr
 
-from harness.budget import Budget, parse_size, simulate_estimate, sweep_estimate
+from harness.runs.budget import Budget, parse_size, simulate_estimate, sweep_estimate
 from tests.cli_support import run_main as _run_main
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -112,7 +112,7 @@ def test_unknown_plot_format_is_refused_before_the_run(tmp_path: Path, capsys) -
 
 def test_atomic_write_cleans_up_on_failure(tmp_path: Path) -> None:
     from harness.errors import HarnessInputError
-    from harness.outputs import atomic_write
+    from harness.io.outputs import atomic_write
 
     with pytest.raises(RuntimeError):
         with atomic_write(tmp_path / "r.nc") as tmp:

@@ -16,9 +16,9 @@ import pytest
 import xarray as xr
 
 from harness import FmuModel, FmuSimulator, SamplingSpec, SweepSpec, run_sweep
-from harness.sampling import sample_periods
-from harness.tasks import TEST_HOOK_ENV
-from harness.tempdirs import PREFIX, remove_stale
+from harness.dynamics.sampling import sample_periods
+from harness.runs.tasks import TEST_HOOK_ENV
+from harness.io.tempdirs import PREFIX, remove_stale
 
 ROOT = Path(__file__).resolve().parents[1]
 TMP = Path(os.environ.get("TMPDIR", "/tmp"))
@@ -221,7 +221,7 @@ def test_other_pools_of_the_harness_die_with_their_parent(tmp_path: Path) -> Non
     script.write_text(
         "import multiprocessing, os, time\n"
         "from concurrent.futures import ProcessPoolExecutor\n"
-        "from harness.tasks import init_child_process\n"
+        "from harness.io.children import init_child_process\n"
         "if __name__ == '__main__':\n"
         "    ctx = multiprocessing.get_context('spawn')\n"
         "    pool = ProcessPoolExecutor(1, mp_context=ctx, initializer=init_child_process, initargs=(os.getpid(),))\n"

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from harness import FmuModel, FmuSimulator, HarnessInputError, MappingSimulator, strobe
-from harness.sampling import sample_periods
+from harness.dynamics.sampling import sample_periods
 from mapcheck.exact import ExactOscillator
 from tests.fmu_support import harness_params as _params
 
@@ -147,7 +147,7 @@ def test_other_builds_with_the_same_variables_give_the_same_map(model: FmuModel,
 
 
 def test_benchmark_runs_the_bare_loop_and_the_harness_on_the_same_orbit() -> None:
-    from harness.benchmark import measure
+    from harness.runs.benchmark import measure
 
     r = measure(str(FMU), periods=40, repeat=1)
     assert r["bare_s_per_period"] > 0 and r["harness_s_per_period"] > 0
@@ -174,7 +174,7 @@ def test_one_reused_instance_per_worker_thread(model: FmuModel) -> None:
     thread gets its own (an FMI instance must not be shared between threads)."""
     import threading
 
-    from harness.simulator import simulator_for
+    from harness.fmu.simulator import simulator_for
 
     first = simulator_for(model.source())
     assert simulator_for(model.source()) is first

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from harness import strobe
-from harness.sampling import sample_periods
+from harness.dynamics.sampling import sample_periods
 from mapcheck.exact import ExactOscillator
 from tests.fmu_support import harness_params as _params
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from harness import SamplingSpec, SweepSpec, read_netcdf, run_sweep, write_netcdf
-from harness import plots
-from harness.plots import parameter_title, period_labels, section_label
+from harness.io import plots
+from harness.io.plots import parameter_title, period_labels, section_label
 
 
 @pytest.fixture(scope="module")

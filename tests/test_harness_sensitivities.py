@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from harness import HarnessInputError, jacobian_vs_x, map_jacobian
-from harness.shooting import StroboscopicMap, good_orbit
-from harness.simulator import FmuSimulator, MappingSimulator
+from harness.dynamics.shooting import StroboscopicMap, good_orbit
+from harness.fmu.simulator import FmuSimulator, MappingSimulator
 from mapcheck.linear import propagator
 from mapcheck.orbits import solve_periodic_orbit
 from tests.fmu_support import harness_params as _params

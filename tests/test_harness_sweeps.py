@@ -17,8 +17,8 @@ import xarray as xr
 from scipy.optimize import brentq
 
 from harness import FmuModel, HarnessInputError, MappingSimulator, SamplingSpec, SweepSpec, SweepStats, run_sweep
-from harness.backends import ProcessBackend
-from harness.tasks import TEST_HOOK_ENV
+from harness.runs.backends import ProcessBackend
+from harness.runs.tasks import TEST_HOOK_ENV
 
 ROOT = Path(__file__).resolve().parents[1]
 FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
@@ -178,7 +178,7 @@ def test_continuation_chain_reports_each_point(model: FmuModel) -> None:
     """A long chain moves the progress bar while it runs: one report per finished point
     (the last one arrives with the result)."""
     from harness import FmuSimulator
-    from harness.sweeps import execute, plan_tasks
+    from harness.runs.sweeps import execute, plan_tasks
 
     base = {k: v for k, v in model.defaults().items() if k not in ("u0", "v0")}
     tasks = plan_tasks(SweepSpec("sigma", np.array([0.5, 0.6, 0.7]), ("down",)), base, (-1.0, 0.0),

@@ -11,7 +11,7 @@ import math
 
 import pytest
 
-from harness.cli import main
+from harness.cli.main import main
 from harness.reproduce.windows import WindowProblem, default_settings
 
 ARGS = ["--alpha", "0.5", "--gamma", "0.05", "--r", "0.8", "--wall", "compliant", "--Gamma", "10"]

@@ -3,7 +3,7 @@
 * Build and interface: the one build command writes an FMU that ``fmpy validate`` accepts and
   whose variables (names, value references, types, causality, variability, initial, start,
   bounds) are exactly the C FMU's, so the harness drives either unchanged.
-* Cross-check: both FMUs are driven by the *harness* (``harness.simulator.FmuSimulator``, the
+* Cross-check: both FMUs are driven by the *harness* (``harness.fmu.simulator.FmuSimulator``, the
   same code path for both) over 50 periods for the compliant, rigid and no wall; stroboscopic
   states and impact counts are equal bit for bit (both step CVODE past the communication
   points and interpolate there).  Also with sigma tuned mid-run.
@@ -32,8 +32,8 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from harness.fmi import FmuModel
-from harness.simulator import FmuSimulator
+from harness.fmu.fmi import FmuModel
+from harness.fmu.simulator import FmuSimulator
 from mapcheck.exact import ExactOscillator
 from tests.fmu_support import WALLS, LoggedSlave
 

@@ -20,6 +20,9 @@ parameter set; ``reproduce fig9`` runs it with the paper's parameters.
 
 ``--quick`` gives a coarse version (under a minute on 2 cores); the default is the
 publication-quality run.
+
+Layer: the top (beside :mod:`harness.cli`): applications of the library, which may import
+every layer below and :mod:`mapcheck`; nothing in the library imports them.
 """
 from __future__ import annotations
 
@@ -69,7 +72,7 @@ class Context:
     def __init__(self, target: str, out: str | Path, quick: bool = False, workers: int | None = None,
                  progress: bool = False, fmu_path: str | None = None, solver: str = "cvode") -> None:
         from ..config import default_fmu_path
-        from ..fmi import FmuModel
+        from ..fmu.fmi import FmuModel
 
         self.target = target
         self.out = Path(out)
@@ -78,7 +81,7 @@ class Context:
         self.workers = workers
         self.progress = progress
         self.fmu = FmuModel(fmu_path or default_fmu_path(), "--fmu")
-        from ..fmi import SOLVER_NAMES, SOLVER_PARAMETER
+        from ..fmu.fmi import SOLVER_NAMES, SOLVER_PARAMETER
 
         if solver not in SOLVER_NAMES:
             raise HarnessInputError("--solver", f"unknown solver {solver!r}; one of {', '.join(SOLVER_NAMES)}")
@@ -92,7 +95,7 @@ class Context:
 
     def simulator(self):
         """A fresh in-process FMU simulator (for shooting and Jacobians)."""
-        from ..simulator import FmuSimulator
+        from ..fmu.simulator import FmuSimulator
 
         return FmuSimulator(self.fmu.source(), instance_name=f"reproduce-{self.target}")
 
@@ -101,7 +104,7 @@ class Context:
         p = self.fmu.defaults()
         p.pop("u0", None)
         p.pop("v0", None)
-        from ..fmi import SOLVER_NAMES, SOLVER_PARAMETER
+        from ..fmu.fmi import SOLVER_NAMES, SOLVER_PARAMETER
 
         if SOLVER_PARAMETER in self.fmu.variables:
             p[SOLVER_PARAMETER] = SOLVER_NAMES[self.solver]
@@ -163,7 +166,7 @@ def run_target(target: str, out: str | Path, quick: bool = False, workers: int |
 
 
 def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
-    """Add the ``reproduce`` and ``windows`` subcommands (picked up by :mod:`harness.cli`)."""
+    """Add the ``reproduce`` and ``windows`` subcommands (picked up by :mod:`harness.cli.main`)."""
     p = sub.add_parser(
         "reproduce", help="reproduce a figure of the paper: FMU vs maps, with a report",
         description="Run the FMU sweeps / shooting / Jacobians and the maps for one of the paper's figures, "

@@ -97,7 +97,7 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
 
 
 def _plot(ctx: Context, rows: dict[str, Any]) -> str:
-    from .. import plots  # noqa: F401  (Agg backend)
+    from ..io import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, len(rows), figsize=(10, 4), sharey=True)

@@ -27,7 +27,7 @@ from mapcheck.linear import invert_alpha_gamma
 from mapcheck.windows import MapParams
 
 from ..config import SamplingSpec, SweepSpec
-from ..shooting import StroboscopicMap, map_guided_windows
+from ..dynamics.shooting import StroboscopicMap, map_guided_windows
 from . import Context
 
 ALPHA, GAMMA, R, GAMMA_WALL = 0.25, 0.01, 0.9, 10.0
@@ -55,7 +55,7 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
     shoot = map_guided_windows(smap, c, guide, (SIGMA_RANGE[0] / 10, 0.05), cfg["xtol_rel"], relative=True)
     shoot["windows"].update({M: None for M in range(M_MAX_ODE + 1, M_MAX + 1)})
     grid = np.geomspace(*SIGMA_RANGE, cfg["ode_num"])
-    from ..sweeps import run_sweep
+    from ..runs.sweeps import run_sweep
 
     ds = run_sweep(ctx.fmu, SweepSpec("sigma", grid, ("up", "down")), params, (-(1.0 + grid[-1]) - 1.0, 0.0),
                    SamplingSpec(theta=0.5, n_transient=cfg["transient"], n_samples=cfg["samples"], tol=1e-4),
@@ -101,7 +101,7 @@ def _worst_edge(ode: dict, other: dict) -> tuple[float, int | None, str | None]:
 
 
 def _plot(ctx: Context, c: Any, ds, windows: dict, cfg: dict) -> list[str]:
-    from .. import plots  # noqa: F401  (Agg backend)
+    from ..io import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
 
     sig = np.geomspace(*SIGMA_RANGE, cfg["map_num"])

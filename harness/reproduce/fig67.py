@@ -24,7 +24,7 @@ import numpy as np
 from mapcheck.compare import loglog_slope, power_law_with_offset
 
 from ..config import SamplingSpec, SweepSpec
-from ..jacobian import jacobian_vs_x, resolve_method
+from ..dynamics.jacobian import jacobian_vs_x, resolve_method
 from . import Context
 
 NU, OMEGA = 0.196, 7.368
@@ -115,7 +115,7 @@ def fit_regimes(x: np.ndarray, scan: Any, r: float, Gamma: float) -> dict[str, A
 
 def _scan_chain(ctx: Context, r: float, G: float, grid: np.ndarray, cfg: dict[str, Any]):
     """Up from the non-impacting state, then down from where the up scan ended."""
-    from ..sweeps import run_sweep
+    from ..runs.sweeps import run_sweep
 
     params = ctx.params(nu=NU, Omega=OMEGA, r=r, Gamma=G, wall=1)
     sampling = SamplingSpec(theta=0.5, n_transient=cfg["transient"], n_samples=cfg["samples"], tol=1e-4)
@@ -202,7 +202,7 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
 
 
 def _plot_jacobian(ctx: Context, r: float, x: np.ndarray, scans: dict, fits: dict) -> str:
-    from .. import plots  # noqa: F401  (Agg backend)
+    from ..io import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(8, 5.5))
@@ -230,7 +230,7 @@ def _plot_jacobian(ctx: Context, r: float, x: np.ndarray, scans: dict, fits: dic
 
 
 def _plot_diagrams(ctx: Context, r: float, chains: dict) -> str:
-    from .. import plots  # noqa: F401
+    from ..io import plots  # noqa: F401
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, len(chains), figsize=(11, 4.5))

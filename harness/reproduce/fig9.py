@@ -51,6 +51,6 @@ def settings(quick: bool) -> WindowSettings:
 
 def run(ctx: Context) -> tuple[dict[str, Any], str]:
     result, _ = run_windows(ctx, problem(), settings(ctx.quick))
-    from .windows import report
+    from .windows_report import report
 
     return result, report(ctx, problem(), result, title="Figure 9: truncated period adding, map vs ODE")

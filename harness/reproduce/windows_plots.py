@@ -16,6 +16,14 @@ from mapcheck.windows import MapParams, window_1d
 __all__ = ["plot_all"]
 
 
+def labels_for(problem: Any) -> dict[str, str]:
+    """Legend labels of the four sources for a ``WindowProblem``."""
+    eq = problem.coefficient_eq()
+    wall = f"Gamma = {problem.Gamma:g}" if problem.wall == "compliant" else "rigid wall"
+    return {"ode": f"ODE (FMU, {wall}, shooting)", "theory_64": f"(64), rho(sigma) from {eq}",
+            "map": f"2D map (37)/(38) with {eq}", "map_A_tilde": f"2D map (37)/(38) with {eq}, A~(sigma)"}
+
+
 def _save(fig, path) -> str:
     import matplotlib.pyplot as plt
 
@@ -26,10 +34,9 @@ def _save(fig, path) -> str:
 
 def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any]) -> list[str]:
     """TARGET_map.png (map, linear rho and A~), TARGET_ode.png (FMU up/down), TARGET_windows.png."""
-    from .. import plots  # noqa: F401  (selects the Agg backend)
+    from ..io import plots  # noqa: F401  (selects the Agg backend)
     import matplotlib.pyplot as plt
 
-    from .windows import labels_for
 
     c = problem.coefficients()
     eq = problem.coefficient_eq()

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import HarnessInputError
+from ..errors import HarnessInputError
 
 
 def fingerprint(obj: Any) -> str:

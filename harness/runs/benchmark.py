@@ -1,10 +1,10 @@
 """Overhead of the harness over a bare fmpy loop, per forcing period.
 
-    python -m harness.benchmark [--fmu PATH] [--periods N] [--repeat R]
+    python -m harness.runs.benchmark [--fmu PATH] [--periods N] [--repeat R]
 
 The bare loop is what a user would write by hand: one FMU2Slave, ``doStep(t, 1)`` and a
 ``getReal``/``getInteger`` of (u, v, impacts) per period.  The harness loop is
-:func:`harness.sampling.strobe` on :class:`harness.simulator.FmuSimulator`, which does the
+:func:`harness.dynamics.sampling.strobe` on :class:`harness.fmu.simulator.FmuSimulator`, which does the
 same FMI calls plus its bookkeeping.  Both run the same parameters from the same state;
 the best of ``repeat`` runs is reported (the machine may be shared).
 """
@@ -16,10 +16,10 @@ from typing import Any
 
 import numpy as np
 
-from .config import default_fmu_path
-from .fmi import FmuModel, open_source
-from .sampling import strobe
-from .simulator import FmuSimulator
+from ..config import default_fmu_path
+from ..fmu.fmi import FmuModel, open_source
+from ..dynamics.sampling import strobe
+from ..fmu.simulator import FmuSimulator
 
 
 def bare_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, float],
@@ -59,7 +59,7 @@ def bare_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, floa
 
 def harness_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, float],
                  periods: int) -> tuple[float, np.ndarray]:
-    """Seconds for ``periods`` sampled periods through :func:`harness.sampling.strobe`, and
+    """Seconds for ``periods`` sampled periods through :func:`harness.dynamics.sampling.strobe`, and
     the samples (u, v, cumulative impacts)."""
     sim = FmuSimulator(model.source(), instance_name="bench")
     t0 = time.perf_counter()
@@ -93,8 +93,8 @@ def measure(fmu: str | None = None, periods: int = 2000, repeat: int = 5, sigma:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Command line of ``python -m harness.benchmark``."""
-    p = argparse.ArgumentParser(prog="python -m harness.benchmark", description=__doc__.split("\n\n")[0])
+    """Command line of ``python -m harness.runs.benchmark``."""
+    p = argparse.ArgumentParser(prog="python -m harness.runs.benchmark", description=__doc__.split("\n\n")[0])
     p.add_argument("--fmu", help="FMU (default: build/fmu/ImpactOscillator.fmu)")
     p.add_argument("--periods", type=int, default=2000)
     p.add_argument("--repeat", type=int, default=5)

@@ -14,7 +14,7 @@ import tempfile
 from pathlib import Path
 from typing import Iterator
 
-from .errors import HarnessInputError
+from ..errors import HarnessInputError
 
 
 def check_output(path: str | os.PathLike, argument: str) -> Path:

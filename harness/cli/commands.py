@@ -1,6 +1,6 @@
 """The subcommands simulate, strobe, sweep and jacobian.
 
-Each command builds an :class:`~harness.config.Experiment` (defaults < TOML < flags), runs,
+Each command builds an :class:`~harness.runs.experiment.Experiment` (defaults < TOML < flags), runs,
 writes a NetCDF file with full provenance and a PNG plot, and prints a short summary on
 stdout.  Long runs show a tqdm progress bar on stderr.
 """
@@ -15,13 +15,14 @@ from typing import Any
 
 import numpy as np
 
-from .classify import classify_orbit, windows
-from .budget import Budget, grid_count, jacobian_estimate, simulate_estimate, strobe_estimate, sweep_estimate
-from .cli import count, overrides_from_args
-from .config import Experiment, parameter_values
-from .errors import FmuRejectedInput, HarnessInputError
-from .outputs import check_output, check_plot
-from .progress import progress_bar
+from ..dynamics.classify import classify_orbit, windows
+from ..runs.budget import Budget, grid_count, jacobian_estimate, simulate_estimate, strobe_estimate, sweep_estimate
+from .main import count, overrides_from_args
+from ..config import parameter_values
+from ..runs.experiment import Experiment
+from ..errors import FmuRejectedInput, HarnessInputError
+from ..io.outputs import check_output, check_plot
+from ..io.progress import progress_bar
 
 
 def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
@@ -111,17 +112,17 @@ def _command_line(args: argparse.Namespace | None = None) -> str:
 
 def _finite(layers: Any, section: str, key: str) -> float:
     """A finite number from the settings, or a one-line error naming the flag or file key."""
-    from .config import _number
+    from ..config import _number
 
     return _number(layers, section, key)
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
     """``simulate``: time series from (u0, v0) at --t0 to --t-end; NetCDF + PNG."""
-    from .plots import timeseries_plot
-    from .results import provenance, timeseries_dataset, write_netcdf
-    from .sampling import simulate
-    from .simulator import FmuSimulator
+    from ..io.plots import timeseries_plot
+    from ..io.results import provenance, timeseries_dataset, write_netcdf
+    from ..dynamics.sampling import simulate
+    from ..fmu.simulator import FmuSimulator
 
     exp = _experiment(args)
     L = exp.layers
@@ -149,10 +150,10 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
 def cmd_strobe(args: argparse.Namespace) -> int:
     """``strobe``: samples at t = n + theta, classified; NetCDF + Poincare section."""
-    from .plots import poincare_section
-    from .results import provenance, strobe_dataset, write_netcdf
-    from .sampling import strobe
-    from .simulator import FmuSimulator
+    from ..io.plots import poincare_section
+    from ..io.results import provenance, strobe_dataset, write_netcdf
+    from ..dynamics.sampling import strobe
+    from ..fmu.simulator import FmuSimulator
 
     exp = _experiment(args)
     s = exp.sampling
@@ -170,8 +171,8 @@ def cmd_strobe(args: argparse.Namespace) -> int:
     orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
     ly = None
     if s.lyapunov:
-        from .classify import DYNAMICS_NAMES, classify_dynamics, still_settling
-        from .lyapunov import lyapunov_continued
+        from ..dynamics.classify import DYNAMICS_NAMES, classify_dynamics, still_settling
+        from ..dynamics.lyapunov import lyapunov_continued
 
         ly = lyapunov_continued(sim, exp.params, s.lyapunov, exact)
         settling = orbit.periodic and still_settling(r.u, r.v, orbit.period, s.tol)
@@ -223,7 +224,7 @@ def _scan_count(text: str) -> float:
 def _check_sweep_budget(args: argparse.Namespace, exp: Experiment) -> None:
     """Refuse a sweep whose grid, samples or periods exceed the limits, before any grid
     array exists (``np.linspace(0, 1, 10**9)`` alone is 8 GB)."""
-    from .config import parse_modes, sweep_directions
+    from ..config import parse_modes, sweep_directions
 
     L, s = exp.layers, exp.sampling
     if args.scan:
@@ -247,8 +248,8 @@ def _check_sweep_budget(args: argparse.Namespace, exp: Experiment) -> None:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """``sweep``: 1D/2D sweep on the chosen backend, resumable; NetCDF + diagram."""
-    from .results import write_netcdf
-    from .sweeps import SweepStats, run_sweep
+    from ..io.results import write_netcdf
+    from ..runs.sweeps import SweepStats, run_sweep
 
     exp = _experiment(args)
     _check_sweep_budget(args, exp)
@@ -308,7 +309,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
           f"(tasks used {ds.attrs['tasks_cpu_time_s']:.1f} CPU s)")
     grid = ds[spec.param].values
     if "lyapunov" in ds:
-        from .classify import DYNAMICS_NAMES
+        from ..dynamics.classify import DYNAMICS_NAMES
 
         codes, counts = np.unique(ds["dynamics"].values, return_counts=True)
         print("  dynamics (Lyapunov exponents over " f"{exp.sampling.lyapunov} periods): "
@@ -322,7 +323,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     print(f"wrote {out}")
     if plot:
         # matplotlib only now: its 0.8 s import would sit on the serial path of every sweep
-        from .plots import bifurcation_diagram, period_map
+        from ..io.plots import bifurcation_diagram, period_map
 
         drawn = period_map(ds, plot) if spec.scan_param else bifurcation_diagram(ds, plot)
         print(f"plot: {drawn}")
@@ -331,11 +332,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 def cmd_jacobian(args: argparse.Namespace) -> int:
     """``jacobian``: J at --state, or J(x) along the grazing family; NetCDF + plot."""
-    from .jacobian import jacobian_vs_x, map_jacobian
-    from .plots import jacobian_plot
-    from .results import jacobian_dataset, provenance, write_netcdf
-    from .sampling import check_count, check_theta
-    from .simulator import FmuSimulator
+    from ..dynamics.jacobian import jacobian_vs_x, map_jacobian
+    from ..io.plots import jacobian_plot
+    from ..io.results import jacobian_dataset, provenance, write_netcdf
+    from ..dynamics.sampling import check_count, check_theta
+    from ..fmu.simulator import FmuSimulator
 
     exp = _experiment(args)
     L = exp.layers

@@ -1,6 +1,6 @@
 """Command line: ``impact-harness`` / ``python -m harness``.
 
-Subcommands are registered by modules: :mod:`harness.commands` provides simulate, strobe,
+Subcommands are registered by modules: :mod:`harness.cli.commands` provides simulate, strobe,
 sweep and jacobian; further modules listed in :data:`OPTIONAL_COMMAND_MODULES` (e.g. a
 later ``harness/reproduce/``) are picked up when they exist.  A command module exposes
 ``register(subparsers, parents)``, which adds its parser(s) with ``set_defaults(func=...)``;
@@ -9,7 +9,7 @@ later ``harness/reproduce/``) are picked up when they exist.  A command module e
 Exit status: 0 success, 1 the FMU failed during a run, 2 bad input (a one-line message
 naming the argument, or quoting the FMU when it refuses the settings at initialization;
 also broken FMU binaries, unreadable files, unwritable outputs, runs over the memory or work
-limits of :mod:`harness.budget`; never a traceback), 130 interrupted, 143 terminated.
+limits of :mod:`harness.runs.budget`; never a traceback), 130 interrupted, 143 terminated.
 """
 from __future__ import annotations
 
@@ -21,12 +21,12 @@ import shlex
 import sys
 from typing import Any, Sequence
 
-from .errors import FmuError, FmuRejectedInput, HarnessInputError, SweepTaskError
+from ..errors import FmuError, FmuRejectedInput, HarnessInputError, SweepTaskError
 
 PROG = "impact-harness"
 
 #: Command modules always present.
-COMMAND_MODULES = ("harness.commands",)
+COMMAND_MODULES = ("harness.cli.commands",)
 #: Command modules added by later issues; skipped while they do not exist.
 OPTIONAL_COMMAND_MODULES = ("harness.reproduce",)
 
@@ -55,7 +55,7 @@ count.__name__ = "int"  # argparse names the type in its message: "invalid int v
 
 def size(text: str) -> int:
     """argparse type of memory sizes (``512M``, ``8G``)."""
-    from .budget import parse_size
+    from ..runs.budget import parse_size
 
     return parse_size(text)
 
@@ -144,7 +144,7 @@ def overrides_from_args(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
 
 def build_parser() -> argparse.ArgumentParser:
     """The full parser, with every registered command module."""
-    from .results import project_version
+    from ..io.results import project_version
 
     parser = OneLineParser(
         prog=PROG,
@@ -238,7 +238,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     finally:
-        restore()  # the extraction folder goes at exit (harness.tempdirs), SIGTERM included
+        restore()  # the extraction folder goes at exit (harness.io.tempdirs), SIGTERM included
 
 
 class Terminated(KeyboardInterrupt):

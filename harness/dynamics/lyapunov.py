@@ -28,9 +28,9 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .errors import HarnessInputError
+from ..errors import HarnessInputError
 from .sampling import check_count, check_theta
-from .simulator import Simulator, has_derivatives, tracking_derivatives
+from ..fmu.simulator import Simulator, has_derivatives, tracking_derivatives
 
 __all__ = ["LyapunovResult", "qr_logs", "lyapunov_from_jacobians", "orbit_jacobians", "lyapunov_exponents",
            "lyapunov_continued", "DEFAULT_BLOCKS", "FD_STEP"]

@@ -23,7 +23,7 @@ from typing import Any, Callable, Iterator, Mapping, Protocol, runtime_checkable
 
 import numpy as np
 
-from .errors import FmuError, FmuRejectedInput, HarnessInputError
+from ..errors import FmuError, FmuRejectedInput, HarnessInputError
 from .fmi import (
     IMPACT_COUNTER,
     INITIAL_STATE,
@@ -33,9 +33,9 @@ from .fmi import (
     FmuModel,
     FmuSource,
     VariableInfo,
-    make_slave,
     open_source,
 )
+from .slaves import make_slave
 
 Params = Mapping[str, Any]
 

@@ -31,9 +31,9 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import scipy.linalg
 
-from .errors import HarnessInputError
+from ..errors import HarnessInputError
 from .sampling import check_theta
-from .simulator import Simulator, has_derivatives, tracking_derivatives
+from ..fmu.simulator import Simulator, has_derivatives, tracking_derivatives
 
 TWO_PI = 2.0 * math.pi
 

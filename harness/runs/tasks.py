@@ -1,6 +1,6 @@
 """Sweep tasks and their execution on a worker.
 
-Kept apart from :mod:`harness.sweeps` so that a worker process imports only what it needs
+Kept apart from :mod:`harness.runs.sweeps` so that a worker process imports only what it needs
 to run a task (numpy, the FMI layer), not xarray, matplotlib or Dask: worker start-up is
 paid once per worker and per sweep.
 """
@@ -13,11 +13,12 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .classify import classify_dynamics, classify_orbit, still_settling
-from .config import SamplingSpec
-from .fmi import INITIAL_STATE, FmuSource
-from .sampling import sample_periods
-from .simulator import has_derivatives, simulator_for
+from ..io.children import _exit_on_signal, die_with_parent
+from ..dynamics.classify import classify_dynamics, classify_orbit, still_settling
+from ..config import SamplingSpec
+from ..fmu.fmi import INITIAL_STATE, FmuSource
+from ..dynamics.sampling import sample_periods
+from ..fmu.simulator import has_derivatives, simulator_for
 
 RESULT_FIELDS = ("u", "v", "impacts", "t", "period", "orbit_impacts", "dynamics", "lyapunov", "lyapunov_err")
 
@@ -137,7 +138,7 @@ def _run_points(task: SweepTask, sim: Any, params: dict[str, Any], state0: tuple
         lam = err = float("nan")
         if s.lyapunov:
             now = dict(params) if task.param in INITIAL_STATE else {**params, task.param: value}
-            from .lyapunov import lyapunov_continued
+            from ..dynamics.lyapunov import lyapunov_continued
 
             ly = lyapunov_continued(sim, now, s.lyapunov, exact)
             out["lyapunov"][i], out["lyapunov_err"][i] = ly.exponents, ly.uncertainty
@@ -203,46 +204,6 @@ def init_pool_worker(progress_queue: Any, parent_pid: int | None = None) -> None
     _POOL_PROGRESS_QUEUE = progress_queue
     _IN_POOL = True
     die_with_parent(parent_pid)
-
-
-def init_child_process(parent_pid: int | None = None) -> None:
-    """Initializer of any other process pool of the harness (e.g. parallel shooting): the
-    process dies with its parent, SIGKILL included, and SIGTERM removes its temporary folder.
-    Ctrl-C is left as it is."""
-    import signal
-
-    signal.signal(signal.SIGTERM, _exit_on_signal)
-    die_with_parent(parent_pid)
-
-
-def _exit_on_signal(signum: int, frame: Any) -> None:
-    # os._exit, not SystemExit: the pool's worker loop catches BaseException from a task and
-    # would send it back as a result instead of exiting
-    from . import tempdirs
-
-    tempdirs.remove_now()
-    os._exit(128 + signum)
-
-
-def die_with_parent(parent_pid: int | None) -> bool:
-    """Ask Linux to send this process SIGTERM when its parent dies, SIGKILL included
-    (``prctl(PR_SET_PDEATHSIG)``); without it, workers of a killed sweep wait on their task
-    queue as orphans for good.  Returns False where prctl is unavailable (not Linux).
-
-    If the parent died before the request took effect, exit now.
-    """
-    import ctypes
-    import signal
-
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        if libc.prctl(1, int(signal.SIGTERM), 0, 0, 0) != 0:  # 1 = PR_SET_PDEATHSIG
-            return False
-    except (OSError, AttributeError):
-        return False
-    if parent_pid is not None and os.getppid() != parent_pid:
-        _exit_on_signal(int(signal.SIGTERM), None)
-    return True
 
 
 def _reporter(progress: Any) -> Callable[[str, int], None] | None:

@@ -11,8 +11,9 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .errors import HarnessInputError
-from .simulator import Simulator
+from ..settings import check_count, check_theta
+from ..errors import HarnessInputError
+from ..fmu.simulator import Simulator
 
 
 @dataclass
@@ -38,34 +39,6 @@ class StrobeResult:
     def final_state(self) -> tuple[float, float]:
         """(u, v) at the last sample (to carry a state on)."""
         return float(self.u[-1]), float(self.v[-1])
-
-
-def check_theta(theta: float, argument: str = "theta") -> float:
-    """Return ``theta`` as float if it lies in [0, 1), else raise naming ``argument``."""
-    try:
-        theta = float(theta)
-    except (TypeError, ValueError):
-        raise HarnessInputError(argument, f"{theta!r} is not a number") from None
-    if not (0.0 <= theta < 1.0):
-        raise HarnessInputError(argument, f"the section phase must lie in [0, 1), got {theta}")
-    return theta
-
-
-def check_count(value: Any, argument: str, minimum: int = 0) -> int:
-    """Return ``value`` as int if it is an integer >= ``minimum``, else raise."""
-    if isinstance(value, bool):
-        raise HarnessInputError(argument, f"expected an integer, got {value!r}")
-    try:
-        as_float = float(value)
-    except (TypeError, ValueError):
-        raise HarnessInputError(argument, f"expected an integer, got {value!r}") from None
-    if not np.isfinite(as_float) or as_float != int(as_float):
-        raise HarnessInputError(argument, f"expected a finite integer, got {value!r}")
-    n = int(as_float)
-    if n < minimum:
-        what = "negative" if n < 0 else "too small"
-        raise HarnessInputError(argument, f"{what} count {n}; must be >= {minimum}")
-    return n
 
 
 def sample_periods(sim: Simulator, n_transient: int, n_samples: int, progress: Any = None) -> StrobeResult:
@@ -118,7 +91,7 @@ def strobe(
     Parameters
     ----------
     sim : Simulator
-        E.g. :class:`harness.simulator.FmuSimulator`; it is (re)started here.
+        E.g. :class:`harness.fmu.simulator.FmuSimulator`; it is (re)started here.
     params : mapping
         FMU parameters (``u0``/``v0`` are taken from ``state0``).
     state0 : (float, float)

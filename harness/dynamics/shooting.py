@@ -38,7 +38,7 @@ import numpy as np
 from mapcheck.orbits import PeriodicOrbit, edge_kind, solve_periodic_orbit
 
 from .jacobian import resolve_method
-from .simulator import Simulator
+from ..fmu.simulator import Simulator
 
 __all__ = ["StroboscopicMap", "Edge", "NEWTON", "MARCH_STEPS", "good_orbit", "window_edges", "map_guided_windows", "newton_for"]
 
@@ -322,7 +322,7 @@ def _shoot_window_task(source: Any, params: Mapping[str, Any], theta: float, c: 
                        w: tuple[float, float | None], sigma_range: tuple[float, float], xtol: float,
                        relative: bool, derivatives: str = "auto") -> tuple[int, Edge, Edge, int]:
     """:func:`_shoot_window` in a worker process, on an FMU instance of its own."""
-    from .simulator import FmuSimulator
+    from ..fmu.simulator import FmuSimulator
 
     smap = StroboscopicMap(FmuSimulator(source, instance_name=f"shoot-M{M}"), params, theta, derivatives)
     e_lo, e_hi = _shoot_window(smap, c, M, w, sigma_range, xtol, relative)
@@ -364,7 +364,7 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
 
         # spawn, as the sweep pool does: the parent holds a loaded FMU library
         ctx = multiprocessing.get_context("spawn")
-        from .tasks import init_child_process
+        from ..io.children import init_child_process
 
         # workers die with this process (SIGKILL included) and clean their temp folders
         with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx,

@@ -35,11 +35,11 @@ import xarray as xr
 
 from .backends import Backend, make_backend
 from .checkpoint import Checkpoint, fingerprint
-from .config import SamplingSpec, SweepSpec, sweep_directions
-from .errors import HarnessInputError
-from .fmi import INITIAL_STATE, FmuModel
-from .progress import progress_bar
-from .results import ORBIT_IMPACTS_ATTRS, PERIOD_ATTRS, provenance
+from ..config import SamplingSpec, SweepSpec, sweep_directions
+from ..errors import HarnessInputError
+from ..fmu.fmi import INITIAL_STATE, FmuModel
+from ..io.progress import progress_bar
+from ..io.results import ORBIT_IMPACTS_ATTRS, PERIOD_ATTRS, provenance
 from .tasks import RESULT_FIELDS, SweepTask, execute, run_task
 
 __all__ = ["SweepStats", "SweepTask", "assemble", "execute", "plan_tasks", "run_sweep", "run_task"]
@@ -165,7 +165,7 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         coords=coords,
         attrs=dict(attrs),
     )
-    from .classify import DYNAMICS_NAMES
+    from ..dynamics.classify import DYNAMICS_NAMES
 
     codes = sorted(DYNAMICS_NAMES)
     ds["dynamics"] = (dims, arrays["dynamics"], {
@@ -227,7 +227,7 @@ def run_sweep(
     ----------
     fmu : FmuModel, path, or simulator
         The FMU to drive, or a picklable simulator object (e.g.
-        :class:`~harness.simulator.MappingSimulator`) used as it is on each worker.
+        :class:`~harness.fmu.simulator.MappingSimulator`) used as it is on each worker.
     spec : SweepSpec
         Swept parameter, grid, modes (and second axis).
     params : mapping, optional
@@ -237,7 +237,7 @@ def run_sweep(
     sampling : SamplingSpec, optional
         Section phase, transient, sampled periods, tolerance.
     backend : str, Backend or distributed.Client, optional
-        See :func:`harness.backends.make_backend`; default: local process pool.
+        See :func:`harness.runs.backends.make_backend`; default: local process pool.
     workers : int, optional
         Local processes (default: all usable cores).
     scheduler : str, optional

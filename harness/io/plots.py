@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .errors import HarnessInputError
+from ..errors import HarnessInputError
 
 import matplotlib
 

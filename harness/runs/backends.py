@@ -22,7 +22,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Any, Callable, Hashable, Mapping, Protocol
 
-from .errors import FmuError, HarnessInputError, SweepTaskError
+from ..errors import FmuError, HarnessInputError, SweepTaskError
 
 ResultCallback = Callable[[Hashable, Any], None]
 
@@ -264,7 +264,7 @@ def make_backend(backend: Any = None, workers: int | None = None, scheduler: str
     scheduler : str, optional
         ``tcp://HOST:PORT`` of a Dask scheduler.
     """
-    from .config import default_workers
+    from ..config import default_workers
 
     if backend is not None and not isinstance(backend, str):
         if hasattr(backend, "run") and hasattr(backend, "describe"):

@@ -1,6 +1,6 @@
 """FMI layer: read and check an FMU, and drive one reusable Co-Simulation instance.
 
-The rest of the harness talks to a *simulator* (:class:`harness.simulator.Simulator`),
+The rest of the harness talks to a *simulator* (:class:`harness.fmu.simulator.Simulator`),
 never to fmpy directly.  This module is the only place that knows about fmpy and FMI:
 
 * :class:`FmuModel` reads the modelDescription once (in the process that plans a run),
@@ -11,13 +11,11 @@ never to fmpy directly.  This module is the only place that knows about fmpy and
   that travels to worker processes and Dask workers.
 * :class:`FmuSimulator` owns *one* slave instance and reuses it between runs with
   ``reset`` (instantiating is far more expensive than resetting).
-* :func:`make_slave` picks the slave class from the FMU's ``fmiVersion``:
-  :class:`Fmi2Slave` (fmpy's ``FMU2Slave``) or :class:`Fmi3Slave` (``FMU3Slave``), which
-  share one small interface; another version is one more entry in :data:`SLAVE_CLASSES`.
+* :func:`harness.fmu.slaves.make_slave` picks the slave class from the FMU's ``fmiVersion``
+  (FMI 2.0 or 3.0, :data:`SUPPORTED_FMI_VERSIONS`).
 """
 from __future__ import annotations
 
-import collections
 import hashlib
 import os
 import threading
@@ -25,9 +23,9 @@ import zipfile
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any
 
-from .errors import FmuError, HarnessInputError
+from ..errors import FmuError, HarnessInputError
 
 #: Names of the oscillator's variables.  They are the interface between the harness and
 #: any FMU it drives (the C FMU, its Python twin, an FMI 3.0 build).
@@ -49,6 +47,9 @@ SENSITIVITY_OUTPUTS = ("J_uu", "J_uv", "J_vu", "J_vv", "S_u", "S_v")
 #: Integer parameter choosing the FMU's integrator, and the names the CLI accepts for it.
 SOLVER_PARAMETER = "solver"
 SOLVER_NAMES = {"cvode": 0, "closed-form": 1}
+
+#: Major FMI versions the harness drives (one slave class each in :mod:`harness.fmu.slaves`).
+SUPPORTED_FMI_VERSIONS = ("2", "3")
 
 _SETTABLE_CAUSALITIES = {"parameter", "input"}
 
@@ -150,11 +151,11 @@ class FmuModel:
                 "the harness needs fmiModelDescription/CoSimulation",
             )
         major = self.fmi_version.split(".")[0]
-        if major not in SLAVE_CLASSES:
+        if major not in SUPPORTED_FMI_VERSIONS:
             raise HarnessInputError(
                 argument,
                 f"{self.path.name} is an FMI {self.fmi_version} FMU; supported: "
-                + ", ".join(f"FMI {v}.x" for v in sorted(SLAVE_CLASSES)),
+                + ", ".join(f"FMI {v}.x" for v in SUPPORTED_FMI_VERSIONS),
             )
         self.model_identifier: str = md.coSimulation.modelIdentifier
         self.guid: str = md.guid
@@ -295,7 +296,7 @@ _EXTRACTED: dict[str, tuple[str, "FmuModel"]] = {}
 
 def _tmp_root() -> str:
     # one folder per process, removed on exit, SIGTERM, or by the next run after a SIGKILL
-    from . import tempdirs
+    from ..io import tempdirs
 
     return tempdirs.root()
 
@@ -332,255 +333,3 @@ def open_source(source: FmuSource) -> tuple[str, FmuModel]:
             raise HarnessInputError("--fmu", f"cannot extract {path}: {exc}") from None
         _EXTRACTED[source.sha256] = (unzipdir, model)
         return unzipdir, model
-
-
-# ----------------------------------------------------------------------------------------
-# Slaves: the version-specific part
-# ----------------------------------------------------------------------------------------
-class _LogMixin:
-    """The FMU's log messages, kept instead of printed, so errors can quote them."""
-
-    messages: collections.deque
-
-    def _log(self, status: int, category: bytes | str, message: bytes | str) -> None:
-        def text(x: bytes | str) -> str:
-            return x.decode("utf-8", "replace") if isinstance(x, bytes) else str(x)
-
-        self.messages.append((int(status), text(category), text(message)))
-
-    def last_error(self) -> str:
-        """The most recent message with status Warning or worse ('' if none)."""
-        for status, _, message in reversed(self.messages):
-            if status >= 1:
-                return message
-        return ""
-
-
-class _SlaveBase(_LogMixin):
-    """What the FMI 2 and FMI 3 slaves share: ``self._fmu`` (fmpy's slave) and its release."""
-
-    _fmu: Any
-    _needs_reset: bool
-
-    def close(self) -> None:
-        try:
-            if self._needs_reset:
-                self._fmu.terminate()
-        except Exception:  # an instance in Error state cannot terminate; free it anyway
-            pass
-        finally:
-            self._fmu.freeInstance()
-            release = getattr(getattr(self, "_callbacks", None), "release", None)
-            if release is not None:  # FMI 2.0 (fmi2_logging): the handler is not needed now
-                release()
-
-
-def _group_by_type(values: Mapping[VariableInfo, Any]) -> dict[str, tuple[list[int], list[Any]]]:
-    """Value references and values per FMI type, so that each type is set in one call."""
-    by_type: dict[str, tuple[list[int], list[Any]]] = {}
-    for var, value in values.items():
-        vrs, vals = by_type.setdefault(var.type, ([], []))
-        vrs.append(var.value_reference)
-        vals.append(value)
-    return by_type
-
-
-class Fmi2Slave(_SlaveBase):
-    """One FMI 2.0 Co-Simulation instance (fmpy's low-level ``FMU2Slave``).
-
-    The interface (``initialize``, ``reset``, ``set``, ``do_step``, ``getter``,
-    ``last_error``, ``close``) is all the simulator uses; :class:`Fmi3Slave` provides the
-    same methods.
-    """
-
-    def __init__(self, model: FmuModel, unzipdir: str, instance_name: str) -> None:
-        from fmpy.fmi2 import FMU2Slave
-
-        from harness.fmi2_logging import Fmi2Callbacks
-
-        self.messages = collections.deque(maxlen=50)
-        self._fmu = FMU2Slave(
-            guid=model.guid,
-            unzipDirectory=unzipdir,
-            modelIdentifier=model.model_identifier,
-            instanceName=instance_name,
-        )
-        # Not a ctypes logger of our own: fmpy's proxy keeps one process-wide pointer to it,
-        # which dangled once this slave was collected (harness/fmi2_logging.py).
-        self._callbacks = Fmi2Callbacks(  # must outlive the instance; released by close()
-            lambda _name, status, category, message: self._log(status, category, message))
-        self._fmu.instantiate(callbacks=self._callbacks.functions, loggingOn=False)
-        self._needs_reset = False
-
-    def initialize(self, t0: float, values: Mapping[VariableInfo, Any]) -> None:
-        """setupExperiment(t0), enter initialization, set ``values``, exit initialization."""
-        self._needs_reset = True  # also after a failure part-way: reset is allowed in Error
-        self._fmu.setupExperiment(startTime=t0)
-        self._fmu.enterInitializationMode()
-        self.set(values)
-        self._fmu.exitInitializationMode()
-
-    def set(self, values: Mapping[VariableInfo, Any]) -> None:
-        """Set variables grouped by type (one FMI call per type)."""
-        for typ, (vrs, vals) in _group_by_type(values).items():
-            if typ in REAL_TYPES:
-                self._fmu.setReal(vrs, [float(x) for x in vals])
-            elif typ in INTEGER_TYPES:
-                self._fmu.setInteger(vrs, [int(x) for x in vals])
-            elif typ in BOOLEAN_TYPES:
-                self._fmu.setBoolean(vrs, [bool(x) for x in vals])
-            else:  # pragma: no cover - rejected earlier by coerce_value
-                raise FmuError(f"cannot set variables of type {typ}")
-
-    def reset(self) -> None:
-        """fmi2Reset: back to the instantiated state, instance and library kept."""
-        if self._needs_reset:
-            self._fmu.reset()
-            self._needs_reset = False
-
-    def do_step(self, t: float, h: float) -> None:
-        self._fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-
-    def getter(self, variables: list[VariableInfo]) -> Callable[[], list]:
-        """A function returning the current values of ``variables`` (all of one type family),
-        bound once so that the per-period read is a single FMI call."""
-        vrs = [v.value_reference for v in variables]
-        family = variables[0].type
-        if family in REAL_TYPES:
-            return lambda: self._fmu.getReal(vrs)
-        if family in INTEGER_TYPES:
-            return lambda: self._fmu.getInteger(vrs)
-        return lambda: self._fmu.getBoolean(vrs)
-
-
-
-class Fmi3Slave(_SlaveBase):
-    """One FMI 3.0 Co-Simulation instance (fmpy's ``FMU3Slave``), same interface as
-    :class:`Fmi2Slave`.
-
-    By default instantiated without event mode and without early return, so ``doStep``
-    integrates the whole communication step and handles wall events inside it, as the FMI 2
-    build does. With ``record_events`` it asks for event mode and early return: ``doStep``
-    then stops at every wall event the FMU locates, the time it reports
-    (``lastSuccessfulTime``) is appended to :attr:`event_times`, the jump is applied in event
-    mode, and the step goes on to its end.
-    """
-
-    def __init__(self, model: FmuModel, unzipdir: str, instance_name: str,
-                 record_events: bool = False) -> None:
-        from fmpy.fmi3 import FMU3Slave
-
-        self.record_events = bool(record_events)
-        self.event_times: list[float] = []
-        self.messages = collections.deque(maxlen=50)
-        self._fmu = FMU3Slave(
-            guid=model.guid,
-            unzipDirectory=unzipdir,
-            modelIdentifier=model.model_identifier,
-            instanceName=instance_name,
-        )
-
-        def log_message(env: Any, status: int, category: bytes, message: bytes) -> None:
-            self._log(status, category, message)
-
-        self._fmu.instantiate(loggingOn=False, eventModeUsed=self.record_events,
-                              earlyReturnAllowed=self.record_events, logMessage=log_message)
-        self._log_message = log_message  # keep the callback alive
-        self._needs_reset = False
-
-    def initialize(self, t0: float, values: Mapping[VariableInfo, Any]) -> None:
-        self._needs_reset = True
-        self._fmu.enterInitializationMode(startTime=t0)
-        self.set(values)
-        self._fmu.exitInitializationMode()
-        self.event_times = []
-        if self.record_events:  # with eventModeUsed the FMU leaves initialization in event mode
-            self._settle_events()
-
-    def _settle_events(self) -> None:
-        """Event mode: let the FMU apply its jumps until it needs no more, then step mode."""
-        for _ in range(1000):
-            need_update, terminate, *_ = self._fmu.updateDiscreteStates()
-            if terminate:
-                raise FmuError("the FMU asked to terminate in event mode")
-            if not need_update:
-                break
-        self._fmu.enterStepMode()
-
-    _SETTERS = {"Float64": "setFloat64", "Float32": "setFloat32", "Int8": "setInt8", "Int16": "setInt16",
-                "Int32": "setInt32", "Int64": "setInt64", "UInt8": "setUInt8", "UInt16": "setUInt16",
-                "UInt32": "setUInt32", "UInt64": "setUInt64", "Boolean": "setBoolean", "Enumeration": "setInt64"}
-
-    def set(self, values: Mapping[VariableInfo, Any]) -> None:
-        for typ, (vrs, vals) in _group_by_type(values).items():
-            setter = self._SETTERS.get(typ)
-            if setter is None:  # pragma: no cover - rejected earlier by coerce_value
-                raise FmuError(f"cannot set variables of type {typ}")
-            convert = float if typ in REAL_TYPES else (bool if typ in BOOLEAN_TYPES else int)
-            getattr(self._fmu, setter)(vrs, [convert(x) for x in vals])
-
-    def reset(self) -> None:
-        if self._needs_reset:
-            self._fmu.reset()
-            self._needs_reset = False
-
-    def do_step(self, t: float, h: float) -> None:
-        target = t + h
-        while True:
-            need, terminate, early, reached = self._fmu.doStep(currentCommunicationPoint=t, communicationStepSize=target - t)
-            if terminate:
-                raise FmuError(f"the FMU asked to terminate at t={reached}")
-            if self.record_events and (need or early):
-                if early:
-                    self.event_times.append(float(reached))
-                self._fmu.enterEventMode()
-                self._settle_events()
-            if not early or reached >= target:
-                return
-            t = reached  # continue the step after the event
-
-    def getter(self, variables: list[VariableInfo]) -> Callable[[], list]:
-        vrs = [v.value_reference for v in variables]
-        typ = variables[0].type
-        name = {"Enumeration": "getInt64"}.get(typ, f"get{typ}")
-        get = getattr(self._fmu, name)
-        return lambda: get(vrs)
-
-
-
-#: Slave class per FMI major version.
-SLAVE_CLASSES: dict[str, type] = {"2": Fmi2Slave, "3": Fmi3Slave}
-
-
-_INSTANTIATE_LOCK = threading.Lock()
-
-
-def make_slave(model: FmuModel, unzipdir: str, instance_name: str,
-               record_events: bool = False) -> Fmi2Slave | Fmi3Slave:
-    """Instantiate the slave class matching the FMU's ``fmiVersion``.
-
-    ``record_events`` (FMI 3.0 only: event mode and early return) records the time of every
-    wall event the FMU reports.
-
-    Serialized: fmpy changes the process's working directory while it loads the library,
-    which is not safe with several threads (a Dask worker with ``--nthreads > 1``).
-    """
-    cls = SLAVE_CLASSES[model.fmi_version.split(".")[0]]
-    if record_events and cls is not Fmi3Slave:
-        raise HarnessInputError(
-            "--fmu", f"recording wall-event times needs an FMI 3.0 FMU with event mode and early "
-            f"return; {model.path} is FMI {model.fmi_version}")
-    with _INSTANTIATE_LOCK:
-        try:
-            if record_events:
-                return cls(model, unzipdir, instance_name, record_events=True)
-            return cls(model, unzipdir, instance_name)
-        except Exception as exc:
-            # fmpy raises a plain Exception when the shared library cannot be loaded (not an
-            # ELF file, wrong architecture, missing symbols) or instantiate returns NULL: a
-            # broken FMU is bad input, told in one line naming the file, never a traceback
-            reason = " ".join(str(exc).split()) or type(exc).__name__
-            if str(unzipdir) in reason:
-                reason = reason.replace(str(unzipdir) + os.sep, "")
-            raise HarnessInputError(
-                "--fmu", f"cannot load the binary of {model.path.name}: {reason}") from None

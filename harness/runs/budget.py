@@ -17,7 +17,7 @@ import re
 from dataclasses import dataclass
 from typing import Any
 
-from .errors import HarnessInputError
+from ..errors import HarnessInputError
 
 #: Default work limit: 1e8 FMU periods, about 8 CPU hours at Figure 9's parameters (the
 #: full Figure 9 reproduction needs ~1e6).

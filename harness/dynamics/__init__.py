@@ -1,0 +1,8 @@
+"""The oscillator as a dynamical system: stroboscopic sampling (:mod:`.sampling`), orbit and
+dynamics classification (:mod:`.classify`), map Jacobians (:mod:`.jacobian`), Newton shooting of
+periodic orbits and window edges (:mod:`.shooting`), Lyapunov exponents (:mod:`.lyapunov`).
+
+Layer: above :mod:`harness.fmu` and :mod:`harness.io`; may import those, the ground
+(:mod:`harness.config`, :mod:`harness.settings`, :mod:`harness.errors`) and :mod:`mapcheck`;
+nothing from ``runs``, ``cli`` or ``reproduce``.
+"""

@@ -1,0 +1,8 @@
+"""Driving the FMU: read and check an archive (:mod:`.fmi`), one reusable FMI 2.0/3.0
+Co-Simulation instance per thread (:mod:`.slaves`, :mod:`.simulator`), and the FMI 2 logger
+that stays valid for every instance (:mod:`.fmi2_logging`).
+
+Layer: above :mod:`harness.io` and the ground (:mod:`harness.config`, :mod:`harness.settings`,
+:mod:`harness.errors`); imports nothing from ``dynamics``, ``runs``, ``cli`` or ``reproduce``.
+This is the only subpackage that knows about fmpy.
+"""

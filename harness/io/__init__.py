@@ -1,0 +1,8 @@
+"""Files, figures and the process's own resources: NetCDF results with provenance
+(:mod:`.results`), atomic writes and output checks (:mod:`.outputs`), plots (:mod:`.plots`),
+progress bars (:mod:`.progress`), per-process temporary folders (:mod:`.tempdirs`) and child
+processes that go with their parent (:mod:`.children`).
+
+Layer: the bottom, beside the ground (:mod:`harness.config`, :mod:`harness.settings`,
+:mod:`harness.errors`); imports nothing else from ``harness``.
+"""

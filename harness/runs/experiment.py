@@ -1,0 +1,107 @@
+"""An experiment bound to its FMU: the validated settings of a run (parameters of the right
+type, initial state, sampling, run options), built from defaults, a TOML file and CLI flags.
+
+Lives in the runs layer because it opens the FMU (:mod:`harness.fmu`); the specs it is made of
+are in :mod:`harness.config`.
+"""
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+from ..config import Layered, RunSpec, SamplingSpec, SweepSpec, _number, default_fmu_path, load_toml
+from ..errors import HarnessInputError
+
+
+@dataclass
+class Experiment:
+    """Everything a run needs, validated against the FMU.
+
+    Build it with :meth:`from_sources`; ``params`` maps FMU variable names to values of the
+    right type, ``state0`` is (u0, v0) at the first section time.
+    """
+
+    fmu_path: str
+    model: Any  # harness.fmu.fmi.FmuModel
+    params: dict[str, Any]
+    state0: tuple[float, float]
+    sampling: SamplingSpec
+    run: RunSpec
+    layers: Layered = field(repr=False)
+
+    @classmethod
+    def from_sources(
+        cls,
+        config: str | os.PathLike | None = None,
+        overrides: Mapping[str, Mapping[str, Any]] | None = None,
+        model: Any = None,
+    ) -> "Experiment":
+        """Defaults < TOML file ``config`` < ``overrides`` (CLI), validated.
+
+        Parameters
+        ----------
+        config : path, optional
+            Experiment file (TOML).
+        overrides : mapping, optional
+            ``{section: {key: value}}``; ``None`` values mean "not given".
+        model : FmuModel, optional
+            Already opened FMU (otherwise opened from ``fmu.path``).
+        """
+        from ..fmu.fmi import FmuModel, INITIAL_STATE, SOLVER_PARAMETER
+
+        layers = Layered()
+        if config is not None:
+            layers.merge(load_toml(config), Path(config).name)
+        if overrides:
+            layers.merge(overrides, "cli")
+        path = layers.get("fmu", "path") or default_fmu_path()
+        if model is None:
+            model = FmuModel(path, argument=layers.arg("fmu", "path") if layers.origin.get(("fmu", "path")) else "--fmu")
+        params = model.defaults()
+        for name, value in layers.values["model"].items():
+            arg = (f"--set {name}" if layers.origin.get(("model", name)) == "cli"
+                   else layers.arg("model", name))
+            if name == SOLVER_PARAMETER and layers.origin.get(("model", name)) == "cli":
+                arg = "--solver"
+            if name == SOLVER_PARAMETER and name not in model.variables:
+                # an FMU without the parameter integrates with CVODE: that choice is a no-op
+                if str(value).lower() in ("cvode", "0"):
+                    continue
+                raise HarnessInputError(arg, f"{model.path.name} has no closed-form solver mode (no parameter "
+                                        f"{SOLVER_PARAMETER!r}); it integrates with CVODE only")
+            params[name] = model.coerce(name, value, arg)
+        state = []
+        for key in INITIAL_STATE:
+            given = layers.get("initial", key)
+            if given is None:
+                state.append(float(params.get(key, -1.0 if key == "u0" else 0.0)))
+            else:
+                state.append(_number(layers, "initial", key))
+        for key in INITIAL_STATE:
+            params.pop(key, None)  # the state travels separately
+        return cls(
+            fmu_path=str(model.path),
+            model=model,
+            params=params,
+            state0=(state[0], state[1]),
+            sampling=SamplingSpec.from_layers(layers),
+            run=RunSpec.from_layers(layers),
+            layers=layers,
+        )
+
+    def sweep_spec(self) -> SweepSpec:
+        """The ``[sweep]`` section, validated against this experiment's FMU."""
+        return SweepSpec.from_layers(self.layers, self.model)
+
+    def as_attrs(self) -> dict[str, Any]:
+        """Flat record of every setting (for the results' attributes)."""
+        out: dict[str, Any] = {"fmu_path": self.fmu_path}
+        for name, value in self.params.items():
+            out[f"model.{name}"] = value
+        out["initial.u0"], out["initial.v0"] = self.state0
+        for section in ("sampling", "run"):
+            for key, value in self.layers.values[section].items():
+                out[f"{section}.{key}"] = value
+        return out
