@@ -20,9 +20,10 @@ from ..runs.budget import Budget, grid_count, jacobian_estimate, simulate_estima
 from .main import count, overrides_from_args
 from ..config import parameter_values
 from ..runs.experiment import Experiment
-from ..errors import FmuRejectedInput, HarnessInputError
+from ..errors import HarnessInputError
 from ..io.outputs import check_output, check_plot
 from ..io.progress import progress_bar
+from .resumable import run_resumable
 
 
 def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
@@ -257,47 +258,17 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         exp.layers.merge({"sweep": _scan_option(args.scan)}, "cli")
     spec = exp.sweep_spec()
     out, plot = _outputs(args, exp, f"sweep-{spec.param}")
-    explicit = exp.run.checkpoint is not None
-    ckpt = Path(exp.run.checkpoint) if explicit else out.with_name(out.name + ".partial")
-    if args.no_resume and ckpt.exists():
-        shutil.rmtree(ckpt)
-    ckpt_is_new = not ckpt.exists()
     stats = SweepStats()
 
-    def sweep() -> Any:
+    def sweep(checkpoint: str) -> Any:
         return run_sweep(
             exp.model, spec, exp.params, exp.state0, exp.sampling,
             backend=exp.run.backend, workers=exp.run.workers, scheduler=exp.run.scheduler,
-            checkpoint=str(ckpt), progress=exp.run.progress,
+            checkpoint=checkpoint, progress=exp.run.progress,
             settings={**exp.as_attrs(), "command": _command_line(args)}, stats=stats,
         )
 
-    try:
-        try:
-            ds = sweep()
-        except HarnessInputError as exc:
-            if explicit or "different run" not in str(exc):
-                raise
-            # The default checkpoint of an earlier, different sweep to the same file: start over.
-            print(f"note: discarding {ckpt} (checkpoint of a different sweep)", file=sys.stderr)
-            shutil.rmtree(ckpt)
-            ds = sweep()
-    except KeyboardInterrupt:
-        # say what is really on disk: whole tasks and the leading points of chains
-        if stats.kept_points:
-            print(f"interrupted: {stats.kept_points} of {stats.total_points} points are kept in {ckpt}; "
-                  "rerun the same command to resume", file=sys.stderr)
-        else:
-            print("interrupted before any point finished; nothing kept", file=sys.stderr)
-            if ckpt_is_new:
-                shutil.rmtree(ckpt, ignore_errors=True)
-        raise
-    except (HarnessInputError, FmuRejectedInput):
-        # Rejected input: a rerun needs other settings, which could not resume this
-        # checkpoint anyway; one made by this run goes (else the next run notes discarding it).
-        if ckpt_is_new:
-            shutil.rmtree(ckpt, ignore_errors=True)
-        raise
+    ds, ckpt = run_resumable(sweep, exp, out, stats, args.no_resume)
     write_netcdf(ds, out)
     shutil.rmtree(ckpt, ignore_errors=True)  # the NetCDF file now holds everything
     print(f"{spec.param}: {len(spec.values)} values x {', '.join(spec.modes)}"
