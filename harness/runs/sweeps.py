@@ -50,29 +50,33 @@ __all__ = ["SweepStats", "SweepTask", "assemble", "execute", "plan_tasks", "run_
 def plan_tasks(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, float],
                sampling: SamplingSpec) -> dict[str, SweepTask]:
     """All tasks of a sweep, keyed by a stable key."""
-    if spec.param in INITIAL_STATE and any(m != "fresh" for m in spec.modes):
-        raise HarnessInputError("--mode", f"the initial state {spec.param!r} can only be swept with fresh starts")
+    if {spec.param, spec.scan_param} & set(INITIAL_STATE) and any(m != "fresh" for m in spec.modes):
+        name = spec.param if spec.param in INITIAL_STATE else spec.scan_param
+        raise HarnessInputError("--mode", f"the initial state {name!r} can only be swept with fresh starts")
     grid = np.sort(np.asarray(spec.values, dtype=float))
     scan = [None] if spec.scan_param is None else list(np.asarray(spec.scan_values, dtype=float))
     tasks: dict[str, SweepTask] = {}
     for j, second in enumerate(scan):
         base = dict(params)
+        start = state0
         if second is not None:
-            base[spec.scan_param] = float(second)
+            base[spec.scan_param] = float(second)  # also for u0/v0: it places the task on the grid
+            if spec.scan_param in INITIAL_STATE:  # a basin scan: the second axis is part of the start
+                start = (float(second), state0[1]) if spec.scan_param == INITIAL_STATE[0] else (state0[0], float(second))
         suffix = "" if second is None else f"-s{j:04d}"
         for mode in spec.modes:
             if mode == "fresh":
                 for i, value in enumerate(grid):
                     key = f"fresh{suffix}-p{i:05d}"
-                    tasks[key] = SweepTask(key, mode, spec.param, (float(value),), base, state0, sampling)
+                    tasks[key] = SweepTask(key, mode, spec.param, (float(value),), base, start, sampling)
             elif mode == LOOP:  # one task: up, then down from where up ended
                 chain = np.concatenate([grid, grid[::-1]])
                 key = f"{LOOP}{suffix}"
-                tasks[key] = SweepTask(key, LOOP, spec.param, tuple(float(x) for x in chain), base, state0, sampling)
+                tasks[key] = SweepTask(key, LOOP, spec.param, tuple(float(x) for x in chain), base, start, sampling)
             else:
                 chain = grid if mode == "up" else grid[::-1]
                 key = f"{mode}{suffix}"
-                tasks[key] = SweepTask(key, mode, spec.param, tuple(float(x) for x in chain), base, state0, sampling)
+                tasks[key] = SweepTask(key, mode, spec.param, tuple(float(x) for x in chain), base, start, sampling)
     return tasks
 
 
