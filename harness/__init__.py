@@ -30,6 +30,13 @@ The public entry points, grouped as you look for them:
   up/down, 1D or 2D, serial / processes / Dask; `Experiment` -- a TOML run description;
 * `write_netcdf`, `read_netcdf`.
 
+# Basins of attraction
+
+* `run_basins` (``impact-harness basins``) -- a grid of initial states (u0, v0) at t = theta, each
+  labelled by the periodic attractor it reaches (`Attractor`: period, impacts, stroboscopic
+  points); coexisting attractors of equal period told apart by their points
+  (`identify_attractors`); starts inside a rigid wall marked invalid; parallel and resumable.
+
 # Shooting
 
 * `harness.dynamics.shooting.StroboscopicMap` -- the FMU's one-period map in coordinates relative to the
@@ -95,6 +102,7 @@ _EXPORTS = {
     "SweepStats": "runs.sweeps", "run_sweep": "runs.sweeps",
     "StroboscopicMap": "dynamics.shooting", "map_guided_windows": "dynamics.shooting",
     "compare_windows": "reproduce.windows",
+    "run_basins": "runs.basin_scan", "Attractor": "dynamics.basins", "identify_attractors": "dynamics.basins",
 }
 
 __all__ = sorted(_EXPORTS) + ["__version__"]

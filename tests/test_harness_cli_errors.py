@@ -138,11 +138,12 @@ def test_rejected_sweep_leaves_no_checkpoint_and_no_note_next_time(tmp_path: Pat
     """Issue 12: a run refused for a bad parameter left OUT.partial, and the corrected rerun
     printed a note about discarding it."""
     out = tmp_path / "s.nc"
-    base = ["sweep", "--param", "u0", "--mode", "fresh", "--set", "wall=rigid", "--transient", "2", "--samples", "2",
-            "--workers", "1", "--out", str(out), "--no-plot", "--no-progress"]
-    # the FMU refuses the start inside the rigid wall (u0 = 0.01 > 0) after u0 = -0.5 finished
-    code, _, err = _run_main([*base, "--values", "-0.5,0.01"], capsys)
-    assert code == 2 and "inside the rigid wall" in _one_line(err)
+    base = ["sweep", "--param", "contact", "--mode", "fresh", "--solver", "closed-form", "--transient", "2",
+            "--samples", "2", "--workers", "1", "--out", str(out), "--no-plot", "--no-progress"]
+    # the FMU refuses the closed-form solver with the Hertz law (contact = 1) after contact = 0 finished
+    # (a start inside a rigid wall is no longer a refusal of the run: an invalid point, test_harness_basins)
+    code, _, err = _run_main([*base, "--values", "0,1"], capsys)
+    assert code == 2 and "closed" in _one_line(err).lower() and "Hertz" in _one_line(err), err
     assert not (tmp_path / "s.nc.partial").exists() and not out.exists()
-    code, _, err = _run_main([*base, "--values", "-0.5,-0.4"], capsys)
+    code, _, err = _run_main([*base, "--values", "0", "--set", "contact=0"], capsys)
     assert code == 0 and err == "" and out.exists(), err

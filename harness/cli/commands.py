@@ -101,7 +101,10 @@ def _outputs(args: argparse.Namespace, exp: Experiment, default_stem: str) -> tu
     out = check_output(exp.run.out or f"results/{default_stem}.nc", exp.layers.arg("run", "out"))
     if args.no_plot:
         return out, None
-    if exp.run.plot:
+    origin = exp.layers.origin
+    # a file's plot path goes with that file's result path: with --out on the command line and
+    # the plot only in the file (another command's, say), the plot goes next to --out
+    if exp.run.plot and not (origin.get(("run", "out")) == "cli" and origin.get(("run", "plot")) != "cli"):
         return out, check_plot(exp.run.plot, exp.layers.arg("run", "plot"))
     return out, check_plot(out.with_suffix(".png"), "--out")  # OUT.png may be a directory
 

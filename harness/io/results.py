@@ -148,7 +148,8 @@ PERIOD_ATTRS = {
     "units": "forcing periods",
     "comment": "M > 0: the samples repeat after M forcing periods (within sampling.tol) with the same wall "
                "entries; 0: no period found up to sampling.max_period -- why (not converged, quasi-periodic, "
-               "chaotic, unclassified) is in the variable dynamics where present",
+               "chaotic, unclassified) is in the variable dynamics where present; -1: not run (a start of a "
+               "basin scan that the FMU refused: inside a rigid wall)",
 }
 #: Attributes of the ``orbit_impacts`` variable.
 ORBIT_IMPACTS_ATTRS = {

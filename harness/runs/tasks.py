@@ -16,7 +16,7 @@ import numpy as np
 from ..io.children import _exit_on_signal, die_with_parent
 from ..dynamics.classify import classify_dynamics, classify_orbit, still_settling
 from ..config import SamplingSpec
-from ..fmu.fmi import INITIAL_STATE, FmuSource
+from ..fmu.fmi import INITIAL_STATE, WALL_NAMES, FmuSource
 from ..dynamics.sampling import sample_periods
 from ..fmu.simulator import has_derivatives, simulator_for
 
@@ -97,6 +97,23 @@ def execute(task: SweepTask, sim: Any, report: Callable[[str, int, dict], None] 
     return out
 
 
+def _start_is_swept(task: SweepTask) -> bool:
+    """True when the task's start state is one of the scan's axes (a basin scan): then a start
+    inside the wall is a point of the grid, not a mistake in the settings."""
+    return task.param in INITIAL_STATE or any(name in task.params for name in INITIAL_STATE)
+
+
+def inside_rigid_wall(params: dict[str, Any], state: tuple[float, float]) -> bool:
+    """A start the FMU refuses by its own rule: inside a rigid wall (u0 > u_wall), or on it
+    moving into it.  Told apart here, before the FMU is asked, so that any other refusal at
+    initialization (a bad setting) stays an error of the whole run."""
+    wall = params.get("wall")
+    if wall not in (WALL_NAMES["rigid"], "rigid"):
+        return False
+    u_wall = float(params.get("u_wall", 0.0))
+    return state[0] > u_wall or (state[0] == u_wall and state[1] > 0.0)
+
+
 def _run_points(task: SweepTask, sim: Any, params: dict[str, Any], state0: tuple[float, float], exact: bool,
                 out: dict[str, np.ndarray], report: Callable[[str, int, dict], None] | None) -> None:
     s = task.sampling
@@ -117,6 +134,8 @@ def _run_points(task: SweepTask, sim: Any, params: dict[str, Any], state0: tuple
                 state0 = (value, state0[1]) if task.param == INITIAL_STATE[0] else (state0[0], value)
             else:
                 params[task.param] = value
+            if _start_is_swept(task) and inside_rigid_wall(params, state0):
+                continue  # an invalid point of a basin scan (period -1, the fill value); the scan goes on
             sim.start(params, s.theta, state0)
         elif i > first:
             run_test_hook(task.key, i)
