@@ -13,8 +13,7 @@ import numpy as np
 from ..config import parameter_values
 from ..errors import HarnessInputError
 from ..runs.budget import Budget, grid_count, sweep_estimate
-from .commands import _command_line, _experiment, _outputs
-from .main import count
+from .commands import _command_line, _experiment, _outputs, execution_options
 from .resumable import run_resumable
 
 
@@ -34,15 +33,7 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     g.add_argument("--match-tol", type=float, metavar="D",
                    help="largest distance (max norm, units of u and v) between two orbits of one attractor "
                    "(default 1000 x --tol x the orbits' size)")
-    b = p.add_argument_group("execution")
-    b.add_argument("--backend", dest="run__backend", choices=["serial", "processes", "dask"],
-                   help="where to run (default processes, or dask with --scheduler)")
-    b.add_argument("--workers", "-j", dest="run__workers", type=count, metavar="N",
-                   help="local worker processes (default: all cores)")
-    b.add_argument("--scheduler", dest="run__scheduler", metavar="tcp://HOST:PORT", help="run on this Dask scheduler")
-    b.add_argument("--checkpoint", dest="run__checkpoint", metavar="DIR",
-                   help="directory of finished points, to resume an interrupted scan (default: OUT.partial)")
-    b.add_argument("--no-resume", action="store_true", help="discard an existing checkpoint and start over")
+    execution_options(p, "scan")
     p.set_defaults(func=cmd_basins)
 
 

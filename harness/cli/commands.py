@@ -58,15 +58,7 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
                    "up scan ended (up,down: two independent scans); comma-separated list allowed (default both)")
     g.add_argument("--scan", metavar="NAME=V1,V2,...|NAME=START:STOP:NUM",
                    help="second axis of a 2D scan, e.g. --scan Gamma=10,100,1000")
-    b = p.add_argument_group("execution")
-    b.add_argument("--backend", dest="run__backend", choices=["serial", "processes", "dask"],
-                   help="where to run (default processes, or dask with --scheduler)")
-    b.add_argument("--workers", "-j", dest="run__workers", type=count, metavar="N",
-                   help="local worker processes (default: all cores)")
-    b.add_argument("--scheduler", dest="run__scheduler", metavar="tcp://HOST:PORT", help="run on this Dask scheduler")
-    b.add_argument("--checkpoint", dest="run__checkpoint", metavar="DIR",
-                   help="directory of finished points, to resume an interrupted sweep (default: OUT.partial)")
-    b.add_argument("--no-resume", action="store_true", help="discard an existing checkpoint and start over")
+    execution_options(p, "sweep")
     p.set_defaults(func=cmd_sweep)
 
     p = sub.add_parser("jacobian", parents=[common], help="Jacobian of the stroboscopic map (at a state, or J(x) near grazing)",
@@ -89,6 +81,19 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
 
 
 # ----------------------------------------------------------------------------------------
+def execution_options(p: argparse.ArgumentParser, what: str) -> None:
+    """Where a grid of runs executes, and its checkpoint (sweep, basins)."""
+    b = p.add_argument_group("execution")
+    b.add_argument("--backend", dest="run__backend", choices=["serial", "processes", "dask"],
+                   help="where to run (default processes, or dask with --scheduler)")
+    b.add_argument("--workers", "-j", dest="run__workers", type=count, metavar="N",
+                   help="local worker processes (default: all cores)")
+    b.add_argument("--scheduler", dest="run__scheduler", metavar="tcp://HOST:PORT", help="run on this Dask scheduler")
+    b.add_argument("--checkpoint", dest="run__checkpoint", metavar="DIR",
+                   help=f"directory of finished points, to resume an interrupted {what} (default: OUT.partial)")
+    b.add_argument("--no-resume", action="store_true", help="discard an existing checkpoint and start over")
+
+
 def _experiment(args: argparse.Namespace, extra: dict[str, dict[str, Any]] | None = None) -> Experiment:
     layer = overrides_from_args(args)
     for section, entries in (extra or {}).items():
