@@ -30,6 +30,11 @@ The public entry points, grouped as you look for them:
   up/down, 1D or 2D, serial / processes / Dask; `Experiment` -- a TOML run description;
 * `write_netcdf`, `read_netcdf`.
 
+# Errors
+
+* `HarnessInputError` -- bad input, naming the argument (the CLI's one-line message, exit 2);
+  `FmuError` -- the FMU failed during a run (exit 1).
+
 # Basins of attraction
 
 * `run_basins` (``impact-harness basins``) -- a grid of initial states (u0, v0) at t = theta, each
@@ -39,11 +44,19 @@ The public entry points, grouped as you look for them:
 
 # Shooting
 
-* `harness.dynamics.shooting.StroboscopicMap` -- the FMU's one-period map in coordinates relative to the
+* `StroboscopicMap` -- the FMU's one-period map in coordinates relative to the
   wall-free orbit;
 * `map_guided_windows` -- ODE window edges of maximal period-M orbits, started in a map's
   windows; each edge the midpoint of a bracket the shooting bisected, or unresolved;
 * `harness.dynamics.shooting.window_edges`, `harness.dynamics.shooting.Edge`.
+
+# Lyapunov exponents
+
+* `lyapunov_exponents` -> `LyapunovResult` -- both exponents of the stroboscopic map with their
+  standard errors (QR method, the FMU's own derivatives or differences);
+  `lyapunov_from_jacobians` -- the same from given one-period Jacobians;
+* `classify_dynamics` -- periodic, quasi-periodic, chaotic or not converged, from the period
+  test and the largest exponent (the sweeps' ``dynamics`` variable).
 
 # Jacobians
 

@@ -8,9 +8,12 @@ cd "$root"
 bash scripts/setup.sh
 out="${DOCS_OUT:-build/docs}"
 rm -rf "$out"
-# every module by name: pdoc follows __all__, which lists the packages' re-exports, not their
-# submodules (harness.__main__ would run the CLI on import: left out)
+# every module by name: pdoc follows __all__ at the top of a package, which lists the re-exports,
+# not the submodules (but a submodule named like a re-export is added by pdoc); a subpackage without __all__ brings its own submodules, so those are not
+# named again (a module named twice is a pdoc warning). harness.__main__ would run the CLI on
+# import: left out.
 mapfile -t modules < <(.venv/bin/python - <<'PY'
+import importlib
 import pkgutil
 
 import harness
@@ -18,9 +21,16 @@ import mapcheck
 
 for pkg in (harness, mapcheck):
     print(pkg.__name__)
+    expanded = []  # packages without __all__: pdoc documents their submodules itself
     for m in pkgutil.walk_packages(pkg.__path__, pkg.__name__ + "."):
-        if not m.name.endswith("__main__"):
-            print(m.name)
+        parent, leaf = m.name.rsplit(".", 1)
+        if leaf == "__main__" or any(m.name.startswith(s + ".") for s in expanded):
+            continue
+        if leaf in getattr(importlib.import_module(parent), "__all__", ()):
+            continue  # pdoc adds it itself (mapcheck.windows: a module and a re-exported function)
+        if m.ispkg and not hasattr(importlib.import_module(m.name), "__all__"):
+            expanded.append(m.name)
+        print(m.name)
 PY
 )
 .venv/bin/python -m pdoc --docformat numpy --output-directory "$out" "$@" "${modules[@]}"

@@ -4,6 +4,4 @@
 
 Layer: the top (beside :mod:`harness.reproduce`); may import everything below.
 """
-from .main import main
-
-__all__ = ["main"]
+from .main import main  # noqa: F401  (the console script: harness.cli:main)

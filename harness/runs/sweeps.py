@@ -258,8 +258,12 @@ def run_sweep(
     Returns
     -------
     xarray.Dataset
-        Variables u, v, impacts, t (direction, param[, scan], sample), period and
-        orbit_impacts (direction, param[, scan]); attributes with the full provenance.
+        Variables u, v, impacts, t (direction, param[, scan], sample); period,
+        orbit_impacts and dynamics (direction, param[, scan]: periodic, quasi-periodic,
+        chaotic, not converged, unclassified, see :func:`harness.classify_dynamics`); with
+        ``sampling.lyapunov`` also lyapunov and lyapunov_err (direction, param[, scan],
+        exponent): both exponents of the stroboscopic map and their standard errors;
+        attributes with the full provenance.
     """
     t_start = time.perf_counter()
     sampling = sampling or SamplingSpec()  # checked on creation
