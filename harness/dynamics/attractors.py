@@ -206,6 +206,14 @@ def find_attractors(sim: Simulator, params: Mapping[str, Any], values: Sequence[
         if not ok:
             scan.not_periodic += 1
             return pts[-1]
+        # a slowly converging orbit (a multiplier near -1) passes the sample test at 2M first:
+        # the refined orbit has the true (smallest) period
+        for d in range(1, M):
+            if M % d == 0 and np.max(np.abs(ev.points[d] - ev.points[0])) <= match:
+                w, ev, ok, res = refine_orbit(pmap, w, p, d)
+                if ok:
+                    M = d
+                    break
         orb_pts, orb_cont = _canonical(ev.points, ev.contacts)
         cand = Attractor(param, float(p), M, int(ev.contacts.sum()), orb_pts, orb_cont,
                          np.linalg.eigvals(ev.J).astype(complex), res, [name], theta)

@@ -44,6 +44,9 @@ STICK_IMPACTS = 20
 
 _CORRECTOR_TOL = 1e-10
 
+#: A gap (distance to the wall of a free passage) below this at a corrector failure is a graze.
+GRAZE_GAP = 1e-5
+
 
 class _Point:
     """An accepted point: x = (w, p), its evaluation and tangent."""
@@ -133,19 +136,21 @@ class _Continuer:
         bad point if it converged there)."""
         lo, hi = 0.0, ds_b
         good, bad = a, None
-        p_bad = a.p + ds_b * a.tangent[2]
+        rate = max(abs(a.tangent[2]), 1e-300)  # dp/ds along the tangent: the bracket in p
         for _ in range(80):
-            if abs(p_bad - good.p) < self.locate_tol or hi - lo < 1e-15:
+            if (hi - lo) * rate < self.locate_tol or hi - lo < 1e-15:
                 break
-            s = 0.5 * (lo + hi)
-            pt = self.along(a, s)
+            # predict from the last good point (not from a): a short step the corrector can make
+            # even next to the corner of a nonsmooth fold
+            pt = self.along(good, 0.5 * (hi - lo))
             if pt is not None and np.array_equal(pt.ev.contacts, a.ev.contacts):
-                lo, good = s, pt
+                if pt.tangent @ good.tangent < 0:
+                    pt.tangent = -pt.tangent
+                lo, good = lo + 0.5 * (hi - lo), pt
+                rate = max(abs(good.tangent[2]), 1e-300)
             else:
-                hi = s
-                bad = pt
-                p_bad = pt.p if pt is not None else a.p + s * a.tangent[2]
-        return good, abs(p_bad - good.p), bad
+                hi, bad = lo + 0.5 * (hi - lo), pt
+        return good, (hi - lo) * rate, bad
 
 
 def _start_point(pmap: PeriodMap, p0: float, z0: Any, M: int) -> _Point:
@@ -225,10 +230,49 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
         labels.append(kind)
         events.append(Event(kind, pt.p, len(pts) - 1, pt.mult, pt.ev.points[0], bracket, note))
 
+    def _graze(good: _Point, bracket: float, bad: _Point | None) -> bool:
+        """Record a graze at ``good``; switch to the orbit with the new contact count if it
+        exists (True: the branch ends here)."""
+        nonlocal a, end_note, steps
+        n_old = int(a.ev.contacts.sum())
+        rigid = int(pmap.params.get("wall", 0)) == 2
+        kind = "graze"
+        if bad is not None and rigid and int(bad.ev.contacts.sum()) >= STICK_IMPACTS:
+            kind = "stick"
+        nxt = _new_contact_orbit(cont, good, bad) if follow_grazing else None
+        if nxt is None:
+            event(kind, good, bracket, f"{n_old} impact(s) per period before; no orbit with another contact "
+                  "count found next to it" + ("" if follow_grazing else " (not sought)") + "; branch ends")
+            end_note = f"{kind} at {pmap.param} = {good.p:.10g}"
+            return True
+        n_new = int(nxt.ev.contacts.sum())
+        how = "beyond it" if (nxt.p - good.p) * (good.p - a.p) > 0 else "back on the same side (nonsmooth fold)"
+        event(kind, good, bracket, f"{n_old} -> {n_new} impacts per period; continued {how}")
+        a = nxt
+        pts.append(a)
+        labels.append("")
+        steps += 1
+        return False
+
     end_note = f"{max_points} steps done"
     steps = 0
+    failed_here = False
     while steps < max_points:
         trial, its = cont.correct(a.x + ds * a.tangent, a.tangent)
+        if trial is None and not failed_here:
+            # the corrector fails where the branch has a corner: a graze that is a nonsmooth fold
+            # (the orbit meets its partner with the extra contact on the wall).  Bisect on
+            # "converges with the same contacts"; a vanishing gap there is a graze.
+            failed_here = True
+            good, bracket, bad = cont.locate_contact_change(a, ds)
+            if good is not a and pmap.gap(good.ev.points, good.ev.contacts, good.p) < GRAZE_GAP:
+                trial = good
+                if trial.tangent @ a.tangent < 0:
+                    trial.tangent = -trial.tangent
+                stop = _graze(good, bracket, bad)
+                if stop:
+                    break
+                continue
         if trial is None:
             ds *= 0.5
             if abs(ds) < ds_min:
@@ -237,26 +281,11 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
             continue
         if trial.tangent @ a.tangent < 0:  # keep the orientation through folds
             trial.tangent = -trial.tangent
+        failed_here = False
         if not np.array_equal(trial.ev.contacts, a.ev.contacts):
             good, bracket, bad = cont.locate_contact_change(a, ds)
-            n_old = int(a.ev.contacts.sum())
-            rigid = int(pmap.params.get("wall", 0)) == 2
-            kind = "graze"
-            if bad is not None and rigid and int(bad.ev.contacts.sum()) >= STICK_IMPACTS:
-                kind = "stick"
-            nxt = _new_contact_orbit(cont, good, bad) if follow_grazing else None
-            if nxt is None:
-                event(kind, good, bracket, f"{n_old} impact(s) per period before; no orbit with another contact "
-                      "count found next to it" + ("" if follow_grazing else " (not sought)") + "; branch ends")
-                end_note = f"{kind} at {pmap.param} = {good.p:.10g}"
+            if _graze(good, bracket, bad):
                 break
-            n_new = int(nxt.ev.contacts.sum())
-            how = "beyond it" if (nxt.p - good.p) * (good.p - a.p) > 0 else "back on the same side (nonsmooth fold)"
-            event(kind, good, bracket, f"{n_old} -> {n_new} impacts per period; continued {how}")
-            a = nxt
-            pts.append(a)
-            labels.append("")
-            steps += 1
             continue
         ta, tb = a.tests(), trial.tests()
         for kind in ("flip", "fold", "ns"):
@@ -287,14 +316,17 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
 def _new_contact_orbit(cont: _Continuer, good: _Point, bad: _Point | None) -> _Point | None:
     """The orbit with another contact count next to a graze at ``good``: the corrector's own
     solution beyond it if it converged, else Newton at fixed p on both sides of the graze."""
-    if bad is not None and not np.array_equal(bad.ev.contacts, good.ev.contacts):
+    near = max(1e3 * cont.locate_tol, 1e-6)
+    if (bad is not None and not np.array_equal(bad.ev.contacts, good.ev.contacts)
+            and float(np.max(np.abs(bad.x - good.x))) < near):
+        # the corrector's own solution just past the graze (not an orbit elsewhere it fell onto)
         return _oriented(bad, bad.x - good.x)
     pmap, M = cont.pmap, cont.M
     h = max(1e3 * cont.locate_tol, 1e-6)
     for dp in (h * good.tangent[2] / max(abs(good.tangent[2]), 1e-300), -h * np.sign(good.tangent[2])):
         for dw in (good.tangent[:2] * 1e-3, -good.tangent[:2] * 1e-3, np.zeros(2)):
             w, ev, ok, _ = refine_orbit(pmap, good.w + dw, good.p + dp, M)
-            if ok and not np.array_equal(ev.contacts, good.ev.contacts):
+            if ok and not np.array_equal(ev.contacts, good.ev.contacts) and float(np.max(np.abs(w - good.w))) < 1e-2:
                 pt = _Point(w, good.p + dp, ev)
                 return _oriented(pt, pt.x - good.x)
     return None
@@ -321,8 +353,8 @@ def switch_at_flip(sim: Simulator, params: Mapping[str, Any], branch: Branch, ev
 
     The period-2M orbit bifurcates from the flip point along the eigenvector e of mu = -1, with
     amplitude ~ sqrt(|p - p_flip|).  Newton on F^{2M} is started at p_flip +- ``delta`` from
-    z_flip +- sqrt(delta) e; the first solution that is not the period-M orbit (|F^M(w) - w| >
-    1e-7) starts :func:`continue_orbit` with period 2M, directed away from the flip.
+    z_flip +- sqrt(delta) e (then with delta / 100); the first solution that is not the period-M
+    orbit (|F^M(w) - w| > 1e-7) and has twice its contacts starts :func:`continue_orbit` with period 2M, directed away from the flip.
     ``kwargs`` go to :func:`continue_orbit` (p_range, max_points, ...).
 
     Returns
@@ -338,14 +370,18 @@ def switch_at_flip(sim: Simulator, params: Mapping[str, Any], branch: Branch, ev
     ev = pmap.evaluate(w_f, event.value, M)
     vals, vecs = np.linalg.eig(ev.J)
     e = np.real(vecs[:, int(np.argmin(np.abs(vals + 1.0)))])
-    for side in (+1.0, -1.0):
-        p = event.value + side * delta
-        for amp in (+1.0, -1.0):
-            w, ev2, ok, _ = refine_orbit(pmap, w_f + amp * math.sqrt(delta) * e, p, 2 * M)
-            if not ok:
-                continue
-            half = pmap.evaluate(w, p, M, derivatives=False).image
-            if float(np.max(np.abs(half - w))) > 1e-7:
-                z = w + pmap.offset(p)
-                return continue_orbit(sim, params, 2 * M, p, z, direction=side, pmap=pmap, **kwargs)
+    impacts = 2 * int(np.asarray(branch.contacts[event.index]).sum())
+    for d in (delta, 1e-2 * delta):
+        for side in (+1.0, -1.0):
+            p = event.value + side * d
+            for amp in (+1.0, -1.0):
+                w, ev2, ok, _ = refine_orbit(pmap, w_f + amp * math.sqrt(d) * e, p, 2 * M)
+                # the bifurcating orbit: period 2M (not the period-M orbit) with the contacts of two
+                # turns of the period-M orbit (not a coexisting orbit Newton may fall onto)
+                if not ok or int(ev2.contacts.sum()) != impacts:
+                    continue
+                half = pmap.evaluate(w, p, M, derivatives=False).image
+                if float(np.max(np.abs(half - w))) > 1e-7:
+                    z = w + pmap.offset(p)
+                    return continue_orbit(sim, params, 2 * M, p, z, direction=side, pmap=pmap, **kwargs)
     return None
