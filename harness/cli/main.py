@@ -26,7 +26,7 @@ from ..errors import FmuError, FmuRejectedInput, HarnessInputError, SweepTaskErr
 PROG = "impact-harness"
 
 #: Command modules always present.
-COMMAND_MODULES = ("harness.cli.commands", "harness.cli.basin_command")
+COMMAND_MODULES = ("harness.cli.commands", "harness.cli.basin_command", "harness.cli.continue_command")
 #: Command modules added by later issues; skipped while they do not exist.
 OPTIONAL_COMMAND_MODULES = ("harness.reproduce",)
 

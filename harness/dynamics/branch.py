@@ -18,7 +18,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-__all__ = ["EVENT_KINDS", "Event", "Branch"]
+__all__ = ["EVENT_KINDS", "Event", "Branch", "branches_dataset"]
 
 EVENT_KINDS = ("flip", "fold", "ns", "graze", "stick", "end")
 
@@ -175,3 +175,34 @@ class Branch:
 
             ds.attrs.update({k: _attr_value(v) for k, v in attrs.items()})
         return ds
+
+
+def branches_dataset(branches: list[Branch], kinds: list[str], attrs: Mapping[str, Any] | None = None) -> Any:
+    """Several branches in one Dataset, concatenated along ``point``; ``branch`` (index) and
+    ``period`` per point, states padded with NaN to the longest period; the events of all
+    branches (each with its branch index) in ``continuation.events``."""
+    import xarray as xr
+
+    if not branches:
+        raise ValueError("no branch to write")
+    parts = []
+    events = []
+    for i, br in enumerate(branches):
+        ds = br.to_dataset()
+        ds["branch"] = ("point", np.full(len(br), i, dtype=np.int32))
+        ds["period"] = ("point", np.full(len(br), br.M, dtype=np.int32))
+        ds["contacts"] = ds["contacts"].astype(float)  # NaN-padded where k >= period
+        events += [{**e.as_dict(), "branch": i, "index": e.index + sum(len(b) for b in branches[:i])}
+                   for e in br.events]
+        parts.append(ds.drop_vars("point"))
+    out = xr.concat(parts, dim="point", join="outer", combine_attrs="override", fill_value=np.nan)
+    out = out.assign_coords(point=np.arange(out.sizes["point"]))
+    out["event"] = out["event"].astype(str)
+    out.attrs["continuation.events"] = json.dumps(events)
+    out.attrs["continuation.branches"] = json.dumps(kinds)
+    out.attrs.pop("continuation.M", None)
+    if attrs:
+        from ..io.results import _attr_value
+
+        out.attrs.update({k: _attr_value(v) for k, v in attrs.items()})
+    return out
