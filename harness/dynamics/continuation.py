@@ -27,7 +27,7 @@ Period doubling: :func:`switch_at_flip` starts the period-2M branch at a located
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -44,8 +44,14 @@ STICK_IMPACTS = 20
 
 _CORRECTOR_TOL = 1e-10
 
+#: Smallest cosine between the tangents of two accepted points (larger turns: a shorter step).
+MAX_TURN = 0.98
+
 #: A gap (distance to the wall of a free passage) below this at a corrector failure is a graze.
 GRAZE_GAP = 1e-5
+
+#: A multiplier above this at a corrector failure: a contact of the orbit is grazing.
+GRAZE_MULTIPLIER = 1e3
 
 
 class _Point:
@@ -98,11 +104,12 @@ class _Continuer:
         pt, _ = self.correct(a.x + ds * a.tangent, a.tangent)
         return pt
 
-    def locate_root(self, a: _Point, ds_b: float, kind: str, fa: float, fb: float) -> tuple[_Point, float]:
-        """Illinois method on s in [0, ds_b] for the test function ``kind``; (point, bracket in p)."""
+    def locate_root(self, a: _Point, ds_b: float, fn: Callable[[_Point], float], fa: float,
+                    fb: float) -> tuple[_Point, float]:
+        """Illinois method on s in [0, ds_b] for the test function ``fn``; (point, bracket in p)."""
         lo, hi, flo, fhi = 0.0, ds_b, fa, fb
-        best, side = None, 0
-        p_lo, p_hi = a.p, None
+        best, best_f, side = a, abs(fa), 0
+        p_at = {0.0: a.p}
         for _ in range(60):
             s = (lo * fhi - hi * flo) / (fhi - flo)
             pt = self.along(a, s)
@@ -111,25 +118,28 @@ class _Continuer:
                 pt = self.along(a, s)
                 if pt is None:
                     break
-            f = pt.tests()[kind]
-            best = pt
-            if not math.isfinite(f) or f == 0.0:
+            f = fn(pt)
+            p_at[s] = pt.p
+            if abs(f) < best_f or best is a:
+                best, best_f = pt, abs(f)
+            if not math.isfinite(f) or f == 0.0 or abs(f) < 1e-14:
                 return pt, 0.0
             if (f > 0) == (flo > 0):
-                lo, flo, p_lo = s, f, pt.p
+                lo, flo = s, f
                 if side == -1:
                     fhi *= 0.5
                 side = -1
             else:
-                hi, fhi, p_hi = s, f, pt.p
+                hi, fhi = s, f
                 if side == +1:
                     flo *= 0.5
                 side = +1
-            if p_hi is not None and abs(p_hi - p_lo) < self.locate_tol:
+            # the bracket in arclength (the parameter may be at a turning point, where its own
+            # bracket says nothing), with the parameter's rate along the tangent
+            if (hi - lo) * max(abs(a.tangent[2]), 1e-3) < self.locate_tol:
                 break
-            if abs(f) < 1e-13:
-                return pt, 0.0
-        return best if best is not None else a, abs((p_hi if p_hi is not None else a.p) - p_lo)
+        bracket = abs(p_at.get(hi, best.p) - p_at.get(lo, a.p)) if hi in p_at and lo in p_at else (hi - lo)
+        return best, bracket
 
     def locate_contact_change(self, a: _Point, ds_b: float) -> tuple[_Point, float, _Point | None]:
         """Bisection on s in [0, ds_b] on 'same contacts as a'; (last good, bracket in p, first
@@ -240,6 +250,8 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
         if bad is not None and rigid and int(bad.ev.contacts.sum()) >= STICK_IMPACTS:
             kind = "stick"
         nxt = _new_contact_orbit(cont, good, bad) if follow_grazing else None
+        if nxt is not None and any(np.array_equal(np.roll(nxt.ev.contacts, k), good.ev.contacts) for k in range(M)):
+            nxt = None  # the same contacts shifted: the same orbit again, not a new one
         if nxt is None:
             event(kind, good, bracket, f"{n_old} impact(s) per period before; no orbit with another contact "
                   "count found next to it" + ("" if follow_grazing else " (not sought)") + "; branch ends")
@@ -258,6 +270,9 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
     steps = 0
     failed_here = False
     while steps < max_points:
+        if not lo <= a.p <= hi:
+            end_note = f"left the range [{lo:g}, {hi:g}]"
+            break
         trial, its = cont.correct(a.x + ds * a.tangent, a.tangent)
         if trial is None and not failed_here:
             # the corrector fails where the branch has a corner: a graze that is a nonsmooth fold
@@ -265,7 +280,10 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
             # "converges with the same contacts"; a vanishing gap there is a graze.
             failed_here = True
             good, bracket, bad = cont.locate_contact_change(a, ds)
-            if good is not a and pmap.gap(good.ev.points, good.ev.contacts, good.p) < GRAZE_GAP:
+            # a vanishing gap of a free passage, or a contact becoming grazing (its multipliers
+            # diverge like 1/sqrt(depth): the square-root singularity)
+            if good is not a and (pmap.gap(good.ev.points, good.ev.contacts, good.p) < GRAZE_GAP
+                                  or float(np.abs(good.mult).max()) > GRAZE_MULTIPLIER):
                 trial = good
                 if trial.tangent @ a.tangent < 0:
                     trial.tangent = -trial.tangent
@@ -279,7 +297,13 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
                 end_note = f"corrector failed down to the smallest step {ds_min:g} (orbit lost)"
                 break
             continue
-        if trial.tangent @ a.tangent < 0:  # keep the orientation through folds
+        turn = float(trial.tangent @ a.tangent)
+        if abs(turn) < MAX_TURN and abs(ds) > 4 * ds_min:
+            # the tangent turned too much in one step: the corrector may have fallen back onto the
+            # branch already followed (a step across a fold); retry shorter
+            ds *= 0.5
+            continue
+        if turn < 0:  # keep the orientation through folds
             trial.tangent = -trial.tangent
         failed_here = False
         if not np.array_equal(trial.ev.contacts, a.ev.contacts):
@@ -288,10 +312,24 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
                 break
             continue
         ta, tb = a.tests(), trial.tests()
+        if M % 2 == 0:
+            # a period-2m branch that runs into the flip of the period-m orbit it was born from:
+            # z_0 - z_m changes sign there (beyond, the branch is the same orbit shifted by m)
+            e = a.ev.points[0] - a.ev.points[M // 2]
+            e = e / max(float(np.linalg.norm(e)), 1e-300)
+            ta["halving"] = float(e @ (a.ev.points[0] - a.ev.points[M // 2]))
+            tb["halving"] = float(e @ (trial.ev.points[0] - trial.ev.points[M // 2]))
+            if ta["halving"] * tb["halving"] < 0:
+                pt, bracket = cont.locate_root(
+                    a, ds, lambda q: float(e @ (q.ev.points[0] - q.ev.points[M // 2])), ta["halving"], tb["halving"])
+                event("flip", pt, bracket, f"the period-{M} branch meets the period-{M // 2} orbit at its flip "
+                      "(beyond: the same orbit shifted by half its period); branch ends")
+                end_note = f"branch point at {pmap.param} = {pt.p:.10g}"
+                break
         for kind in ("flip", "fold", "ns"):
             fa, fb = ta[kind], tb[kind]
             if math.isfinite(fa) and math.isfinite(fb) and fa * fb < 0:
-                pt, bracket = cont.locate_root(a, ds, kind, fa, fb)
+                pt, bracket = cont.locate_root(a, ds, lambda q, k=kind: q.tests()[k], fa, fb)
                 if kind == "ns" and abs(pt.mult[0].imag) < 1e-12:
                     continue  # a real pair with product 1: a neutral saddle, not a bifurcation
                 if pt.tangent @ a.tangent < 0:
@@ -304,9 +342,6 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
         if progress is not None:
             progress.update(1)
         ds = math.copysign(min(abs(ds) * (1.5 if its <= 3 else (0.5 if its >= 6 else 1.0)), ds_max), ds)
-        if not lo <= a.p <= hi:
-            end_note = f"left the range [{lo:g}, {hi:g}]"
-            break
     # located events were appended out of order: sort points by continuation order
     last = pts[-1]
     events.append(Event("end", last.p, len(pts) - 1, last.mult, last.ev.points[0], 0.0, end_note))
