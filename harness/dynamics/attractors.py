@@ -198,11 +198,24 @@ def find_attractors(sim: Simulator, params: Mapping[str, Any], values: Sequence[
         pts, _ = pmap.run(p, z0, transient)
         z = pts[-1]
         pts, cont = pmap.run(p, z, 2 * M_max + 1)
-        M = _detect_period(pts, M_max, detect_tol)
-        if M is None or not np.all(np.isfinite(pts)):
+        if not np.all(np.isfinite(pts)):
             scan.not_periodic += 1
             return pts[-1]
-        w, ev, ok, res = refine_orbit(pmap, pts[-1] - off, p, M)
+        M = _detect_period(pts, M_max, detect_tol)
+        if M is not None:
+            w, ev, ok, res = refine_orbit(pmap, pts[-1] - off, p, M)
+        else:
+            # not yet periodic to detect_tol: a slow transient (a multiplier near the unit
+            # circle, next to a bifurcation) still ends near its orbit; Newton from there, for
+            # each period, accepting a stable orbit that the samples are close to
+            ok = False
+            spread = float(np.max(np.abs(pts[-M_max - 1:] - pts[-1]))) + 1e-12
+            for M in range(1, M_max + 1):
+                w, ev, ok, res = refine_orbit(pmap, pts[-1] - off, p, M)
+                ok = (ok and bool(np.all(np.abs(np.linalg.eigvals(ev.J)) < 1.0))
+                      and float(np.max(np.abs(ev.points[0] - pts[-1]))) < 10 * spread)
+                if ok:
+                    break
         if not ok:
             scan.not_periodic += 1
             return pts[-1]
