@@ -27,12 +27,13 @@ Period doubling: :func:`switch_at_flip` starts the period-2M branch at a located
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
+from .arclength import ArclengthCorrector, BranchPoint
 from .branch import Branch, Event
-from .periodic_map import MapEvaluation, PeriodMap, refine_orbit
+from .periodic_map import PeriodMap, refine_orbit
 from ..errors import HarnessInputError
 from ..fmu.simulator import Simulator
 
@@ -41,8 +42,6 @@ __all__ = ["continue_orbit", "switch_at_flip", "STICK_IMPACTS"]
 #: Impacts per period from which a new contact pattern on a rigid wall is a chatter ending in
 #: sticking (the FMU ends chatter by sticking after ~100 impacts).
 STICK_IMPACTS = 20
-
-_CORRECTOR_TOL = 1e-10
 
 #: Smallest cosine between the tangents of two accepted points (larger turns: a shorter step).
 MAX_TURN = 0.98
@@ -54,122 +53,13 @@ GRAZE_GAP = 1e-5
 GRAZE_MULTIPLIER = 1e3
 
 
-class _Point:
-    """An accepted point: x = (w, p), its evaluation and tangent."""
-
-    def __init__(self, w: np.ndarray, p: float, ev: MapEvaluation) -> None:
-        self.w, self.p, self.ev = np.asarray(w, dtype=float), float(p), ev
-        self.x = np.append(self.w, self.p)
-        self.mult = np.linalg.eigvals(ev.J).astype(complex)
-        row = np.hstack([ev.J - np.eye(2), ev.dp[:, None]])
-        t = np.cross(row[0], row[1])
-        self.tangent = t / np.linalg.norm(t)
-
-    def tests(self) -> dict[str, float]:
-        J = self.ev.J
-        det = float(np.linalg.det(J))
-        complex_pair = bool(abs(self.mult[0].imag) > 1e-12)
-        return {"fold": float(np.linalg.det(J - np.eye(2))), "flip": float(np.linalg.det(J + np.eye(2))),
-                "ns": det - 1.0 if complex_pair else math.nan}
-
-
-class _Continuer:
-    def __init__(self, pmap: PeriodMap, M: int, locate_tol: float) -> None:
-        self.pmap, self.M, self.locate_tol = pmap, M, locate_tol
-
-    def correct(self, x_pred: np.ndarray, t: np.ndarray, max_iter: int = 8) -> tuple[_Point | None, int]:
-        """Newton on the extended system from ``x_pred``; (point or None, iterations)."""
-        x = x_pred.copy()
-        for it in range(1, max_iter + 1):
-            ev = self.pmap.evaluate(x[:2], x[2], self.M)
-            g = ev.image - x[:2]
-            if not np.all(np.isfinite(g)):
-                return None, it
-            if float(np.max(np.abs(g))) < _CORRECTOR_TOL and abs(t @ (x - x_pred)) < 1e-12:
-                return _Point(x[:2], x[2], ev), it
-            A = np.vstack([np.hstack([ev.J - np.eye(2), ev.dp[:, None]]), t])
-            rhs = -np.append(g, t @ (x - x_pred))
-            try:
-                dx = np.linalg.solve(A, rhs)
-            except np.linalg.LinAlgError:
-                return None, it
-            big = float(np.max(np.abs(dx)))
-            if big > 0.2:
-                dx *= 0.2 / big
-            x = x + dx
-        return None, max_iter
-
-    def along(self, a: _Point, ds: float) -> _Point | None:
-        """The branch point at arclength ``ds`` from ``a`` (along a's tangent), or None."""
-        pt, _ = self.correct(a.x + ds * a.tangent, a.tangent)
-        return pt
-
-    def locate_root(self, a: _Point, ds_b: float, fn: Callable[[_Point], float], fa: float,
-                    fb: float) -> tuple[_Point, float]:
-        """Illinois method on s in [0, ds_b] for the test function ``fn``; (point, bracket in p)."""
-        lo, hi, flo, fhi = 0.0, ds_b, fa, fb
-        best, best_f, side = a, abs(fa), 0
-        p_at = {0.0: a.p}
-        for _ in range(60):
-            s = (lo * fhi - hi * flo) / (fhi - flo)
-            pt = self.along(a, s)
-            if pt is None:
-                s = 0.5 * (lo + hi)
-                pt = self.along(a, s)
-                if pt is None:
-                    break
-            f = fn(pt)
-            p_at[s] = pt.p
-            if abs(f) < best_f or best is a:
-                best, best_f = pt, abs(f)
-            if not math.isfinite(f) or f == 0.0 or abs(f) < 1e-14:
-                return pt, 0.0
-            if (f > 0) == (flo > 0):
-                lo, flo = s, f
-                if side == -1:
-                    fhi *= 0.5
-                side = -1
-            else:
-                hi, fhi = s, f
-                if side == +1:
-                    flo *= 0.5
-                side = +1
-            # the bracket in arclength (the parameter may be at a turning point, where its own
-            # bracket says nothing), with the parameter's rate along the tangent
-            if (hi - lo) * max(abs(a.tangent[2]), 1e-3) < self.locate_tol:
-                break
-        bracket = abs(p_at.get(hi, best.p) - p_at.get(lo, a.p)) if hi in p_at and lo in p_at else (hi - lo)
-        return best, bracket
-
-    def locate_contact_change(self, a: _Point, ds_b: float) -> tuple[_Point, float, _Point | None]:
-        """Bisection on s in [0, ds_b] on 'same contacts as a'; (last good, bracket in p, first
-        bad point if it converged there)."""
-        lo, hi = 0.0, ds_b
-        good, bad = a, None
-        rate = max(abs(a.tangent[2]), 1e-300)  # dp/ds along the tangent: the bracket in p
-        for _ in range(80):
-            if (hi - lo) * rate < self.locate_tol or hi - lo < 1e-15:
-                break
-            # predict from the last good point (not from a): a short step the corrector can make
-            # even next to the corner of a nonsmooth fold
-            pt = self.along(good, 0.5 * (hi - lo))
-            if pt is not None and np.array_equal(pt.ev.contacts, a.ev.contacts):
-                if pt.tangent @ good.tangent < 0:
-                    pt.tangent = -pt.tangent
-                lo, good = lo + 0.5 * (hi - lo), pt
-                rate = max(abs(good.tangent[2]), 1e-300)
-            else:
-                hi, bad = lo + 0.5 * (hi - lo), pt
-        return good, (hi - lo) * rate, bad
-
-
-def _start_point(pmap: PeriodMap, p0: float, z0: Any, M: int) -> _Point:
+def _start_point(pmap: PeriodMap, p0: float, z0: Any, M: int) -> BranchPoint:
     w0 = np.asarray(z0, dtype=float) - pmap.offset(p0)
     w, ev, ok, res = refine_orbit(pmap, w0, p0, M)
     if not ok:
         raise HarnessInputError("--start", f"no period-{M} orbit found near ({z0[0]:g}, {z0[1]:g}) at "
                                 f"{pmap.param} = {p0:g} (Newton residual {res:.3g})")
-    return _Point(w, p0, ev)
+    return BranchPoint(w, p0, ev)
 
 
 def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float, z0: Any,
@@ -227,20 +117,20 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
     if not lo <= p0 <= hi:
         raise HarnessInputError("--start", f"{param} = {p0:g} lies outside the range [{lo:g}, {hi:g}]")
     pmap = pmap or PeriodMap(sim, params, param, theta, derivatives)
-    cont = _Continuer(pmap, M, locate_tol)
+    cont = ArclengthCorrector(pmap, M, locate_tol)
     a = _start_point(pmap, p0, z0, M)
     if a.tangent[2] * direction < 0:
         a.tangent = -a.tangent
-    pts: list[_Point] = [a]
+    pts: list[BranchPoint] = [a]
     labels = [""]
     events: list[Event] = []
 
-    def event(kind: str, pt: _Point, bracket: float, note: str = "") -> None:
+    def event(kind: str, pt: BranchPoint, bracket: float, note: str = "") -> None:
         pts.append(pt)
         labels.append(kind)
         events.append(Event(kind, pt.p, len(pts) - 1, pt.mult, pt.ev.points[0], bracket, note))
 
-    def _graze(good: _Point, bracket: float, bad: _Point | None) -> bool:
+    def _graze(good: BranchPoint, bracket: float, bad: BranchPoint | None) -> bool:
         """Record a graze at ``good``; switch to the orbit with the new contact count if it
         exists (True: the branch ends here)."""
         nonlocal a, end_note, steps
@@ -348,7 +238,7 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
     return _branch(pmap, M, pts, labels, events)
 
 
-def _new_contact_orbit(cont: _Continuer, good: _Point, bad: _Point | None) -> _Point | None:
+def _new_contact_orbit(cont: ArclengthCorrector, good: BranchPoint, bad: BranchPoint | None) -> BranchPoint | None:
     """The orbit with another contact count next to a graze at ``good``: the corrector's own
     solution beyond it if it converged, else Newton at fixed p on both sides of the graze."""
     near = max(1e3 * cont.locate_tol, 1e-6)
@@ -362,18 +252,18 @@ def _new_contact_orbit(cont: _Continuer, good: _Point, bad: _Point | None) -> _P
         for dw in (good.tangent[:2] * 1e-3, -good.tangent[:2] * 1e-3, np.zeros(2)):
             w, ev, ok, _ = refine_orbit(pmap, good.w + dw, good.p + dp, M)
             if ok and not np.array_equal(ev.contacts, good.ev.contacts) and float(np.max(np.abs(w - good.w))) < 1e-2:
-                pt = _Point(w, good.p + dp, ev)
+                pt = BranchPoint(w, good.p + dp, ev)
                 return _oriented(pt, pt.x - good.x)
     return None
 
 
-def _oriented(pt: _Point, away: np.ndarray) -> _Point:
+def _oriented(pt: BranchPoint, away: np.ndarray) -> BranchPoint:
     if pt.tangent @ away < 0:
         pt.tangent = -pt.tangent
     return pt
 
 
-def _branch(pmap: PeriodMap, M: int, pts: list[_Point], labels: list[str], events: list[Event]) -> Branch:
+def _branch(pmap: PeriodMap, M: int, pts: list[BranchPoint], labels: list[str], events: list[Event]) -> Branch:
     return Branch(
         param=pmap.param, M=M, params=dict(pmap.params), theta=pmap.theta,
         values=np.array([p.p for p in pts]), points=np.array([p.ev.points for p in pts]),
