@@ -157,6 +157,12 @@ def test_underdamped_rigid_window(sim, under) -> None:
     _check_flip(under, flip.value, flip.point, 1, inside=+1.0, delta=1e-4)
     up = continue_orbit(sim, under, 1, 1.7, a.points[0], p_range=(1.0, 3.0), direction=1)
     assert up.stable.all() and up.events[-1].note.startswith("left the range")
+    # the stable two-impact period-2 orbit at 1.55 is the one born at that flip: its branch runs
+    # into the period-1 orbit there (a branch point, located on the period-1 orbit's flip)
+    p2 = _seed(sim, under, 1.55, 2)
+    b2 = continue_orbit(sim, under, 2, 1.55, p2.points[0], p_range=(1.0, 3.0), direction=1)
+    meet = [e for e in b2.events if e.kind == "flip"]
+    assert p2.label == "P2/2" and meet and abs(meet[0].value - flip.value) < 1e-7
     at164 = _seed(sim, under, 1.64, 1)
     orb = closed_form_orbit(under, 1.64, at164.points[0], 1)
     assert orb.converged

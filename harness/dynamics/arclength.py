@@ -75,18 +75,19 @@ class ArclengthCorrector:
         return pt
 
     def locate_root(self, a: BranchPoint, ds_b: float, fn: Callable[[BranchPoint], float], fa: float,
-                    fb: float) -> tuple[BranchPoint, float]:
-        """Illinois method on s in [0, ds_b] for the test function ``fn``; (point, bracket in p)."""
+                    fb: float, valid: Callable[[BranchPoint], bool] | None = None) -> tuple[BranchPoint, float]:
+        """Illinois method on s in [0, ds_b] for the test function ``fn``; (point, bracket in p).
+        A corrected point that is not ``valid`` (on another branch) counts as a failed correction."""
         lo, hi, flo, fhi = 0.0, ds_b, fa, fb
         best, best_f, side = a, abs(fa), 0
         p_at = {0.0: a.p}
         for _ in range(60):
             s = (lo * fhi - hi * flo) / (fhi - flo)
             pt = self.along(a, s)
-            if pt is None:
+            if pt is None or (valid is not None and not valid(pt)):
                 s = 0.5 * (lo + hi)
                 pt = self.along(a, s)
-                if pt is None:
+                if pt is None or (valid is not None and not valid(pt)):
                     break
             f = fn(pt)
             p_at[s] = pt.p

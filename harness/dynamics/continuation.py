@@ -210,8 +210,9 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
             ta["halving"] = float(e @ (a.ev.points[0] - a.ev.points[M // 2]))
             tb["halving"] = float(e @ (trial.ev.points[0] - trial.ev.points[M // 2]))
             if ta["halving"] * tb["halving"] < 0:
-                pt, bracket = cont.locate_root(
-                    a, ds, lambda q: float(e @ (q.ev.points[0] - q.ev.points[M // 2])), ta["halving"], tb["halving"])
+                # where the branch meets the period-m orbit: that orbit's flip, located on the
+                # period-m orbit itself (the corrector here would fall onto it: it solves F^M = w too)
+                pt, bracket = _flip_of_half(cont, a, trial, M // 2)
                 event("flip", pt, bracket, f"the period-{M} branch meets the period-{M // 2} orbit at its flip "
                       "(beyond: the same orbit shifted by half its period); branch ends")
                 end_note = f"branch point at {pmap.param} = {pt.p:.10g}"
@@ -236,6 +237,35 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
     last = pts[-1]
     events.append(Event("end", last.p, len(pts) - 1, last.mult, last.ev.points[0], 0.0, end_note))
     return _branch(pmap, M, pts, labels, events)
+
+
+def _flip_of_half(cont: ArclengthCorrector, a: BranchPoint, b: BranchPoint, m: int) -> tuple[BranchPoint, float]:
+    """The flip of the period-m orbit between two points of a period-2m branch that runs into it:
+    secant iterations in p on det(D(F^m) + I) of the period-m orbit (Newton-refined at each p from
+    the midpoint of the branch's z_0 and z_m).  Returns the period-2m branch point there (the
+    period-m orbit run twice, multipliers mu_m^2) and the last secant step in p."""
+    pmap = cont.pmap
+    w_mid = 0.5 * (b.ev.points[0] + b.ev.points[m]) - pmap.offset(b.p)
+
+    def f(p: float) -> tuple[float, np.ndarray]:
+        w, ev, ok, _ = refine_orbit(pmap, w_mid, p, m)
+        return (float(np.linalg.det(ev.J + np.eye(2))) if ok else math.nan), w
+
+    p0, p1 = a.p, b.p
+    f0, w0 = f(p0)
+    f1, w1 = f(p1)
+    step = abs(p1 - p0)
+    for _ in range(30):
+        if not (math.isfinite(f0) and math.isfinite(f1)) or f1 == f0:
+            break
+        p2 = p1 - f1 * (p1 - p0) / (f1 - f0)
+        p0, f0 = p1, f1
+        f1, w1 = f(p2)
+        step, p1 = abs(p2 - p0), p2
+        if step < cont.locate_tol:
+            break
+    w, ev, ok, _ = refine_orbit(pmap, w1, p1, 2 * m)
+    return BranchPoint(w, p1, ev), step
 
 
 def _new_contact_orbit(cont: ArclengthCorrector, good: BranchPoint, bad: BranchPoint | None) -> BranchPoint | None:
