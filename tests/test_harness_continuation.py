@@ -204,3 +204,45 @@ def test_branch_dataset(sim, fig9, tmp_path) -> None:
     assert np.allclose(back["sigma"].values, br.values)
     assert list(back["event"].values).count("flip") == 1
     assert int(back["stable"].values[0]) == 1
+
+
+def _mapping(step, derivative):
+    from harness.fmu.simulator import MappingSimulator
+
+    return MappingSimulator(step, {"sigma": 0.0}, derivative)
+
+
+def test_fold_flip_ns_on_maps_with_known_bifurcations() -> None:
+    """The event machinery on maps whose bifurcations are known exactly (the FMU's cases above
+    have no smooth fold or Neimark-Sacker point): u -> u + sigma - u^2 has its fold at sigma = 0
+    and, on the branch u = sqrt(sigma), its flip at sigma = 1 (multiplier 1 - 2 sqrt(sigma));
+    z -> (1/2 + sigma) R(1) z has a Neimark-Sacker point at sigma = 1/2."""
+    quad = _mapping(lambda u, v, t, p: (u + p["sigma"] - u * u, 0.5 * v, 1),
+                    lambda u, v, t, p: (np.array([[1.0 - 2.0 * u, 0.0], [0.0, 0.5]]), np.array([1.0, 0.0])))
+    down = continue_orbit(quad, {}, 1, 0.25, [0.5, 0.0], p_range=(-1.0, 2.0), direction=-1,
+                          max_points=80)
+    fold = [e for e in down.events if e.kind == "fold"]
+    assert fold and abs(fold[0].value) < 1e-8 and abs(fold[0].multipliers.real.max() - 1.0) < 1e-4
+    # beyond the fold the branch is the unstable u = -sqrt(sigma)
+    assert not down.stable[-1] and down.values[-1] > 0
+    up = continue_orbit(quad, {}, 1, 0.25, [0.5, 0.0], p_range=(-1.0, 2.0), direction=1)
+    flip = [e for e in up.events if e.kind == "flip"]
+    assert flip and abs(flip[0].value - 1.0) < 1e-8
+
+    c, s = np.cos(1.0), np.sin(1.0)
+    R = np.array([[c, -s], [s, c]])
+
+    def rot(u, v, t, p):
+        z = (0.5 + p["sigma"]) * (R @ (np.array([u, v]) - o(p))) + o(p)
+        return z[0], z[1], 1
+
+    def o(p):  # the map's fixed point sits at the section's offset, so w = 0 along the branch
+        return np.array([(1.0 + p["sigma"]) * np.cos(np.pi) - 1.0, 0.0])
+
+    def drot(u, v, t, p):
+        J = (0.5 + p["sigma"]) * R
+        return J, (np.eye(2) - J) @ np.array([-1.0, 0.0]) + R @ (np.array([u, v]) - o(p))
+
+    ns = continue_orbit(_mapping(rot, drot), {}, 1, 0.0, o({"sigma": 0.0}), p_range=(-0.4, 1.0), direction=1)
+    found = [e for e in ns.events if e.kind == "ns"]
+    assert found and abs(found[0].value - 0.5) < 1e-8 and abs(abs(found[0].multipliers[0]) - 1.0) < 1e-8
