@@ -38,6 +38,7 @@ def test_continue_writes_branch_plot_report(tmp_path: Path, capsys) -> None:
     (["--range", "0.5:1", "--start", "0.7", "--param", "nonsense"], "--param"),
     (["--range", "0.5:1", "--start", "0.7", "--state", "1,x", "-M", "1"], "--state"),
     (["--range", "0.5:1", "--start", "0.7", "--state", "-3.4,0.01"], "-M"),
+    (["--range", "-0.5:-1", "--start", "-0.7"], "--range"),
 ])
 def test_continue_refuses_bad_input(tmp_path: Path, capsys, argv: list[str], needle: str) -> None:
     code, out, err = run_main(["continue", *FIG9, *argv, "--out", str(tmp_path / "x.nc"), "--no-progress"], capsys)

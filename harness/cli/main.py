@@ -173,7 +173,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: Options whose value is a list that may start with a minus sign ("-0.5,0.1").
-_LIST_OPTIONS = ("--values", "--state", "--scan")
+_LIST_OPTIONS = ("--values", "--state", "--scan", "--range")
 
 
 def _join_list_values(argv: list[str]) -> list[str]:
