@@ -5,7 +5,7 @@
 # for the cross targets x86_64-windows and aarch64-linux; the native x86_64-linux binaries and
 # the archives are built by scripts/setup.sh in build/fmu, which packages these in. Also
 # initialises a wine prefix (build/cross/wineprefix) once, so that no test pays wine's first
-# start. Every step is skipped when its output is up to date.
+# start, and builds the platform tests' C host for each target. Every step is skipped when its output is up to date.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -20,6 +20,15 @@ for target in x86_64-windows aarch64-linux; do
             -DIMPACT_BINARIES_ONLY=ON >/dev/null
     fi
     cmake --build "$bld" -j 2 >/dev/null
+done
+# The platform tests' FMI importer (tests/host), one per target.
+for target in x86_64-linux x86_64-windows aarch64-linux; do
+    bld=build/cross/$target/host
+    if [[ ! -f $bld/CMakeCache.txt ]]; then
+        cmake -S tests/host -B "$bld" -DCMAKE_TOOLCHAIN_FILE="$root/cmake/toolchain-$target.cmake" \
+            -DCMAKE_BUILD_TYPE=Release >/dev/null
+    fi
+    cmake --build "$bld" >/dev/null
 done
 export WINEPREFIX="$root/build/cross/wineprefix" WINEDEBUG=-all
 if [[ ! -f $WINEPREFIX/system.reg ]]; then
