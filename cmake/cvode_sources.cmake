@@ -1,6 +1,6 @@
 # The part of SUNDIALS 6.4.1 (Debian's source package, BSD-3-Clause) that the FMU needs: CVODE
 # with the serial N_Vector, dense and band matrices, the dense linear solver and the Newton
-# nonlinear solver. The lists were found by linking the FMU with -z defs against these files alone
+# nonlinear solver (not the profiler: it is off, and its file needs POSIX or MPI timers). The lists were found by linking the FMU with -z defs against these files alone
 # and taking gcc -MM's headers; tests/test_fmu_sources.py rebuilds the binary from them.
 # Paths are relative to the SUNDIALS source tree; impact_stage_sources() copies them into an
 # FMU's sources/ so that `-I sources` alone resolves every #include:
@@ -15,7 +15,7 @@ set(CVODE_SOURCES
   src/sundials/sundials_matrix.c src/sundials/sundials_linearsolver.c
   src/sundials/sundials_nonlinearsolver.c src/sundials/sundials_nvector.c
   src/sundials/sundials_nvector_senswrapper.c src/sundials/sundials_dense.c
-  src/sundials/sundials_futils.c src/sundials/sundials_profiler.c src/sundials/sundials_version.c
+  src/sundials/sundials_futils.c src/sundials/sundials_version.c
   src/nvector/serial/nvector_serial.c src/sunmatrix/dense/sunmatrix_dense.c
   src/sunmatrix/band/sunmatrix_band.c src/sunlinsol/dense/sunlinsol_dense.c
   src/sunnonlinsol/newton/sunnonlinsol_newton.c)

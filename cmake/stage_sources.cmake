@@ -44,7 +44,7 @@ foreach(h sundials_config.h sundials_export.h)
   string(REGEX REPLACE "(#  define SUNDIALS_DEPRECATED(_MSG\\(msg\\))?) __attribute__ \\(\\(__deprecated__(\\(msg\\))?\\)\\)"
          "#  if defined(_MSC_VER)\n\\1 __declspec(deprecated\\3)\n#  else\n\\1 __attribute__ ((__deprecated__\\3))\n#  endif"
          text "${text}")
-  string(REPLACE "#define SUNDIALS_HAVE_POSIX_TIMERS" "/* SUNDIALS_HAVE_POSIX_TIMERS: not needed (no profiling) */" text "${text}")
+  string(REPLACE "\n#define SUNDIALS_HAVE_POSIX_TIMERS\n" "\n/* #undef SUNDIALS_HAVE_POSIX_TIMERS (only the profiler, which is off, uses it) */\n" text "${text}")
   file(WRITE ${src}/sundials/${h} "${text}")
 endforeach()
 file(MAKE_DIRECTORY ${OUT}/documentation/licenses)

@@ -249,7 +249,11 @@ int main(int argc, char **argv) {
     me = strcmp(argv[3], "me") == 0;
     token = argv[4];
     if (!(lib = LOAD(argv[1]))) {
-        fprintf(stderr, "cannot load %s\n", argv[1]);
+#ifdef _WIN32
+        fprintf(stderr, "cannot load %s (error %lu)\n", argv[1], (unsigned long)GetLastError());
+#else
+        fprintf(stderr, "cannot load %s: %s\n", argv[1], dlerror());
+#endif
         return 3;
     }
     /* one block per case, until the end of the input (one process per platform and interface:
