@@ -23,6 +23,14 @@ from tests.platform_support import (CROSS, NATIVE, PLATFORMS, TOKEN, WINESERVER,
 ROOT = Path(__file__).resolve().parents[1]
 CORPUS = sorted((ROOT / "tests" / "fuzz_corpus").glob("*.json"))
 PORTED_CORRUPTIONS = {"none", "bitflip", "nan", "inf", "zero_word"}
+# One sequence takes 7 s natively (a doStep of 1e8 periods with no wall, ended by the FMU's step
+# budget) and some 100 s under qemu's emulation: it runs natively and under wine, not under qemu.
+NOT_EMULATED = {"aarch64-linux": {"F7-bounded-wall0-dostep-1e8"}}
+
+
+def expected(platform: str) -> list[str]:
+    """The corpus sequences replayed on `platform`."""
+    return [p.stem for p in CORPUS if p.stem not in NOT_EMULATED.get(platform, set())]
 
 
 def _vars_line(tag: str, xml: Path, version: int) -> str:
@@ -73,10 +81,10 @@ def _action(a: dict) -> str:
     return head
 
 
-def corpus_text(md2: Path, md3: Path) -> str:
-    """The whole corpus in corpus_replay.c's input format."""
+def corpus_text(md2: Path, md3: Path, names: list[str]) -> str:
+    """The corpus sequences `names` in corpus_replay.c's input format."""
     lines = [_vars_line("V2", md2, 2), _vars_line("V3", md3, 3)]
-    for path in CORPUS:
+    for path in (p for p in CORPUS if p.stem in names):
         seq = json.loads(path.read_text())["sequence"]
         lines.append(f"SEQ {path.stem} {seq['interface']} {int(bool(seq.get('expect_error')))}")
         lines += [_action(a) for a in seq["actions"]]
@@ -104,8 +112,8 @@ def traces(tmp_path_factory) -> dict[str, dict[str, list[str]]]:
     require_cross_build()
     base = tmp_path_factory.mktemp("corpus")
     fmi2, fmi3 = unpack(FMU_PATH, base / "fmi2"), unpack(FMU3_PATH, base / "fmi3")
-    text = corpus_text(fmi2 / "modelDescription.xml", fmi3 / "modelDescription.xml")
-    out = {p.name: replay(p, fmi2, fmi3, text) for p in PLATFORMS}
+    mds = fmi2 / "modelDescription.xml", fmi3 / "modelDescription.xml"
+    out = {p.name: replay(p, fmi2, fmi3, corpus_text(*mds, expected(p.name))) for p in PLATFORMS}
     subprocess.run([WINESERVER, "-k"], env=env(), capture_output=True)
     return out
 
@@ -113,7 +121,7 @@ def traces(tmp_path_factory) -> dict[str, dict[str, list[str]]]:
 @pytest.mark.parametrize("plat", [p.name for p in PLATFORMS])
 def test_every_sequence_passes_the_oracle(traces, plat):
     got = traces[plat]
-    assert sorted(got) == sorted(p.stem for p in CORPUS)
+    assert sorted(got) == sorted(expected(plat))
     failed = {name: lines[-1] for name, lines in got.items() if not lines or lines[-1] != "PASS"}
     assert not failed, failed
 
