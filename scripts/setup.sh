@@ -12,7 +12,8 @@ log() { printf '[setup] %s\n' "$*" >&2; }
 
 # --- 1. Debian packages -------------------------------------------------------------------
 # libtbb12: the ecos co-simulation master (ecospy, a test dependency) links against it.
-apt_pkgs=(libsundials-dev build-essential cmake zip valgrind libtbb12)
+# libminizip-dev libxml2-dev zlib1g-dev: fmusim, the independent importer built in step 4.
+apt_pkgs=(libsundials-dev build-essential cmake zip valgrind libtbb12 libminizip-dev libxml2-dev zlib1g-dev)
 missing=()
 for p in "${apt_pkgs[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -72,4 +73,25 @@ if [[ -f examples/afm/controller/CMakeLists.txt ]]; then
     fi
     cmake --build build/afm >/dev/null
     log "controller FMU ready: build/afm/AmplitudeController.fmu"
+fi
+
+# --- 4. Independent importers -------------------------------------------------------------
+# fmusim (Reference FMUs v0.0.39) is not packaged: its source lives outside the repository, in
+# $IMPACT_SHARED/tools (default ../shared/tools), and is built here into build/tools/fmusim,
+# again only when the source is newer than the binary. Without the source the fmusim tests skip
+# naming the missing path; with the source and a failed build they fail (tests/importer_fmusim.py).
+fmusim_src="${IMPACT_SHARED:-$root/../shared}/tools/fmusim-v0.0.39"
+fmusim_bin=build/tools/fmusim
+if [[ -f $fmusim_src/build.sh ]]; then
+    if [[ ! -x $fmusim_bin ]] || [[ -n $(find "$fmusim_src" -newer "$fmusim_bin" -type f -print -quit) ]]; then
+        mkdir -p build/tools
+        rm -f "$fmusim_bin"  # never test a stale binary after a failed rebuild
+        if bash "$fmusim_src/build.sh" "$root/build/tools" >build/tools/fmusim-build.log 2>&1; then
+            log "fmusim ready: $fmusim_bin"
+        else
+            log "fmusim build FAILED (build/tools/fmusim-build.log); its tests will fail"
+        fi
+    fi
+else
+    log "fmusim source not found at $fmusim_src: the fmusim tests will be skipped"
 fi
