@@ -123,7 +123,8 @@ def fmusim_holds_cs(inputs: list[tuple[float, float, float]], grid: np.ndarray
         (t0, F0, w0), (t1, F1, w1) = inputs[i], inputs[i + 1]
         out.append((float(t), F0 + (t - t0) * (F1 - F0) / (t1 - t0),
                     w0 + (t - t0) * (w1 - w0) / (t1 - t0)))
-    return out
+    # a hold that repeats the previous values is no switch (fewer closed-form segments)
+    return [x for i, x in enumerate(out) if i == 0 or x[1:] != out[i - 1][1:]]
 
 
 def write_input_csv(path: Path, inputs: list[tuple[float, float, float]]) -> Path:
@@ -176,6 +177,7 @@ class PeriodCheck:
     err_v: float
     impacts: int
     impacts_exact: int
+    scale: float  # max(1, largest |u|, |v| of the closed form at the periods)
 
 
 def compare_per_period(t: np.ndarray, u: np.ndarray, v: np.ndarray, impacts: np.ndarray,
@@ -194,4 +196,4 @@ def compare_per_period(t: np.ndarray, u: np.ndarray, v: np.ndarray, impacts: np.
                 assert abs(t_impact[j] - entries[n - 1]) <= t_impact_tol, (t[j], t_impact[j])
     return PeriodCheck(float(np.max(np.abs(u[k] - want[:, 0]))),
                        float(np.max(np.abs(v[k] - want[:, 1]))), int(impacts[k[-1]]),
-                       int(counts[-1]))
+                       int(counts[-1]), max(1.0, float(np.abs(want).max())))
