@@ -123,8 +123,13 @@ def fmusim_holds_cs(inputs: list[tuple[float, float, float]], grid: np.ndarray
         (t0, F0, w0), (t1, F1, w1) = inputs[i], inputs[i + 1]
         out.append((float(t), F0 + (t - t0) * (F1 - F0) / (t1 - t0),
                     w0 + (t - t0) * (w1 - w0) / (t1 - t0)))
-    # a hold that repeats the previous values is no switch (fewer closed-form segments)
-    return [x for i, x in enumerate(out) if i == 0 or x[1:] != out[i - 1][1:]]
+    return merge_holds(out)
+
+
+def merge_holds(holds: list[tuple[float, float, float]]) -> list[tuple[float, float, float]]:
+    """Drop holds that repeat the previous values: no switch there (fewer closed-form
+    segments)."""
+    return [x for i, x in enumerate(holds) if i == 0 or x[1:] != holds[i - 1][1:]]
 
 
 def write_input_csv(path: Path, inputs: list[tuple[float, float, float]]) -> Path:
