@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 
 from tests.fmu_support import FMU3_PATH, FMU_PATH, ROOT
-from tests.importer_support import (CS_TOL, Case, compare_per_period, fmusim_holds_cs,
-                                    run_fmusim, write_input_csv)
+from tests.importer_support import (CS_TOL, Case, PeriodCheck, compare_per_period,
+                                    fmusim_holds_cs, run_fmusim, write_input_csv)
 
 PERIODS = 10
 OVERDAMPED = dict(nu=4.605170185988091, Omega=0.3059238689620112)  # the paper's figure 9
@@ -44,7 +44,7 @@ ME_RTOL = 1e-10
 ME_TOL = 2e-6
 
 
-def _cs_check(fmu: Path, case: Case, tmp: Path, h: float, inputs=None, flags=()):
+def cs_check(fmu: Path, case: Case, tmp: Path, h: float, inputs=None, flags=()):
     """One CS run in fmusim and its per-period comparison with the closed form."""
     csv = write_input_csv(tmp / "inputs.csv", inputs) if inputs else None
     res = run_fmusim(fmu, tmp, case, interface="cs", stop=PERIODS, h=h, flags=flags,
@@ -64,7 +64,7 @@ def _cs_check(fmu: Path, case: Case, tmp: Path, h: float, inputs=None, flags=())
 def test_cs_per_period_matches_closed_form(name: str, version: str, h: float,
                                            tmp_path: Path) -> None:
     case = CASES[name]
-    _, chk = _cs_check(FMUS[version], case, tmp_path, h)
+    _, chk = cs_check(FMUS[version], case, tmp_path, h)
     assert chk.err_u <= CS_TOL and chk.err_v <= CS_TOL * max(1.0, case.Omega), chk
     assert chk.impacts == chk.impacts_exact > 0
 
@@ -75,7 +75,7 @@ def test_fmi3_cs_early_return_and_event_mode(name: str, h: float, tmp_path: Path
     """With early return and event mode the FMU returns at each wall event: fmusim records a row
     there (before and after the event), at the closed form's event time."""
     case = CASES[name]
-    res, chk = _cs_check(FMU3_PATH, case, tmp_path, h,
+    res, chk = cs_check(FMU3_PATH, case, tmp_path, h,
                          flags=("--early-return-allowed", "--event-mode-used"))
     assert chk.err_u <= CS_TOL and chk.err_v <= CS_TOL * max(1.0, case.Omega), chk
     assert chk.impacts == chk.impacts_exact > 0
@@ -84,33 +84,44 @@ def test_fmi3_cs_early_return_and_event_mode(name: str, h: float, tmp_path: Path
     assert np.isin(np.unique(res["t_impact"][res["impacts"] > 0]), off_grid).all()
 
 
-STAIRS = [(0.0, 0.0, 0.0), (2.5, 0.0, 0.0), (2.5, 0.01, -0.05), (5.25, 0.01, -0.05),
-          (5.25, -0.02, 0.03), (7.5, -0.02, 0.03), (7.5, 0.0, -0.02), (10.0, 0.0, -0.02)]
-RAMPS = [(0.0, 0.0, 0.0), (4.0, 0.02, -0.08), (10.0, -0.01, 0.04)]
+#: (time, F_ext / Omega^2, u_wall): F_ext as the shift of the equilibrium it causes, so that one
+#: file fits both parameter sets; a repeated time is a step (an input event in fmusim)
+STAIRS = [(0.0, 0.0, 0.0), (2.5, 0.0, 0.0), (2.5, 0.1, -0.05), (5.25, 0.1, -0.05),
+          (5.25, -0.2, 0.03), (7.5, -0.2, 0.03), (7.5, 0.0, -0.02), (10.0, 0.0, -0.02)]
+RAMPS = [(0.0, 0.0, 0.0), (4.0, 0.2, -0.08), (10.0, -0.1, 0.04)]
 
 
+def scaled(inputs, case: Case) -> list[tuple[float, float, float]]:
+    return [(t, shift * case.Omega ** 2, w) for t, shift, w in inputs]
+
+
+@pytest.mark.parametrize("name", ["over-compliant", "under-compliant"])
 @pytest.mark.parametrize("version", FMUS)
 @pytest.mark.parametrize("inputs,h", [(STAIRS, 0.1), (STAIRS, 0.01), (RAMPS, 0.1)],
                          ids=["stairs-0.1", "stairs-0.01", "ramps-0.1"])
-def test_cs_with_input_file(inputs, version: str, h: float, tmp_path: Path) -> None:
+def test_cs_with_input_file(inputs, version: str, h: float, name: str, tmp_path: Path) -> None:
     """F_ext and u_wall from a CSV file, compliant wall (a step may put the wall into the mass:
-    the CS rule keeps the state); the overdamped case, where F_ext / Omega^2 moves the
-    equilibrium by up to 0.2. Ramps at h = 0.1 only: the FMU sees a new value at every
+    the CS rule keeps the state). Ramps at h = 0.1 only: the FMU sees a new value at every
     communication point, a closed-form segment each."""
-    case = CASES["over-compliant"]
-    _, chk = _cs_check(FMUS[version], case, tmp_path, h, inputs=inputs)
-    assert chk.err_u <= CS_TOL and chk.err_v <= CS_TOL, chk
+    case = CASES[name]
+    _, chk = cs_check(FMUS[version], case, tmp_path, h, inputs=scaled(inputs, case))
+    assert chk.err_u <= CS_TOL and chk.err_v <= CS_TOL * max(1.0, case.Omega), chk
     assert chk.impacts == chk.impacts_exact > 0
+
+
+def me_check(fmu: Path, case: Case, tmp: Path) -> PeriodCheck:
+    """One ME run in fmusim's CVODE (rtol 1e-10, output interval 0.1), compared per period."""
+    res = run_fmusim(fmu, tmp, case, interface="me", stop=PERIODS, h=0.1,
+                     flags=("--solver", "cvode"), tolerance=ME_RTOL)
+    return compare_per_period(res["time"], res["u"], res["v"], res["impacts"], res["t_impact"],
+                              case, [(0.0, 0.0, 0.0)], PERIODS, t_impact_tol=ME_TOL)
 
 
 @pytest.mark.parametrize("version", FMUS)
 @pytest.mark.parametrize("name", CASES)
 def test_me_in_fmusims_cvode(name: str, version: str, tmp_path: Path) -> None:
     case = CASES[name]
-    res = run_fmusim(FMUS[version], tmp_path, case, interface="me", stop=PERIODS, h=0.1,
-                     flags=("--solver", "cvode"), tolerance=ME_RTOL)
-    chk = compare_per_period(res["time"], res["u"], res["v"], res["impacts"], res["t_impact"],
-                             case, [(0.0, 0.0, 0.0)], PERIODS, t_impact_tol=ME_TOL)
+    chk = me_check(FMUS[version], case, tmp_path)
     assert max(chk.err_u, chk.err_v) <= ME_TOL * chk.scale, chk
     assert chk.impacts == chk.impacts_exact > 0
 
@@ -133,7 +144,7 @@ def test_me_wall_stepping_into_the_mass_follows_the_cs_rule(version: str, tmp_pa
     assert -0.1 < u < 0.0  # the new wall position is behind the mass: it is inside at once
     csv = write_input_csv(tmp_path / "inputs.csv", INTO_THE_MASS)
     # CS first: the documented rule, exact
-    _, chk = _cs_check(FMUS[version], case, tmp_path, 0.1, inputs=INTO_THE_MASS)
+    _, chk = cs_check(FMUS[version], case, tmp_path, 0.1, inputs=INTO_THE_MASS)
     assert chk.err_u <= CS_TOL and chk.err_v <= CS_TOL, chk
     res = run_fmusim(FMUS[version], tmp_path, case, interface="me", stop=PERIODS, h=0.1,
                      flags=("--solver", "cvode"), tolerance=ME_RTOL, input_csv=csv)
@@ -152,6 +163,6 @@ TWIN_FMU = ROOT / "build" / "fmu" / "ImpactOscillatorPy.fmu"
 def test_pythonfmu_twin_in_fmusim(name: str, h: float, tmp_path: Path) -> None:
     """The twin (FMI 2.0 CS, Python inside) in a C host, with no Python environment given."""
     case = CASES[name]
-    _, chk = _cs_check(TWIN_FMU, case, tmp_path, h)
+    _, chk = cs_check(TWIN_FMU, case, tmp_path, h)
     assert chk.err_u <= CS_TOL and chk.err_v <= CS_TOL * max(1.0, case.Omega), chk
     assert chk.impacts == chk.impacts_exact > 0

@@ -20,7 +20,8 @@ from fmpy import read_model_description
 from examples.afm import masters as M
 from examples.afm.monolithic import Controller, Oscillator, simulate
 from tests.fmu_support import FMU_PATH, ROOT
-from tests.importer_support import CS_TOL, Case, compare_per_period, merge_holds
+from tests.importer_support import (CS_TOL, Case, PeriodCheck, compare_per_period,
+                                    merge_holds)
 from tests.test_importer_fmusim import CASES
 
 pytest.importorskip("libcosimpy", reason="libcosimpy is a dev extra: pip install -e '.[dev]'")
@@ -33,6 +34,7 @@ CTRL_FMU = ROOT / "build" / "afm" / "AmplitudeController.fmu"
 NS = 10 ** 9  # libcosim's time unit is the nanosecond
 H_NS = 10_000_000  # h = 0.01
 STEPS_PER_PERIOD = NS // H_NS
+SSP_PERIODS = 12
 log_output_level(CosimLogLevel.WARNING)
 
 
@@ -72,9 +74,8 @@ class _Recorder:
         return dict(zip(("time", "u", "v", "t_impact", "u_wall", "impacts"), a.T))
 
 
-@pytest.mark.parametrize("name", CASES)
-def test_fmu_alone_per_period(name: str) -> None:
-    case: Case = CASES[name]
+def run_alone(case: Case) -> PeriodCheck:
+    """The FMU alone in libcosim for 10 periods, compared per period."""
     ex = CosimExecution.from_step_size(H_NS)
     refs = _refs(FMU_PATH)
     i = ex.add_local_slave(CosimLocalSlave(fmu_path=str(FMU_PATH), instance_name="osc"))
@@ -83,16 +84,22 @@ def test_fmu_alone_per_period(name: str) -> None:
     for _ in range(10):
         rec.step(STEPS_PER_PERIOD)
     r = rec.columns()
-    chk = compare_per_period(r["time"], r["u"], r["v"], r["impacts"], r["t_impact"], case,
-                             [(0.0, 0.0, 0.0)], 10)
+    return compare_per_period(r["time"], r["u"], r["v"], r["impacts"], r["t_impact"], case,
+                              [(0.0, 0.0, 0.0)], 10)
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_fmu_alone_per_period(name: str) -> None:
+    case: Case = CASES[name]
+    chk = run_alone(case)
     assert chk.err_u <= CS_TOL and chk.err_v <= CS_TOL * max(1.0, case.Omega), chk
     assert chk.impacts == chk.impacts_exact > 0
 
 
-def test_ssp_with_a_source_fmu_driving_the_wall(tmp_path: Path) -> None:
-    """The closed loop of examples/afm from libcosim's SSP loader, 12 periods at h = 0.01."""
-    osc, ctrl = Oscillator(), Controller()
-    periods = 12
+def run_ssp(tmp_path: Path) -> tuple[PeriodCheck, dict[str, np.ndarray], list]:
+    """The closed loop of examples/afm from libcosim's SSP loader, 12 periods at h = 0.01:
+    the per-period check, the recorded columns, the wall holds."""
+    osc, ctrl, periods = Oscillator(), Controller(), SSP_PERIODS
     ssp = M.write_ssp(tmp_path / "afm.ssp", FMU_PATH, CTRL_FMU, feedback=True)
     ex = CosimExecution.from_ssp_file(str(ssp), step_size=H_NS)
     refs = {M.OSC: _refs(FMU_PATH), M.CTRL: _refs(CTRL_FMU)}
@@ -108,11 +115,17 @@ def test_ssp_with_a_source_fmu_driving_the_wall(tmp_path: Path) -> None:
     # the wall the oscillator was given over each step (its input, seen after the step)
     starts = np.concatenate([[0.0], r["time"][:-1]])
     holds = merge_holds([(float(t), 0.0, float(w)) for t, w in zip(starts, r["u_wall"])])
-    assert len(holds) >= 5  # the controller moved the wall at several window ends
     case = Case(nu=osc.nu, Omega=osc.Omega, sigma=osc.sigma, wall="compliant",
                 Gamma=osc.Gamma, r=osc.r, u0=osc.sigma, v0=0.0)
     chk = compare_per_period(r["time"], r["u"], r["v"], r["impacts"], r["t_impact"], case,
                              holds, periods)
+    return chk, r, holds
+
+
+def test_ssp_with_a_source_fmu_driving_the_wall(tmp_path: Path) -> None:
+    osc, ctrl, periods = Oscillator(), Controller(), SSP_PERIODS
+    chk, r, holds = run_ssp(tmp_path)
+    assert len(holds) >= 5  # the controller moved the wall at several window ends
     assert chk.err_u <= CS_TOL and chk.err_v <= CS_TOL * osc.Omega, chk
     assert chk.impacts == chk.impacts_exact > 0
     # the source's law: the wall positions are the exact loop reference's (Jacobi schedule)
