@@ -509,7 +509,10 @@ int core_set(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[]
             const double before = d->get(c);
             rebase_inputs(&c->m, tau);
             field_set(&c->m, d, in[i]);
-            if (in[i] != before && !early) {
+            /* a jump: in Co-Simulation between steps; in Model Exchange only in Event Mode (the
+             * standards let an importer change inputs discontinuously only there; in
+             * Continuous-Time Mode an input is a continuous signal) */
+            if (in[i] != before && !early && (!c->is_me || c->state == CS_EVENT)) {
                 c->inputs_changed = 1;
                 if (!c->is_me) c->s.needs_reinit = 1; /* the right-hand side changed here */
             }
