@@ -15,6 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tests import test_importer_fmusim as F  # noqa: E402
 from tests import test_importer_libcosim as L  # noqa: E402
+from tests.importer_support import compare_per_period, run_fmusim, write_input_csv  # noqa: E402
 
 
 def _row(label: str, checks: list) -> str:
@@ -45,6 +46,21 @@ def main() -> None:
     for version, fmu in F.FMUS.items():
         rows.append(_row(f"fmusim | {version} ME, CVODE rtol 1e-10",
                          [F.me_check(fmu, c, tmp) for c in F.CASES.values()]))
+    for version, fmu in F.FMUS.items():
+        case = F.CASES["over-compliant"]
+        csv = write_input_csv(tmp / "into.csv", F.INTO_THE_MASS)
+        res = run_fmusim(fmu, tmp, case, interface="me", stop=F.PERIODS, h=0.1,
+                           flags=("--solver", "cvode"), tolerance=F.ME_RTOL, input_csv=csv)
+        rows.append(_row(f"fmusim | {version} ME, u_wall steps behind the mass",
+                         [compare_per_period(res["time"], res["u"], res["v"], res["impacts"],
+                                               res["t_impact"], case, F.ME_HOLDS, F.PERIODS,
+                                               t_impact_tol=F.ME_TOL)]))
+    try:
+        rows.append(_row("fmusim | pythonfmu twin, fmi2 CS, h = 0.1",
+                         [F.cs_check(F.TWIN_FMU, c, tmp, 0.1)[1]
+                          for c in (F.CASES["over-compliant"], F.CASES["under-rigid"])]))
+    except AssertionError as e:  # fmusim's non-zero exit: the twin does not load in a C host
+        rows.append(f"| fmusim | pythonfmu twin, fmi2 CS | does not run: {str(e).splitlines()[0]} | | |")
     rows.append(_row("libcosim | fmi2 CS alone, h = 0.01",
                      [L.run_alone(c) for c in F.CASES.values()]))
     rows.append(_row("libcosim | fmi2 CS in SSP, controller FMU drives u_wall, h = 0.01",
