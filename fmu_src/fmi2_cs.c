@@ -35,11 +35,7 @@ const char *fmi2GetVersion(void) { return fmi2Version; }
 
 fmi2Status fmi2SetDebugLogging(fmi2Component comp, fmi2Boolean on, size_t n,
                                const fmi2String categories[]) {
-    (void)n; (void)categories;
-    CoreInstance *c = C(comp);
-    if (!core_allowed(c, "fmi2SetDebugLogging", CS_ANY)) return fmi2Error;
-    c->logging = on;
-    return fmi2OK;
+    return S(core_set_logging(C(comp), "fmi2SetDebugLogging", on, n, categories));
 }
 
 fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
@@ -73,7 +69,7 @@ fmi2Component fmi2Instantiate(fmi2String name, fmi2Type type, fmi2String guid,
 
 void fmi2FreeInstance(fmi2Component comp) {
     Fmi2Instance *w = (Fmi2Instance *)comp;
-    if (!w) return;
+    if (!w || !core_allowed(w->core, "fmi2FreeInstance")) return;
     core_free(w->core);
     if (w->cb.freeMemory) w->cb.freeMemory(w);
     else free(w);
@@ -134,7 +130,7 @@ fmi2Status fmi2GetString(fmi2Component comp, const fmi2ValueReference vr[], size
                          fmi2String value[]) {
     (void)value;
     CoreInstance *c = C(comp);
-    if (!core_allowed(c, "fmi2GetString", CS_ANY)) return fmi2Error;
+    if (!core_allowed(c, "fmi2GetString")) return fmi2Error;
     if (n == 0) return fmi2OK;
     return S(core_fail(c, "fmi2GetString", "value reference %u: the model has no String "
                        "variables", vr ? vr[0] : 0u));
@@ -171,7 +167,7 @@ fmi2Status fmi2SetString(fmi2Component comp, const fmi2ValueReference vr[], size
                          const fmi2String value[]) {
     (void)value;
     CoreInstance *c = C(comp);
-    if (!core_allowed(c, "fmi2SetString", CS_INSTANTIATED | CS_INIT | CS_RUN)) return fmi2Error;
+    if (!core_allowed(c, "fmi2SetString")) return fmi2Error;
     if (n == 0) return fmi2OK;
     return S(core_fail(c, "fmi2SetString", "value reference %u: the model has no String "
                        "variables", vr ? vr[0] : 0u));
@@ -212,7 +208,9 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueRefer
                                         size_t nu, const fmi2ValueReference z[], size_t nz,
                                         const fmi2Real dv[], fmi2Real dz[]) {
     (void)u; (void)nu; (void)z; (void)nz; (void)dv; (void)dz;
-    return S(core_fail(C(comp), "fmi2GetDirectionalDerivative", "not provided by this FMU"));
+    CoreInstance *c = C(comp);
+    if (!core_allowed(c, "fmi2GetDirectionalDerivative")) return fmi2Error;
+    return S(core_fail(c, "fmi2GetDirectionalDerivative", "not provided by this FMU"));
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -228,7 +226,9 @@ fmi2Status fmi2SetRealInputDerivatives(fmi2Component comp, const fmi2ValueRefere
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component comp, const fmi2ValueReference vr[],
                                         size_t n, const fmi2Integer order[], fmi2Real value[]) {
     (void)vr; (void)n; (void)order; (void)value;
-    return S(core_fail(C(comp), "fmi2GetRealOutputDerivatives", "not provided by this FMU"));
+    CoreInstance *c = C(comp);
+    if (!core_allowed(c, "fmi2GetRealOutputDerivatives")) return fmi2Error;
+    return S(core_fail(c, "fmi2GetRealOutputDerivatives", "not provided by this FMU"));
 }
 
 fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no_prior) {
@@ -237,17 +237,21 @@ fmi2Status fmi2DoStep(fmi2Component comp, fmi2Real t, fmi2Real h, fmi2Boolean no
 }
 
 fmi2Status fmi2CancelStep(fmi2Component comp) {
-    return S(core_fail(C(comp), "fmi2CancelStep", "doStep is synchronous; nothing to cancel"));
+    CoreInstance *c = C(comp);
+    if (!core_allowed(c, "fmi2CancelStep")) return fmi2Error; /* never: no step in progress */
+    return S(core_fail(c, "fmi2CancelStep", "doStep is synchronous; nothing to cancel"));
 }
 
 fmi2Status fmi2GetStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Status *value) {
     (void)s; (void)value;
-    return S(core_fail(C(comp), "fmi2GetStatus", "doStep is synchronous; no status to query"));
+    CoreInstance *c = C(comp);
+    if (!core_allowed(c, "fmi2GetStatus")) return fmi2Error;
+    return S(core_fail(c, "fmi2GetStatus", "doStep is synchronous; no status to query"));
 }
 
 fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Real *value) {
     CoreInstance *c = C(comp);
-    if (!core_allowed(c, "fmi2GetRealStatus", CS_ANY)) return fmi2Error;
+    if (!core_allowed(c, "fmi2GetRealStatus")) return fmi2Error;
     if (s != fmi2LastSuccessfulTime || !value)
         return S(core_fail(c, "fmi2GetRealStatus", "only fmi2LastSuccessfulTime is available"));
     *value = solver_time(&c->s);
@@ -256,17 +260,23 @@ fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Rea
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Integer *value) {
     (void)s; (void)value;
-    return S(core_fail(C(comp), "fmi2GetIntegerStatus", "no integer status"));
+    CoreInstance *c = C(comp);
+    if (!core_allowed(c, "fmi2GetIntegerStatus")) return fmi2Error;
+    return S(core_fail(c, "fmi2GetIntegerStatus", "no integer status"));
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Boolean *value) {
     (void)s; (void)value;
-    return S(core_fail(C(comp), "fmi2GetBooleanStatus", "no boolean status"));
+    CoreInstance *c = C(comp);
+    if (!core_allowed(c, "fmi2GetBooleanStatus")) return fmi2Error;
+    return S(core_fail(c, "fmi2GetBooleanStatus", "no boolean status"));
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2String *value) {
     (void)s; (void)value;
-    return S(core_fail(C(comp), "fmi2GetStringStatus", "no string status"));
+    CoreInstance *c = C(comp);
+    if (!core_allowed(c, "fmi2GetStringStatus")) return fmi2Error;
+    return S(core_fail(c, "fmi2GetStringStatus", "no string status"));
 }
 
 /* ---------------------------------------------------------------------------------------- */
@@ -279,7 +289,8 @@ fmi2Status fmi2EnterEventMode(fmi2Component comp) {
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component comp, fmi2EventInfo *info) {
     CoreInstance *c = C(comp);
-    if (c && !info) return S(core_fail(c, "fmi2NewDiscreteStates", "NULL argument"));
+    if (!core_allowed(c, "fmi2NewDiscreteStates")) return fmi2Error;
+    if (!info) return S(core_fail(c, "fmi2NewDiscreteStates", "NULL argument"));
     int changed = 0;
     const int st = core_update_discrete(c, "fmi2NewDiscreteStates", &changed);
     if (st != CORE_OK) return S(st);

@@ -43,9 +43,9 @@ static void log_fmi3(void *env, const char *name, int status, const char *catego
 }
 
 #define S(x) ((fmi3Status)(x))
-#define CHECK(fn, states) \
+#define CHECK(fn) \
     CoreInstance *c = instance ? ((Fmi3Instance *)instance)->core : NULL; \
-    if (!core_allowed(c, fn, states)) return fmi3Error
+    if (!core_allowed(c, fn)) return fmi3Error
 #define CORE(instance) ((instance) ? ((Fmi3Instance *)(instance))->core : NULL)
 
 /* ---------------------------------------------------------------------------------------- */
@@ -54,10 +54,7 @@ const char *fmi3GetVersion(void) { return fmi3Version; }
 
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean on, size_t n,
                                const fmi3String categories[]) {
-    (void)n; (void)categories;
-    CHECK("fmi3SetDebugLogging", CS_ANY);
-    c->logging = on;
-    return fmi3OK;
+    return S(core_set_logging(CORE(instance), "fmi3SetDebugLogging", on, n, categories));
 }
 
 static Fmi3Instance *instantiate(fmi3String name, fmi3String token, fmi3Boolean logging,
@@ -120,7 +117,7 @@ fmi3Instance fmi3InstantiateScheduledExecution(
 
 void fmi3FreeInstance(fmi3Instance instance) {
     Fmi3Instance *w = (Fmi3Instance *)instance;
-    if (!w) return;
+    if (!w || !core_allowed(w->core, "fmi3FreeInstance")) return; /* not from intermediateUpdate */
     core_free(w->core);
     free(w);
 }
@@ -156,14 +153,14 @@ fmi3Status fmi3Reset(fmi3Instance instance) {
 
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
                           fmi3Float64 values[], size_t nv) {
-    CHECK("fmi3GetFloat64", CS_ANY);
+    CHECK("fmi3GetFloat64");
     if (n != nv) return S(core_fail(c, "fmi3GetFloat64", "bad arguments"));
     return S(core_get(c, "fmi3GetFloat64", VT_REAL, vr, n, values));
 }
 
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
                           const fmi3Float64 values[], size_t nv) {
-    CHECK("fmi3SetFloat64", CS_ANY);
+    CHECK("fmi3SetFloat64");
     if (n != nv) return S(core_fail(c, "fmi3SetFloat64", "bad arguments"));
     return S(core_set(c, "fmi3SetFloat64", VT_REAL, vr, n, values));
 }
@@ -172,7 +169,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
 #define INT_ACCESS(T, VT, CT)                                                                  \
     fmi3Status fmi3Get##T(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,     \
                           CT values[], size_t nv) {                                            \
-        CHECK("fmi3Get" #T, CS_ANY);                                                           \
+        CHECK("fmi3Get" #T);                                                           \
         if (n != nv || (n > 0 && (!vr || !values)))                                            \
             return S(core_fail(c, "fmi3Get" #T, "bad arguments"));                             \
         for (size_t i = 0; i < n; ++i) {                                                       \
@@ -185,7 +182,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference vr[], 
     }                                                                                          \
     fmi3Status fmi3Set##T(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,     \
                           const CT values[], size_t nv) {                                      \
-        CHECK("fmi3Set" #T, CS_ANY);                                                           \
+        CHECK("fmi3Set" #T);                                                           \
         if (n != nv || (n > 0 && (!vr || !values)))                                            \
             return S(core_fail(c, "fmi3Set" #T, "bad arguments"));                             \
         if (n == 0) return S(core_set(c, "fmi3Set" #T, VT, vr, 0, NULL));                      \
@@ -204,14 +201,14 @@ INT_ACCESS(Boolean, VT_BOOLEAN, fmi3Boolean)
     fmi3Status fmi3Get##T(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,       \
                           fmi3##T values[], size_t nv) {                                        \
         (void)vr; (void)values; (void)nv;                                                       \
-        CHECK("fmi3Get" #T, CS_ANY);                                                        \
+        CHECK("fmi3Get" #T);                                                        \
         return n == 0 ? fmi3OK : core_fail(c, "fmi3Get" #T, "the model has no " #T " variables");   \
     }
 #define NO_VARIABLES_SET(T)                                                                     \
     fmi3Status fmi3Set##T(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,       \
                           const fmi3##T values[], size_t nv) {                                  \
         (void)vr; (void)values; (void)nv;                                                       \
-        CHECK("fmi3Set" #T, CS_ANY);                                                         \
+        CHECK("fmi3Set" #T);                                                         \
         return n == 0 ? fmi3OK : core_fail(c, "fmi3Set" #T, "the model has no settable " #T          \
                                       " variables");                                            \
     }
@@ -229,35 +226,35 @@ NO_VARIABLES(String)
 fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
                          size_t sizes[], fmi3Binary values[], size_t nv) {
     (void)vr; (void)sizes; (void)values; (void)nv;
-    CHECK("fmi3GetBinary", CS_ANY);
+    CHECK("fmi3GetBinary");
     return n == 0 ? fmi3OK : core_fail(c, "fmi3GetBinary", "the model has no Binary variables");
 }
 
 fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
                          const size_t sizes[], const fmi3Binary values[], size_t nv) {
     (void)vr; (void)sizes; (void)values; (void)nv;
-    CHECK("fmi3SetBinary", CS_ANY);
+    CHECK("fmi3SetBinary");
     return n == 0 ? fmi3OK : core_fail(c, "fmi3SetBinary", "the model has no Binary variables");
 }
 
 fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
                         fmi3Clock values[]) {
     (void)vr; (void)values;
-    CHECK("fmi3GetClock", CS_ANY);
+    CHECK("fmi3GetClock");
     return n == 0 ? fmi3OK : core_fail(c, "fmi3GetClock", "the model has no clocks");
 }
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,
                         const fmi3Clock values[]) {
     (void)vr; (void)values;
-    CHECK("fmi3SetClock", CS_ANY);
+    CHECK("fmi3SetClock");
     return n == 0 ? fmi3OK : core_fail(c, "fmi3SetClock", "the model has no clocks");
 }
 
 fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference vr,
                                                size_t *n) {
     (void)vr; (void)n;
-    CHECK("fmi3GetNumberOfVariableDependencies", CS_ANY);
+    CHECK("fmi3GetNumberOfVariableDependencies");
     return core_fail(c, "fmi3GetNumberOfVariableDependencies", "not provided by this FMU");
 }
 
@@ -265,7 +262,7 @@ fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference
                                        size_t ei_dep[], fmi3ValueReference independents[],
                                        size_t ei_ind[], fmi3DependencyKind kinds[], size_t n) {
     (void)dependent; (void)ei_dep; (void)independents; (void)ei_ind; (void)kinds; (void)n;
-    CHECK("fmi3GetVariableDependencies", CS_ANY);
+    CHECK("fmi3GetVariableDependencies");
     return core_fail(c, "fmi3GetVariableDependencies", "not provided by this FMU");
 }
 
@@ -305,7 +302,7 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
                                         const fmi3Float64 seed[], size_t ns,
                                         fmi3Float64 sens[], size_t nsens) {
     (void)u; (void)nu; (void)k; (void)nk; (void)seed; (void)ns; (void)sens; (void)nsens;
-    CHECK("fmi3GetDirectionalDerivative", CS_ANY);
+    CHECK("fmi3GetDirectionalDerivative");
     return core_fail(c, "fmi3GetDirectionalDerivative", "not provided by this FMU");
 }
 
@@ -314,17 +311,17 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
                                     const fmi3Float64 seed[], size_t ns, fmi3Float64 sens[],
                                     size_t nsens) {
     (void)u; (void)nu; (void)k; (void)nk; (void)seed; (void)ns; (void)sens; (void)nsens;
-    CHECK("fmi3GetAdjointDerivative", CS_ANY);
+    CHECK("fmi3GetAdjointDerivative");
     return core_fail(c, "fmi3GetAdjointDerivative", "not provided by this FMU");
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
-    CHECK("fmi3EnterConfigurationMode", CS_ANY);
+    CHECK("fmi3EnterConfigurationMode");
     return core_fail(c, "fmi3EnterConfigurationMode", "the model has no structural parameters");
 }
 
 fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
-    CHECK("fmi3ExitConfigurationMode", CS_ANY);
+    CHECK("fmi3ExitConfigurationMode");
     return core_fail(c, "fmi3ExitConfigurationMode", "the model has no structural parameters");
 }
 
@@ -332,7 +329,7 @@ fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
     fmi3Status fn(fmi3Instance instance, const fmi3ValueReference vr[], size_t n,              \
                   __VA_ARGS__) {                                                               \
         (void)vr;                                                                              \
-        CHECK(#fn, CS_ANY);                                                                 \
+        CHECK(#fn);                                                                 \
         return n == 0 ? fmi3OK : core_fail(c, #fn, "the model has no clocks");                      \
     }
 #pragma GCC diagnostic push
@@ -348,7 +345,7 @@ NO_CLOCKS(fmi3SetShiftFraction, const fmi3UInt64 cn[], const fmi3UInt64 res[])
 #pragma GCC diagnostic pop
 
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
-    CHECK("fmi3EvaluateDiscreteStates", CS_ANY);
+    CHECK("fmi3EvaluateDiscreteStates");
     return fmi3OK;
 }
 
@@ -358,6 +355,8 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *need_upd
                                     fmi3Float64 *next_time) {
     int changed = 0;
     const int st = core_update_discrete(CORE(instance), "fmi3UpdateDiscreteStates", &changed);
+    /* fmi3EvaluateDiscreteStates is not declared (providesEvaluateDiscreteStates): the table
+     * refuses it in every state. */
     if (st != CORE_OK) return S(st);
     if (need_update) *need_update = fmi3False;
     if (terminate) *terminate = fmi3False;
@@ -410,14 +409,14 @@ fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 
 }
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n) {
-    CHECK("fmi3GetNumberOfEventIndicators", CS_ANY);
+    CHECK("fmi3GetNumberOfEventIndicators");
     if (!n) return S(core_fail(c, "fmi3GetNumberOfEventIndicators", "NULL argument"));
     *n = MODEL_N_ME_EVENTS;
     return fmi3OK;
 }
 
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n) {
-    CHECK("fmi3GetNumberOfContinuousStates", CS_ANY);
+    CHECK("fmi3GetNumberOfContinuousStates");
     if (!n) return S(core_fail(c, "fmi3GetNumberOfContinuousStates", "NULL argument"));
     *n = 2;
     return fmi3OK;
@@ -434,7 +433,7 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
                                     size_t n, const fmi3Int32 order[], fmi3Float64 values[],
                                     size_t nv) {
     (void)vr; (void)n; (void)order; (void)values; (void)nv;
-    CHECK("fmi3GetOutputDerivatives", CS_ANY);
+    CHECK("fmi3GetOutputDerivatives");
     return S(core_fail(c, "fmi3GetOutputDerivatives", "not provided by this FMU"));
 }
 
@@ -472,6 +471,6 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 t, fmi3Float64 h, fmi3B
 fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clock,
                                       fmi3Float64 t) {
     (void)clock; (void)t;
-    CHECK("fmi3ActivateModelPartition", CS_ANY);
+    CHECK("fmi3ActivateModelPartition");
     return S(core_fail(c, "fmi3ActivateModelPartition", "not a Scheduled Execution FMU"));
 }

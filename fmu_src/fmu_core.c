@@ -15,9 +15,162 @@
 /* ------------------------------------------------------------------------------------------ */
 /* Logging and state machine */
 
+/* The standards' state machines as data: for each FMI function, the states in which it may be
+ * called, per interface. Taken from FMI 2.0.4 sections 3.2.3 (Model Exchange) and 4.2.4
+ * (Co-Simulation) and FMI 3.0 sections 3.2 (Model Exchange) and 4.2 (Co-Simulation, with and
+ * without eventModeUsed, Intermediate Update Mode), narrowed where this FMU declares less
+ * (no clocks, no structural parameters, no providesEvaluateDiscreteStates, no variable with
+ * intermediateUpdate = true). docs/fmi-state-machine.md is rendered from this table
+ * (scripts/state_table_doc.py; tests/test_fmi_state_doc.py keeps them equal), and
+ * tests/test_fmi_conformance.py checks every (state, function) pair against a table written
+ * independently from the standards' text (tests/fmi_standard.py).
+ *
+ * States: I Instantiated, N Initialization Mode, S Step Mode (FMI 2.0: stepComplete), E Event
+ * Mode, C Continuous-Time Mode, T Terminated, X Error (FMI 2.0; FMI 3.0 enters Terminated on
+ * fmi3Error), U Intermediate Update Mode (no call allowed: nothing is declared for it).
+ * Columns: Co-Simulation, Model Exchange, FMI 3.0 Co-Simulation with eventModeUsed.
+ * Keep one row per line: the documentation is parsed from it. */
+typedef struct {
+    const char *fn;
+    int cs, me, cs_event;
+} StateRow;
+
+#define I CS_INSTANTIATED
+#define N CS_INIT
+#define S CS_STEP
+#define E CS_EVENT
+#define C CS_CONT
+#define T CS_TERMINATED
+#define X CS_ERROR
+/* STATE_TABLE_BEGIN */
+static const StateRow STATE_TABLE[] = {
+    {"fmi2SetDebugLogging", I|N|S|T|X, I|N|E|C|T|X, 0},
+    {"fmi2SetupExperiment", I, I, 0},
+    {"fmi2EnterInitializationMode", I, I, 0},
+    {"fmi2ExitInitializationMode", N, N, 0},
+    {"fmi2Terminate", S, E|C, 0},
+    {"fmi2Reset", I|N|S|T|X, I|N|E|C|T|X, 0},
+    {"fmi2FreeInstance", I|N|S|T|X, I|N|E|C|T|X, 0},
+    {"fmi2GetReal", N|S|T|X, N|E|C|T|X, 0},
+    {"fmi2GetInteger", N|S|T|X, N|E|C|T|X, 0},
+    {"fmi2GetBoolean", N|S|T|X, N|E|C|T|X, 0},
+    {"fmi2GetString", N|S|T|X, N|E|C|T|X, 0},
+    {"fmi2SetReal", I|N|S, I|N|E|C, 0},
+    {"fmi2SetInteger", I|N|S, I|N|E, 0},
+    {"fmi2SetBoolean", I|N|S, I|N|E, 0},
+    {"fmi2SetString", I|N|S, I|N|E, 0},
+    {"fmi2GetFMUstate", I|N|S|T|X, I|N|E|C|T|X, 0},
+    {"fmi2SetFMUstate", I|N|S|T|X, I|N|E|C|T|X, 0},
+    {"fmi2FreeFMUstate", I|N|S|T|X, I|N|E|C|T|X, 0},
+    {"fmi2SerializedFMUstateSize", I|N|S|T|X, I|N|E|C|T|X, 0},
+    {"fmi2SerializeFMUstate", I|N|S|T|X, I|N|E|C|T|X, 0},
+    {"fmi2DeSerializeFMUstate", I|N|S|T|X, I|N|E|C|T|X, 0},
+    {"fmi2GetDirectionalDerivative", N|S|T|X, N|E|C|T|X, 0},
+    {"fmi2SetRealInputDerivatives", I|N|S, 0, 0},
+    {"fmi2GetRealOutputDerivatives", S|T|X, 0, 0},
+    {"fmi2DoStep", S, 0, 0},
+    {"fmi2CancelStep", 0, 0, 0},
+    {"fmi2GetStatus", S|T, 0, 0},
+    {"fmi2GetRealStatus", S|T, 0, 0},
+    {"fmi2GetIntegerStatus", S|T, 0, 0},
+    {"fmi2GetBooleanStatus", S|T, 0, 0},
+    {"fmi2GetStringStatus", S|T, 0, 0},
+    {"fmi2EnterEventMode", 0, E|C, 0},
+    {"fmi2NewDiscreteStates", 0, E, 0},
+    {"fmi2EnterContinuousTimeMode", 0, E, 0},
+    {"fmi2CompletedIntegratorStep", 0, C, 0},
+    {"fmi2SetTime", 0, C, 0},
+    {"fmi2SetContinuousStates", 0, C, 0},
+    {"fmi2GetDerivatives", 0, E|C|T|X, 0},
+    {"fmi2GetEventIndicators", 0, N|E|C|T|X, 0},
+    {"fmi2GetContinuousStates", 0, N|E|C|T|X, 0},
+    {"fmi2GetNominalsOfContinuousStates", 0, I|E|C|T|X, 0},
+    {"fmi3SetDebugLogging", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
+    {"fmi3EnterInitializationMode", I, I, I},
+    {"fmi3ExitInitializationMode", N, N, N},
+    {"fmi3EnterEventMode", 0, E|C, S},
+    {"fmi3Terminate", S, E|C, S|E},
+    {"fmi3Reset", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
+    {"fmi3FreeInstance", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
+    {"fmi3GetFloat32", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetFloat64", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetInt8", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetUInt8", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetInt16", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetUInt16", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetInt32", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetUInt32", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetInt64", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetUInt64", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetBoolean", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetString", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetBinary", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3SetFloat32", I|N|S, I|N|E|C, I|N|S|E},
+    {"fmi3SetFloat64", I|N|S, I|N|E|C, I|N|S|E},
+    {"fmi3SetInt8", I|N|S, I|N|E, I|N|S|E},
+    {"fmi3SetUInt8", I|N|S, I|N|E, I|N|S|E},
+    {"fmi3SetInt16", I|N|S, I|N|E, I|N|S|E},
+    {"fmi3SetUInt16", I|N|S, I|N|E, I|N|S|E},
+    {"fmi3SetInt32", I|N|S, I|N|E, I|N|S|E},
+    {"fmi3SetUInt32", I|N|S, I|N|E, I|N|S|E},
+    {"fmi3SetInt64", I|N|S, I|N|E, I|N|S|E},
+    {"fmi3SetUInt64", I|N|S, I|N|E, I|N|S|E},
+    {"fmi3SetBoolean", I|N|S, I|N|E, I|N|S|E},
+    {"fmi3SetString", I|N|S, I|N|E, I|N|S|E},
+    {"fmi3SetBinary", I|N|S, I|N|E, I|N|S|E},
+    {"fmi3GetClock", 0, E, E},
+    {"fmi3SetClock", 0, E, E},
+    {"fmi3GetIntervalDecimal", 0, E, E},
+    {"fmi3GetIntervalFraction", 0, E, E},
+    {"fmi3GetShiftDecimal", 0, E, E},
+    {"fmi3GetShiftFraction", 0, E, E},
+    {"fmi3SetIntervalDecimal", 0, E, E},
+    {"fmi3SetIntervalFraction", 0, E, E},
+    {"fmi3SetShiftDecimal", 0, E, E},
+    {"fmi3SetShiftFraction", 0, E, E},
+    {"fmi3GetNumberOfVariableDependencies", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
+    {"fmi3GetVariableDependencies", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
+    {"fmi3GetFMUState", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
+    {"fmi3SetFMUState", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
+    {"fmi3FreeFMUState", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
+    {"fmi3SerializedFMUStateSize", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
+    {"fmi3SerializeFMUState", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
+    {"fmi3DeserializeFMUState", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
+    {"fmi3GetDirectionalDerivative", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3GetAdjointDerivative", N|S|T, N|E|C|T, N|S|E|T},
+    {"fmi3EnterConfigurationMode", I|S, I|E, I|S|E},
+    {"fmi3ExitConfigurationMode", 0, 0, 0},
+    {"fmi3EvaluateDiscreteStates", 0, 0, 0},
+    {"fmi3UpdateDiscreteStates", 0, E, E},
+    {"fmi3EnterContinuousTimeMode", 0, E, 0},
+    {"fmi3CompletedIntegratorStep", 0, C, 0},
+    {"fmi3SetTime", 0, E|C, 0},
+    {"fmi3SetContinuousStates", 0, C, 0},
+    {"fmi3GetContinuousStateDerivatives", 0, N|E|C|T, 0},
+    {"fmi3GetEventIndicators", 0, N|E|C|T, 0},
+    {"fmi3GetContinuousStates", 0, N|E|C|T, 0},
+    {"fmi3GetNominalsOfContinuousStates", 0, N|E|C|T, 0},
+    {"fmi3GetNumberOfEventIndicators", 0, I|N|E|C|T, 0},
+    {"fmi3GetNumberOfContinuousStates", 0, I|N|E|C|T, 0},
+    {"fmi3EnterStepMode", 0, 0, E},
+    {"fmi3GetOutputDerivatives", S|T, 0, S|E|T},
+    {"fmi3DoStep", S, 0, S},
+    {"fmi3ActivateModelPartition", 0, 0, 0},
+};
+/* STATE_TABLE_END */
+#undef I
+#undef N
+#undef S
+#undef E
+#undef C
+#undef T
+#undef X
+
 void core_log(CoreInstance *c, int status, const char *category, const char *fmt, ...) {
     if (!c || !c->log) return;
-    if (status == CORE_OK && !c->logging) return;
+    /* with logging off, only errors reach the importer (their message is the only account of
+     * why a call failed) */
+    if (status < CORE_ERROR && !c->logging) return;
     char buf[1024];
     va_list ap;
     va_start(ap, fmt);
@@ -26,20 +179,77 @@ void core_log(CoreInstance *c, int status, const char *category, const char *fmt
     c->log(c->env, c->name, status, category, buf);
 }
 
+int core_set_logging(CoreInstance *c, const char *fn, int on, size_t n,
+                     const char *const categories[]) {
+    if (!core_allowed(c, fn)) return CORE_ERROR;
+    if (n > 0 && !categories) return core_fail(c, fn, "%zu categories but a NULL array", n);
+    for (size_t i = 0; i < n; ++i) {
+        const char *k = categories[i];
+        if (!k || (strcmp(k, "logStatusError") && strcmp(k, "logStatusWarning") &&
+                   strcmp(k, "logEvents")))
+            return core_fail(c, fn, "category %s is not one of the modelDescription's "
+                             "LogCategories", k ? k : "(NULL)");
+    }
+    c->logging = on != 0;
+    return CORE_OK;
+}
+
+int core_error_state(const CoreInstance *c) { return c->fmi3 ? CS_TERMINATED : CS_ERROR; }
+
 int core_fail(CoreInstance *c, const char *fn, const char *fmt, ...) {
     char buf[900];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
-    if (c) core_log(c, CORE_ERROR, "logStatusError", "%s: %s", fn, buf);
+    if (!c) return CORE_ERROR;
+    core_log(c, CORE_ERROR, "logStatusError", "%s: %s", fn, buf);
+    /* FMI 2.0 (2.1.3): after fmi2Error the simulation cannot be continued (Error state, left by
+     * fmi2SetFMUstate, fmi2Reset or fmi2FreeInstance); FMI 3.0 (2.2.3, 4.2): the instance is
+     * in Terminated (fmi3SetFMUState, fmi3Reset, fmi3FreeInstance). */
+    c->state = core_error_state(c);
     return CORE_ERROR;
 }
 
-int core_allowed(CoreInstance *c, const char *fn, int states) {
+int core_allowed_states(CoreInterface iface, int event_mode, const char *fn) {
+    if (!fn) return -1;
+    for (size_t i = 0; i < sizeof STATE_TABLE / sizeof STATE_TABLE[0]; ++i) {
+        const StateRow *r = &STATE_TABLE[i];
+        if (strcmp(r->fn, fn) != 0) continue;
+        if (iface == IF_FMI2_ME || iface == IF_FMI3_ME) return r->me;
+        return iface == IF_FMI3_CS && event_mode ? r->cs_event : r->cs;
+    }
+    return -1;
+}
+
+static const char *state_name(int state) {
+    switch (state) {
+    case CS_INSTANTIATED: return "Instantiated";
+    case CS_INIT: return "Initialization Mode";
+    case CS_STEP: return "Step Mode";
+    case CS_EVENT: return "Event Mode";
+    case CS_CONT: return "Continuous-Time Mode";
+    case CS_TERMINATED: return "Terminated";
+    case CS_ERROR: return "Error";
+    case CS_INTERMEDIATE: return "Intermediate Update Mode";
+    default: return "an unknown state";
+    }
+}
+
+int core_allowed(CoreInstance *c, const char *fn) {
     if (!c) return 0;
+    const int states = core_allowed_states(c->iface, c->event_mode_used, fn);
+    if (states < 0) {
+        core_fail(c, fn ? fn : "?", "not in the FMU's state table (an FMU bug)");
+        return 0;
+    }
     if (c->state & states) return 1;
-    core_fail(c, fn, "not allowed in the current state (%d)", c->state);
+    static const char *const IFACE[] = {"?", "FMI 2.0 Co-Simulation", "FMI 2.0 Model Exchange",
+                                        "FMI 3.0 Co-Simulation", "FMI 3.0 Model Exchange"};
+    core_fail(c, fn, "not allowed in %s (%s%s; docs/fmi-state-machine.md)",
+              state_name(c->state), IFACE[c->iface],
+              c->iface == IF_FMI3_CS ? (c->event_mode_used ? " with eventModeUsed"
+                                                            : " without eventModeUsed") : "");
     return 0;
 }
 
@@ -237,7 +447,7 @@ static void rebase_inputs(ModelData *m, double tau) {
 
 int core_get(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[], size_t n,
              double out[]) {
-    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (n > 0 && (!vr || !out)) return core_fail(c, fn, "NULL argument");
     for (size_t i = 0; i < n; ++i) {
         const VarDef *d = find_var(c, vr[i]);
@@ -266,7 +476,7 @@ static const char *check_derived(const ModelData *m, char *buf, size_t n) {
 
 int core_set(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[], size_t n,
              const double in[]) {
-    if (!core_allowed(c, fn, CS_INSTANTIATED | CS_INIT | CS_RUN)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (n > 0 && (!vr || !in)) return core_fail(c, fn, "NULL argument");
     for (size_t i = 0; i < n; ++i) {
         const VarDef *d = find_var(c, vr[i]);
@@ -299,7 +509,10 @@ int core_set(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[]
             const double before = d->get(c);
             rebase_inputs(&c->m, tau);
             field_set(&c->m, d, in[i]);
-            if (in[i] != before && !early) {
+            /* a jump: in Co-Simulation between steps; in Model Exchange only in Event Mode (the
+             * standards let an importer change inputs discontinuously only there; in
+             * Continuous-Time Mode an input is a continuous signal) */
+            if (in[i] != before && !early && (!c->is_me || c->state == CS_EVENT)) {
                 c->inputs_changed = 1;
                 if (!c->is_me) c->s.needs_reinit = 1; /* the right-hand side changed here */
             }
@@ -314,7 +527,7 @@ int core_set(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[]
 
 int core_set_input_derivatives(CoreInstance *c, const char *fn, const unsigned vr[], size_t n,
                                const int order[], const double value[]) {
-    if (!core_allowed(c, fn, CS_INSTANTIATED | CS_INIT | CS_STEP)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (c->is_me) return core_fail(c, fn, "a Model Exchange instance has no input derivatives");
     if (n > 0 && (!vr || !order || !value)) return core_fail(c, fn, "NULL argument");
     int status = CORE_OK;
@@ -364,7 +577,9 @@ CoreInstance *core_instantiate(const char *name, CoreInterface iface, void *env,
     c->iface = iface;
     c->is_me = iface == IF_FMI2_ME || iface == IF_FMI3_ME;
     c->fmi3 = iface == IF_FMI3_CS || iface == IF_FMI3_ME;
-    c->tunable_states = c->fmi3 ? (CS_STEP | CS_EVENT) : CS_RUN;
+    /* FMI 3.0: Step and Event Mode; FMI 2.0 Co-Simulation: stepComplete; FMI 2.0 Model Exchange:
+     * Event Mode only (Continuous-Time Mode takes continuous inputs alone). */
+    c->tunable_states = c->fmi3 ? (CS_STEP | CS_EVENT) : (c->is_me ? CS_EVENT : CS_STEP);
     c->name = calloc_fn ? calloc_fn(1, strlen(name) + 1) : calloc(1, strlen(name) + 1);
     if (c->name) strcpy(c->name, name);
     model_set_defaults(&c->m);
@@ -395,7 +610,7 @@ void core_free(CoreInstance *c) {
 }
 
 int core_setup(CoreInstance *c, const char *fn, int tol_defined, double tol, double start) {
-    if (!core_allowed(c, fn, CS_INSTANTIATED)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (!isfinite(start) || !(fabs(start) <= CORE_MAX_TIME))
         return core_fail(c, fn, "startTime = %g: must be finite with |startTime| <= %g", start,
                          CORE_MAX_TIME);
@@ -408,21 +623,18 @@ int core_setup(CoreInstance *c, const char *fn, int tol_defined, double tol, dou
 }
 
 int core_enter_init(CoreInstance *c, const char *fn) {
-    if (!core_allowed(c, fn, CS_INSTANTIATED)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     c->state = CS_INIT;
     return CORE_OK;
 }
 
 int core_exit_init(CoreInstance *c, const char *fn) {
-    if (!core_allowed(c, fn, CS_INIT)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     char buf[300];
     model_update_derived(&c->m);
     const char *why = model_check_consistency(&c->m, buf, sizeof buf);
     if (!why) why = check_derived(&c->m, buf, sizeof buf);
-    if (why) {
-        c->state = CS_ERROR;
-        return core_fail(c, fn, "%s", why);
-    }
+    if (why) return core_fail(c, fn, "%s", why);
     solver_start(&c->s, c->start_time);
     c->m.origin = c->s.origin;
     c->m.in_tau = c->s.tau;
@@ -436,13 +648,13 @@ int core_exit_init(CoreInstance *c, const char *fn) {
 }
 
 int core_terminate(CoreInstance *c, const char *fn) {
-    if (!core_allowed(c, fn, CS_RUN | CS_ERROR)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     c->state = CS_TERMINATED;
     return CORE_OK;
 }
 
 int core_reset(CoreInstance *c, const char *fn) {
-    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     /* CVODE's memory is kept: the next run re-initialises it instead of reallocating. */
     model_set_defaults(&c->m);
     c->start_time = 0.0;
@@ -537,6 +749,7 @@ static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char
         return buf;
     }
     int savable = CS_INSTANTIATED | CS_INIT | CS_TERMINATED;
+    if (!c->fmi3) savable |= CS_ERROR; /* fmi2GetFMUstate is allowed in Error */
     savable |= c->is_me ? (CS_EVENT | CS_CONT) : CS_STEP;
     if (!c->is_me && c->event_mode_used) savable |= CS_EVENT;
     const int st = s->state;
@@ -603,10 +816,9 @@ static void snapshot_restore(CoreInstance *c, const Snapshot *s) {
     c->s.needs_reinit = 1;
 }
 
-#define SNAPSHOT_STATES (CS_INSTANTIATED | CS_INIT | CS_RUN | CS_TERMINATED)
 
 int core_get_state(CoreInstance *c, const char *fn, void **state) {
-    if (!core_allowed(c, fn, SNAPSHOT_STATES)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (!state) return core_fail(c, fn, "NULL argument");
     Snapshot *s = *state ? (Snapshot *)*state : core_alloc(c, sizeof(Snapshot));
     if (!s) return core_fail(c, fn, "out of memory");
@@ -616,7 +828,7 @@ int core_get_state(CoreInstance *c, const char *fn, void **state) {
 }
 
 int core_set_state(CoreInstance *c, const char *fn, const void *state) {
-    if (!core_allowed(c, fn, SNAPSHOT_STATES)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (!state) return core_fail(c, fn, "NULL state");
     char buf[300];
     const char *why = snapshot_check(c, (const Snapshot *)state, buf, sizeof buf);
@@ -626,7 +838,7 @@ int core_set_state(CoreInstance *c, const char *fn, const void *state) {
 }
 
 int core_free_state(CoreInstance *c, const char *fn, void **state) {
-    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (state && *state) {
         core_release(c, *state);
         *state = NULL;
@@ -635,7 +847,7 @@ int core_free_state(CoreInstance *c, const char *fn, void **state) {
 }
 
 int core_serialized_size(CoreInstance *c, const char *fn, const void *state, size_t *size) {
-    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (!size || !state || ((const Snapshot *)state)->magic != SNAPSHOT_MAGIC)
         return core_fail(c, fn, "not a state of this FMU");
     *size = sizeof(Snapshot);
@@ -644,7 +856,7 @@ int core_serialized_size(CoreInstance *c, const char *fn, const void *state, siz
 
 int core_serialize(CoreInstance *c, const char *fn, const void *state, unsigned char *bytes,
                    size_t size) {
-    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (!bytes || size < sizeof(Snapshot) || !state ||
         ((const Snapshot *)state)->magic != SNAPSHOT_MAGIC)
         return core_fail(c, fn, "bad state or buffer too small");
@@ -654,7 +866,7 @@ int core_serialize(CoreInstance *c, const char *fn, const void *state, unsigned 
 
 int core_deserialize(CoreInstance *c, const char *fn, const unsigned char *bytes, size_t size,
                      void **state) {
-    if (!core_allowed(c, fn, CS_ANY)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (!bytes || !state || size != sizeof(Snapshot))
         return core_fail(c, fn, "%zu bytes are not a serialised state of this FMU (expected "
                          "%zu)", size, sizeof(Snapshot));
@@ -708,12 +920,14 @@ static int outputs_finite(const CoreInstance *c) {
 int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_at_event,
                  CoreIntermediateFn intermediate, int *event_needed, int *early_return,
                  double *last_time) {
-    if (!core_allowed(c, fn, CS_STEP)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (c->is_me) return core_fail(c, fn, "a Model Exchange instance");
     if (event_needed) *event_needed = 0;
     if (early_return) *early_return = 0;
-    if (!isfinite(t) || !isfinite(h) || h < 0.0)
-        return core_fail(c, fn, "bad communication step (t = %g, h = %g)", t, h);
+    /* both standards: communicationStepSize > 0 (h = 0 and h = -0.0 are refused) */
+    if (!isfinite(t) || !isfinite(h) || !(h > 0.0))
+        return core_fail(c, fn, "bad communication step (t = %g, h = %g): h must be finite and "
+                         "> 0", t, h);
     if (!(fabs(t + h) <= CORE_MAX_TIME))
         return core_fail(c, fn, "the step's end t + h = %g is beyond the FMU's time range "
                          "|t| <= %g", t + h, CORE_MAX_TIME);
@@ -731,19 +945,28 @@ int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_a
 
     if (!stop_at_event && !intermediate) {
         if (solver_advance(&c->s, &c->m, t_end) != 0) {
-            c->state = CS_ERROR;
             return core_fail(c, fn, "integration failed: %s", c->s.msg);
         }
     } else {
         for (;;) {
             const int rc = solver_advance_ex(&c->s, &c->m, t_end, 1);
             if (rc < 0) {
-                c->state = CS_ERROR;
                 return core_fail(c, fn, "integration failed: %s", c->s.msg);
             }
             if (rc == 0) break; /* reached t_end */
             const double te = solver_time(&c->s);
-            const int requested = intermediate ? intermediate(c, te) : 0;
+            int requested = 0;
+            if (intermediate) {
+                /* FMI 3.0 Intermediate Update Mode: the table allows no call in it (no variable is
+                 * declared intermediateUpdate); a refused call leaves the instance in Terminated
+                 * and this doStep fails with it. */
+                c->state = CS_INTERMEDIATE;
+                requested = intermediate(c, te);
+                if (c->state != CS_INTERMEDIATE)
+                    return core_fail(c, fn, "a call inside intermediateUpdate at t = %.17g failed "
+                                     "(see above): the step is abandoned", te);
+                c->state = CS_STEP;
+            }
             if (stop_at_event || (c->early_return_allowed && requested)) {
                 /* With event mode the jump waits for the discrete-state update; without, it is
                  * applied here (outputs after the event). */
@@ -763,7 +986,6 @@ int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_a
     end_ramps(c);
     if (last_time) *last_time = solver_time(&c->s);
     if (!outputs_finite(c)) {
-        c->state = CS_ERROR;
         return core_fail(c, fn, "the state left the valid range (u = %g, v = %g at t = %.17g)",
                          c->m.u, c->m.v, solver_time(&c->s));
     }
@@ -777,35 +999,33 @@ int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_a
 /* ------------------------------------------------------------------------------------------ */
 /* Model Exchange, and the event mode of FMI 3.0 Co-Simulation */
 
-#define ME_ONLY(c, fn, states)                                                                \
+#define ME_ONLY(c, fn)                                                                        \
     do {                                                                                      \
-        if (!core_allowed(c, fn, states)) return CORE_ERROR;                                  \
+        if (!core_allowed(c, fn)) return CORE_ERROR;                                  \
         if (!(c)->is_me) return core_fail(c, fn, "instance was not instantiated for Model "   \
                                           "Exchange");                                        \
     } while (0)
 
 int core_enter_event_mode(CoreInstance *c, const char *fn) {
-    if (!core_allowed(c, fn, c->fmi3 ? (CS_STEP | CS_CONT) : (CS_EVENT | CS_CONT)))
-        return CORE_ERROR;
-    if (!c->fmi3 && !c->is_me)
-        return core_fail(c, fn, "instance was not instantiated for Model Exchange");
-    if (!c->is_me && !c->event_mode_used)
-        return core_fail(c, fn, "instantiated with eventModeUsed = false");
+    if (!core_allowed(c, fn)) return CORE_ERROR; /* NULL instance first, then the table */
     c->state = CS_EVENT;
     return CORE_OK;
 }
 
 int core_update_discrete(CoreInstance *c, const char *fn, int *values_changed) {
-    if (!core_allowed(c, fn, CS_EVENT)) return CORE_ERROR;
-    if (!c->fmi3 && !c->is_me)
-        return core_fail(c, fn, "instance was not instantiated for Model Exchange");
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     int changed;
     const int impacts = c->m.impacts;
     if (c->is_me) {
         double y[2] = {c->m.u, c->m.v};
         c->m.origin = floor(c->me_time);
-        changed = model_me_event_update(&c->m, local_tau(c), y);
-        c->inputs_changed = 0; /* ME: a jumped input is the event the importer stopped at */
+        /* An input that jumped since the last update (u_wall, F_ext) gets the rule Co-Simulation
+         * applies (model_input_jump, README "Inputs that jump"): a compliant wall stepping past
+         * the mass switches the contact mode and leaves the mass where it is. Only then is a
+         * remaining wall crossing an event. */
+        changed = c->inputs_changed ? model_input_jump(&c->m, local_tau(c), y) : 0;
+        c->inputs_changed = 0;
+        changed |= model_me_event_update(&c->m, local_tau(c), y);
         c->m.u = y[0];
         c->m.v = y[1];
         if (changed) c->s.events++;
@@ -820,13 +1040,13 @@ int core_update_discrete(CoreInstance *c, const char *fn, int *values_changed) {
 }
 
 int core_enter_continuous_mode(CoreInstance *c, const char *fn) {
-    ME_ONLY(c, fn, CS_EVENT);
+    ME_ONLY(c, fn);
     c->state = CS_CONT;
     return CORE_OK;
 }
 
 int core_enter_step_mode(CoreInstance *c, const char *fn) {
-    if (!core_allowed(c, fn, CS_EVENT)) return CORE_ERROR;
+    if (!core_allowed(c, fn)) return CORE_ERROR;
     if (c->is_me) return core_fail(c, fn, "a Model Exchange instance");
     solver_apply_pending(&c->s, &c->m); /* an importer that skipped the discrete update */
     c->state = CS_STEP;
@@ -834,14 +1054,14 @@ int core_enter_step_mode(CoreInstance *c, const char *fn) {
 }
 
 int core_completed_step(CoreInstance *c, const char *fn, int *enter_event, int *terminate) {
-    ME_ONLY(c, fn, CS_CONT);
+    ME_ONLY(c, fn);
     if (enter_event) *enter_event = 0;
     if (terminate) *terminate = 0;
     return CORE_OK;
 }
 
 int core_set_time(CoreInstance *c, const char *fn, double t) {
-    ME_ONLY(c, fn, CS_EVENT | CS_CONT);
+    ME_ONLY(c, fn);
     if (!finite_within(t, CORE_MAX_TIME))
         return core_fail(c, fn, "time = %g: must be finite with |t| <= %g", t, CORE_MAX_TIME);
     c->me_time = t;
@@ -850,7 +1070,7 @@ int core_set_time(CoreInstance *c, const char *fn, double t) {
 }
 
 int core_set_states(CoreInstance *c, const char *fn, const double x[], size_t n) {
-    ME_ONLY(c, fn, CS_EVENT | CS_CONT);
+    ME_ONLY(c, fn);
     if (n != 2 || !x) return core_fail(c, fn, "expected 2 states, got %zu", n);
     if (!finite_within(x[0], CORE_MAX_STATE) || !finite_within(x[1], CORE_MAX_STATE))
         return core_fail(c, fn, "states (%g, %g) rejected: must be finite with |x| <= %g (state "
@@ -860,10 +1080,9 @@ int core_set_states(CoreInstance *c, const char *fn, const double x[], size_t n)
     return CORE_OK;
 }
 
-#define ME_GET_STATES (CS_INIT | CS_RUN | CS_TERMINATED | CS_ERROR)
 
 int core_get_states(CoreInstance *c, const char *fn, double x[], size_t n) {
-    ME_ONLY(c, fn, ME_GET_STATES);
+    ME_ONLY(c, fn);
     if (n != 2 || !x) return core_fail(c, fn, "expected 2 states, got %zu", n);
     x[0] = c->m.u;
     x[1] = c->m.v;
@@ -871,7 +1090,7 @@ int core_get_states(CoreInstance *c, const char *fn, double x[], size_t n) {
 }
 
 int core_get_derivatives(CoreInstance *c, const char *fn, double dx[], size_t n) {
-    ME_ONLY(c, fn, ME_GET_STATES);
+    ME_ONLY(c, fn);
     if (n != 2 || !dx) return core_fail(c, fn, "expected 2 states, got %zu", n);
     const double y[2] = {c->m.u, c->m.v};
     model_derivatives(&c->m, local_tau(c), y, dx);
@@ -881,7 +1100,7 @@ int core_get_derivatives(CoreInstance *c, const char *fn, double dx[], size_t n)
 }
 
 int core_get_event_indicators(CoreInstance *c, const char *fn, double g[], size_t n) {
-    ME_ONLY(c, fn, ME_GET_STATES);
+    ME_ONLY(c, fn);
     if (n != MODEL_N_ME_EVENTS || !g)
         return core_fail(c, fn, "expected %d indicators, got %zu", MODEL_N_ME_EVENTS, n);
     g[0] = get_indicator(c);
@@ -889,7 +1108,7 @@ int core_get_event_indicators(CoreInstance *c, const char *fn, double g[], size_
 }
 
 int core_get_nominals(CoreInstance *c, const char *fn, double x[], size_t n) {
-    ME_ONLY(c, fn, CS_ANY);
+    ME_ONLY(c, fn);
     if (n != 2 || !x) return core_fail(c, fn, "expected 2 states, got %zu", n);
     x[0] = x[1] = 1.0;
     return CORE_OK;

@@ -30,8 +30,10 @@ enum {
     CS_CONT = 1 << 4,
     CS_TERMINATED = 1 << 5,
     CS_ERROR = 1 << 6,
+    CS_INTERMEDIATE = 1 << 7, /* FMI 3.0 Co-Simulation: inside the intermediateUpdate callback */
+    CS_FATAL = 1 << 8,        /* never entered: no call of this FMU answers Fatal */
 };
-#define CS_ANY 0x7f
+#define CS_ANY 0x1ff
 #define CS_RUN (CS_STEP | CS_EVENT | CS_CONT) /* initialised, not terminated */
 
 /* Which interface an instance (and its snapshots) belongs to. */
@@ -78,8 +80,19 @@ void core_free(CoreInstance *c);
 void core_log(CoreInstance *c, int status, const char *category, const char *fmt, ...);
 /* Logs an error "fn: message" and returns CORE_ERROR. */
 int core_fail(CoreInstance *c, const char *fn, const char *fmt, ...);
-/* 1 if the call fn is allowed in the instance's state, else logs and returns 0. */
-int core_allowed(CoreInstance *c, const char *fn, int states);
+/* The state machine (fmu_core.c, STATE_TABLE): 1 if the FMI function named fn may be called in
+ * the instance's state, else 0 (c NULL), or logs, moves the instance to its error state and
+ * returns 0. Every entry point calls it first. */
+int core_allowed(CoreInstance *c, const char *fn);
+/* The states in which fn may be called by an instance of interface iface (event_mode: FMI 3.0
+ * Co-Simulation instantiated with eventModeUsed); -1 for a function the table does not know. */
+int core_allowed_states(CoreInterface iface, int event_mode, const char *fn);
+/* The state an instance enters when a call returns Error (FMI 2.0: Error; FMI 3.0: Terminated). */
+int core_error_state(const CoreInstance *c);
+
+/* fmi2/fmi3SetDebugLogging: the categories must be the modelDescription's LogCategories. */
+int core_set_logging(CoreInstance *c, const char *fn, int on, size_t n,
+                     const char *const categories[]);
 
 int core_setup(CoreInstance *c, const char *fn, int tol_defined, double tol, double start);
 int core_enter_init(CoreInstance *c, const char *fn);

@@ -15,6 +15,7 @@ if [[ -f $prefix/lib/libsundials_cvode.a && -f $prefix/include/sundials/sundials
 fi
 src=$(bash "$root/scripts/sundials_source.sh")
 bld="$root/build/cross/$target/cvode-build"
+mkdir -p "$root/build/cross/$target"  # its log lives there (a fresh checkout has no build/ yet)
 cmake -S "$src" -B "$bld" -DCMAKE_TOOLCHAIN_FILE="$toolchain" -DCMAKE_BUILD_TYPE=Release \
     -DCMAKE_INSTALL_PREFIX="$prefix" -DCMAKE_INSTALL_LIBDIR=lib \
     -DBUILD_SHARED_LIBS=OFF -DBUILD_STATIC_LIBS=ON -DCMAKE_POSITION_INDEPENDENT_CODE=ON \

@@ -14,7 +14,8 @@ log() { printf '[setup] %s\n' "$*" >&2; }
 
 # --- 1. Debian packages -------------------------------------------------------------------
 # libtbb12: the ecos co-simulation master (ecospy, a test dependency) links against it.
-apt_pkgs=(libsundials-dev build-essential cmake zip valgrind libtbb12)
+# libminizip-dev libxml2-dev zlib1g-dev: fmusim, the independent importer built in step 4.
+apt_pkgs=(libsundials-dev build-essential cmake zip valgrind libtbb12 libminizip-dev libxml2-dev zlib1g-dev)
 native_only=${IMPACT_NATIVE_ONLY:-0}
 # The cross compilers, wine and qemu-user to run what they build, dpkg-dev for `apt-get source`.
 [[ $native_only == 1 ]] || apt_pkgs+=(gcc-mingw-w64-x86-64-win32 gcc-aarch64-linux-gnu
@@ -66,12 +67,12 @@ cmake -S fmu_src -B build/fmu -DCMAKE_BUILD_TYPE=Release "${fmu_args[@]}" >/dev/
 cmake --build build/fmu -j 2 >/dev/null
 log "FMU ready: build/fmu/ImpactOscillator.fmu"
 
-# The pythonfmu twin (same model in Python, CVODE through scikit-sundae); rebuilt only when its
-# sources are newer than the FMU.
+# The pythonfmu twin (same model in Python, CVODE through scikit-sundae, behind a C front that
+# keeps the FMI state machine); rebuilt only when its sources are newer than the FMU.
 twin_src=fmu_src/pytwin
 twin_fmu=build/fmu/ImpactOscillatorPy.fmu
 if [[ -f $twin_src/build.py ]]; then
-    if [[ ! -f $twin_fmu ]] || [[ -n $(find "$twin_src" -newer "$twin_fmu" -name '*.py' -print -quit) ]]; then
+    if [[ ! -f $twin_fmu ]] || [[ -n $(find "$twin_src" -newer "$twin_fmu" \( -name '*.py' -o -name '*.c' \) -print -quit) ]]; then
         .venv/bin/python "$twin_src/build.py" --out "$twin_fmu" >/dev/null
         log "twin FMU ready: $twin_fmu"
     fi
@@ -84,4 +85,25 @@ if [[ -f examples/afm/controller/CMakeLists.txt ]]; then
     fi
     cmake --build build/afm >/dev/null
     log "controller FMU ready: build/afm/AmplitudeController.fmu"
+fi
+
+# --- 4. Independent importers -------------------------------------------------------------
+# fmusim (Reference FMUs v0.0.39) is not packaged: its source lives outside the repository, in
+# $IMPACT_SHARED/tools (default ../shared/tools), and is built here into build/tools/fmusim,
+# again only when the source is newer than the binary. Without the source the fmusim tests skip
+# naming the missing path; with the source and a failed build they fail (tests/importer_fmusim.py).
+fmusim_src="${IMPACT_SHARED:-$root/../shared}/tools/fmusim-v0.0.39"
+fmusim_bin=build/tools/fmusim
+if [[ -f $fmusim_src/build.sh ]]; then
+    if [[ ! -x $fmusim_bin ]] || [[ -n $(find "$fmusim_src" -newer "$fmusim_bin" -type f -print -quit) ]]; then
+        mkdir -p build/tools
+        rm -f "$fmusim_bin"  # never test a stale binary after a failed rebuild
+        if bash "$fmusim_src/build.sh" "$root/build/tools" >build/tools/fmusim-build.log 2>&1; then
+            log "fmusim ready: $fmusim_bin"
+        else
+            log "fmusim build FAILED (build/tools/fmusim-build.log); its tests will fail"
+        fi
+    fi
+else
+    log "fmusim source not found at $fmusim_src: the fmusim tests will be skipped"
 fi

@@ -122,6 +122,25 @@ def expect_error(call, *args) -> None:  # noqa: ANN001
     raise AssertionError(f"{call.__name__}{args} did not fail")
 
 
+def refused_and_restored(fmu: LoggedSlave, call, *args) -> None:  # noqa: ANN001
+    """Assert that `call` returns fmi2Error, that the instance is then in the Error state, and
+    recover it the way FMI 2.0.4 (section 2.1.3) documents: restore a state saved before.
+
+    After fmi2Error "the simulation cannot be continued" with the instance; fmi2SetFMUstate of an
+    earlier state (or fmi2Reset) is the way back. Error-state check: fmi2Terminate, allowed in
+    every running state but not in Error, is refused.
+    """
+    saved = fmu.slave.getFMUstate()
+    try:
+        expect_error(call, *args)
+        message = fmu.errors()[-1]
+        expect_error(fmu.slave.terminate)
+        fmu.messages.append((3, "logStatusError", message))  # the call's message stays last
+        fmu.slave.setFMUstate(saved)
+    finally:
+        fmu.slave.freeFMUstate(saved)
+
+
 # -- added for FMI 3.0 / Model Exchange / contact-law tests (issue 8) ---------------------------
 FMU3_PATH = ROOT / "build" / "fmu" / "ImpactOscillator_fmi3.fmu"
 

@@ -11,7 +11,8 @@ import pytest
 from fmpy.validation import validate_fmu
 
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import FMU_PATH, LoggedSlave, expect_error, on_orbit
+from tests.fmu_support import (FMU_PATH, LoggedSlave, expect_error, on_orbit,
+                               refused_and_restored)
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
 
@@ -174,12 +175,19 @@ def test_bad_parameter_is_rejected_with_a_message_and_nothing_lost(fmu, name, va
     fmu.slave.setupExperiment(startTime=0.0)
     fmu.slave.enterInitializationMode()
     before = fmu.slave.getInteger([fmu.vr[name]])[0] if name == "wall" else fmu.get(name)
+    saved = fmu.slave.getFMUstate()
     expect_error(lambda: fmu.set(**{name: value}))
     msg = fmu.errors()[-1]
     assert name in msg and why in msg, msg
     after = fmu.slave.getInteger([fmu.vr[name]])[0] if name == "wall" else fmu.get(name)
     assert after == before  # the rejected value was not stored
-    fmu.slave.exitInitializationMode()  # and the instance goes on with the old value
+    # FMI 2.0.4 section 2.1.3: after fmi2Error the simulation cannot go on with this instance
+    # (it is in the Error state) ...
+    expect_error(fmu.slave.exitInitializationMode)
+    # ... unless a state saved before is restored: then it goes on with the old value.
+    fmu.slave.setFMUstate(saved)
+    fmu.slave.freeFMUstate(saved)
+    fmu.slave.exitInitializationMode()
     fmu.step_to(1.0)
 
 
@@ -215,12 +223,15 @@ def test_unknown_value_reference_and_wrong_types(fmu):
 def test_calls_in_the_wrong_state(fmu):
     fmu.slave.reset()  # instantiated, not initialised
     expect_error(fmu.slave.doStep, 0.0, 1.0)
-    expect_error(fmu.slave.exitInitializationMode)
-    assert "not allowed in the current state" in fmu.errors()[-1]
-    fmu.start()
-    expect_error(fmu.slave.doStep, 5.0, 1.0)  # not the FMU's time
-    expect_error(fmu.slave.doStep, 0.0, -1.0)
-    fmu.step_to(1.0)  # still usable
+    assert "not allowed in Instantiated" in fmu.errors()[-1]
+    expect_error(fmu.slave.exitInitializationMode)  # now in Error (FMI 2.0.4 2.1.3)
+    assert "not allowed in Error" in fmu.errors()[-1]
+    fmu.start()  # fmi2Reset leads out of Error
+    refused_and_restored(fmu, fmu.slave.doStep, 5.0, 1.0)  # not the FMU's time
+    refused_and_restored(fmu, fmu.slave.doStep, 0.0, -1.0)
+    refused_and_restored(fmu, fmu.slave.doStep, 0.0, 0.0)  # both standards: h > 0
+    refused_and_restored(fmu, fmu.slave.doStep, 0.0, -0.0)
+    fmu.step_to(1.0)  # restored, usable
 
 
 def test_tolerances_cvode_cannot_meet_are_rejected_where_they_enter():
@@ -232,7 +243,7 @@ def test_tolerances_cvode_cannot_meet_are_rejected_where_they_enter():
         fmu.slave.reset()
         fmu.slave.setupExperiment(startTime=0.0)
         fmu.slave.enterInitializationMode()
-        expect_error(lambda: fmu.set(rtol=1e-18))
+        refused_and_restored(fmu, lambda: fmu.set(rtol=1e-18))
         assert "rtol" in fmu.errors()[-1] and "[1e-15, 0.1]" in fmu.errors()[-1]
         fmu.set(atol=1e-30, sigma=0.5)
         fmu.slave.exitInitializationMode()

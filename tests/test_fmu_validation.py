@@ -17,7 +17,7 @@ from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Slave
 
 from harness.fmu.fmi2_logging import Fmi2Callbacks
-from tests.fmu_support import FMU3_PATH, FMU_PATH, LoggedSlave, expect_error
+from tests.fmu_support import FMU3_PATH, FMU_PATH, LoggedSlave, expect_error, refused_and_restored
 
 OUTPUTS_REAL = ("u", "v", "F_contact", "v_impact", "t_impact", "F_g", "phi", "kappa")
 
@@ -43,7 +43,7 @@ def _init(fmu, t0=0.0):
 def test_out_of_range_values_are_refused_where_they_enter(fmu, name, value):
     _init(fmu)
     before = fmu.get(name)
-    expect_error(lambda: fmu.set(**{name: value}))
+    refused_and_restored(fmu, lambda: fmu.set(**{name: value}))
     assert name in fmu.errors()[-1] and "rejected" in fmu.errors()[-1]
     assert fmu.get(name) == before
     fmu.slave.exitInitializationMode()
@@ -62,12 +62,12 @@ def test_derived_quantities_that_would_overflow_are_refused(fmu):
 
 def test_absurd_times_are_refused(fmu):
     fmu.slave.reset()
-    expect_error(lambda: fmu.slave.setupExperiment(startTime=1e300))
+    refused_and_restored(fmu, lambda: fmu.slave.setupExperiment(startTime=1e300))
     assert "startTime" in fmu.errors()[-1]
     fmu.start()
-    expect_error(fmu.slave.doStep, 0.0, 1e14)
+    refused_and_restored(fmu, fmu.slave.doStep, 0.0, 1e14)
     assert "time range" in fmu.errors()[-1]
-    fmu.step_to(1.0)  # a refused step leaves the instance usable
+    fmu.step_to(1.0)  # restored to before the refused step, the instance goes on
 
 
 def _me_instance(msgs):
@@ -95,14 +95,18 @@ def test_model_exchange_states_and_time_are_checked():
         me.exitInitializationMode()
         me.enterContinuousTimeMode()
         me.setContinuousStates(_arr(0.001, -0.5), 2)
+        saved = me.getFMUstate()
         with pytest.raises(FMICallException):
             me.setContinuousStates(_arr(0.001, 1e308), 2)
         assert "1e+15" in msgs[-1]
         x = _arr(0.0, 0.0)
-        me.getContinuousStates(x, 2)
+        me.getContinuousStates(x, 2)  # allowed in the Error state (FMI 2.0.4 3.2.3)
         assert list(x) == [0.001, -0.5]  # kept
+        me.setFMUstate(saved)  # the documented way out of Error (FMI 2.0.4 2.1.3)
         with pytest.raises(FMICallException):
             me.setTime(1e300)
+        me.setFMUstate(saved)
+        me.freeFMUstate(saved)
         # the largest valid states give finite derivatives
         me.setContinuousStates(_arr(1e15, -1e15), 2)
         dx = _arr(0.0, 0.0)
@@ -122,11 +126,17 @@ def test_fmi3_refuses_the_same_values():
     try:
         with pytest.raises(FMICallException):
             s.enterInitializationMode(startTime=1e300)
+        s.reset()  # FMI 3.0 (2.2.3): after fmi3Error the instance is Terminated until reset
         s.enterInitializationMode(startTime=0.0)
+        saved = s.getFMUState()
         for name, bad in (("Omega", 1.8e308), ("sigma", 1e308), ("u0", -1e296),
                           ("F_ext", float("nan"))):
             with pytest.raises(FMICallException):
                 s.setFloat64([vr[name]], [bad])
+            with pytest.raises(FMICallException):  # Terminated: no initialisation to leave
+                s.exitInitializationMode()
+            s.setFMUState(saved)  # back to Initialization Mode, values as before
+        s.freeFMUState(saved)
         s.exitInitializationMode()
         s.doStep(0.0, 1.0)
         assert np.all(np.isfinite(s.getFloat64([vr[n] for n in OUTPUTS_REAL])))

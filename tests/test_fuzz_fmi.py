@@ -128,3 +128,30 @@ def test_minimise_keeps_what_the_failure_needs() -> None:
 
     small = runner.minimise(seq, fails)
     assert [a["i"] for a in small["actions"]] == [3, 17, 31]
+
+
+def test_the_standard_model_flags_an_illegal_call_answered_ok() -> None:
+    """The fuzzer's state-machine oracle (issue 19): fed the calls of an FMU that accepts a call
+    the standard forbids, it reports; the standard's transitions move it (Error -> error state,
+    FMI 3.0 -> Terminated; Reset -> Instantiated; SetFMUState -> unknown, not judged)."""
+    from tests.fuzz.standard_model import StateModel
+
+    found: list[str] = []
+    m = StateModel("fmi2cs")
+    m.feed("fmi2DoStep", 0, found.append)  # doStep in Instantiated answered OK
+    assert found and "fmi2DoStep" in found[0]
+    m.feed("fmi2SetupExperiment", 3, found.append)  # allowed, failed: Error state
+    assert m.state == "Error"
+    m.feed("fmi2Terminate", 0, found.append)  # not allowed in Error
+    assert len(found) == 2
+    m.feed("fmi2Reset", 0, found.append)
+    assert m.state == "Instantiated"
+    m3 = StateModel("fmi3cs_event")
+    for f in ("fmi3EnterInitializationMode", "fmi3ExitInitializationMode"):
+        m3.feed(f, 0, found.append)
+    assert m3.state == "Event"
+    m3.feed("fmi3DoStep", 3, found.append)  # refused as it must be: no finding, Terminated
+    assert m3.state == "Terminated" and len(found) == 2
+    m3.feed("fmi3SetFMUState", 0, found.append)
+    m3.feed("fmi3DoStep", 0, found.append)  # unknown state: not judged
+    assert len(found) == 2

@@ -10,6 +10,8 @@ parent process, runner.py), and in this process
   variables as they were;
 * ``roundtrip``: a state serialised and deserialised restores the very same variables;
 * ``fatal``: no call answers fmi2Fatal/fmi3Fatal;
+* ``illegal-ok``: no call the standard's state machine does not allow in the instance's state
+  (tests/fmi_standard.py, followed by tests/fuzz/standard_model.py) is answered OK or Warning;
 * ``bricked``: at the end of every sequence, whatever happened, reset + a fresh initialisation +
   one step work and give finite values.
 
@@ -26,6 +28,7 @@ from typing import Any
 
 from tests.fuzz.bindings import DISCARD, ERROR, FATAL, OK, WARNING, Fmi2, Fmi3
 from tests.fuzz.sequences import interface_is_me
+from tests.fuzz.standard_model import RecordingLibrary, StateModel
 
 PASSED = (OK, WARNING)
 
@@ -97,6 +100,10 @@ class Executor:
 
     def __init__(self, lib: Fmi2 | Fmi3, interface: str) -> None:
         self.lib = lib
+        if not isinstance(lib.lib, RecordingLibrary):
+            lib.lib = RecordingLibrary(lib.lib)
+        self.recorder: RecordingLibrary = lib.lib
+        self.model = StateModel(interface)
         self.interface = interface
         self.me = interface_is_me(interface)
         self.calls = 0
@@ -121,7 +128,16 @@ class Executor:
             early_return=self.interface in ("fmi3cs_event", "fmi3cs_intermediate"),
             intermediate=self.interface == "fmi3cs_intermediate")
 
+    def _judge(self) -> None:
+        """Replays the FMI calls made since the last judgement through the standard's model."""
+        def fail(message: str) -> None:
+            raise Violation("illegal-ok", message)
+        calls, self.recorder.calls = self.recorder.calls, []
+        for name, status in calls:
+            self.model.feed(name, status, fail)
+
     def _check(self, fn: str, status: int) -> int:
+        self._judge()
         self.calls += 1
         if status == FATAL:
             raise Violation("fatal", f"{fn} returned Fatal: {self.last_message()}")
@@ -135,7 +151,11 @@ class Executor:
         return self.lib.messages[-1] if self.lib.messages else "(no message)"
 
     def snapshot(self) -> list | None:
-        """All variables' values, or None where the FMU does not give them now."""
+        """All variables' values, or None where the FMU does not give them now (or the standard
+        does not allow reading them: Instantiated)."""
+        self._judge()
+        if not self.model.getters_allowed():
+            return None
         out: list = []
         for kind, vrs in (("real", self.reals), ("int", self.ints), ("bool", self.bools)):
             if not vrs:
@@ -154,6 +174,9 @@ class Executor:
     def now(self) -> float:
         if self.me:
             return self.me_time
+        self._judge()
+        if not self.model.getters_allowed():
+            return 0.0
         if self.time_vr is not None:
             st, vals = self.lib.get("real", [self.time_vr])
             self._check("get time", st)
@@ -174,6 +197,7 @@ class Executor:
                 dt = time.perf_counter() - t0
                 if dt > self.slowest[0]:
                     self.slowest = (dt, repr(a))
+            self._judge()
             self.final = self.snapshot_quiet()
             if expect_error and not self.errors:
                 raise Violation("accepted-extreme", "every call of the sequence returned OK")
@@ -281,13 +305,14 @@ class Executor:
         vrs, kind = a["vrs"], a["kind"]
         values = [bool(x) for x in a["values"]] if kind == "bool" else a["values"]
         before = None
-        if len(vrs) == 1:
+        self._judge()
+        if len(vrs) == 1 and self.model.getters_allowed():
             st, b = self.lib.get(kind, vrs)
             before = b if self._check("get", st) in PASSED else None
         st = self._check("set", self.lib.set(kind, vrs, values))
         if st in PASSED:
             self.snapshot()
-        elif before is not None:
+        elif before is not None and self.model.getters_allowed():
             st2, after = self.lib.get(kind, vrs)
             if self._check("get", st2) in PASSED and not _same(before, after):
                 raise Violation("not-atomic", f"refused set {kind} {vrs}={values} changed the "
