@@ -55,7 +55,7 @@ THETA = 0.5  # strobe half a period away from the grazing phase t = n
 def twin_fmu() -> Path:
     """The twin as the set-up script builds it; rebuilt here if missing or older than its
     sources, so that the tests never run a stale twin."""
-    sources = list(TWIN_SRC.glob("*.py"))
+    sources = [*TWIN_SRC.glob("*.py"), *TWIN_SRC.glob("*.c")]
     if not TWIN_FMU.exists() or max(p.stat().st_mtime for p in sources) > TWIN_FMU.stat().st_mtime:
         subprocess.run(
             [sys.executable, str(TWIN_SRC / "build.py"), "--out", str(TWIN_FMU)],
