@@ -55,7 +55,7 @@ THETA = 0.5  # strobe half a period away from the grazing phase t = n
 def twin_fmu() -> Path:
     """The twin as the set-up script builds it; rebuilt here if missing or older than its
     sources, so that the tests never run a stale twin."""
-    sources = list(TWIN_SRC.glob("*.py"))
+    sources = [*TWIN_SRC.glob("*.py"), *TWIN_SRC.glob("*.c")]
     if not TWIN_FMU.exists() or max(p.stat().st_mtime for p in sources) > TWIN_FMU.stat().st_mtime:
         subprocess.run(
             [sys.executable, str(TWIN_SRC / "build.py"), "--out", str(TWIN_FMU)],
@@ -607,6 +607,7 @@ int main(int argc, char **argv) {
     if (!h) { printf("dlopen: %s\n", dlerror()); return 1; }
     LOAD(fmi2Instantiate) LOAD(fmi2SetupExperiment) LOAD(fmi2EnterInitializationMode)
     LOAD(fmi2ExitInitializationMode) LOAD(fmi2DoStep) LOAD(fmi2GetReal) LOAD(fmi2SetReal)
+    LOAD(fmi2GetInteger)
     LOAD(fmi2Terminate) LOAD(fmi2FreeInstance)
     fmi2CallbackFunctions cb = {logger, calloc, free, NULL, NULL};
     fmi2Component c = fmi2Instantiate("c", fmi2CoSimulation, argv[2], argv[3], &cb, fmi2False,
@@ -618,10 +619,16 @@ int main(int argc, char **argv) {
     fmi2Real x[2] = {-2.2, 0.0};
     fmi2SetReal(c, vr, 2, x);
     if (fmi2ExitInitializationMode(c) != fmi2OK) { printf("init failed\n"); return 1; }
-    for (int k = 0; k < 10; ++k)
-        if (fmi2DoStep(c, 0.5 + k, 1.0, fmi2True) != fmi2OK) { printf("step failed\n"); return 1; }
     fmi2ValueReference out[2] = {13, 14};  /* u, v */
+    fmi2ValueReference imp[1] = {15};  /* impacts */
     fmi2Real y[2];
+    fmi2Integer n[1];
+    for (int k = 0; k < 10; ++k) {
+        if (fmi2DoStep(c, 0.5 + k, 1.0, fmi2True) != fmi2OK) { printf("step failed\n"); return 1; }
+        fmi2GetReal(c, out, 2, y);
+        fmi2GetInteger(c, imp, 1, n);
+        printf("period %.17g %.17g %.17g %d\n", 1.5 + k, y[0], y[1], (int)n[0]);
+    }
     fmi2GetReal(c, out, 2, y);
     printf("state %.17g %.17g\n", y[0], y[1]);
     fmi2Terminate(c);
@@ -669,13 +676,14 @@ def test_c_host_needs_no_python_environment(twin_fmu: Path, tmp_path: Path) -> N
     recipe of the README (preload and both variables) still works."""
     args, python_env = _c_importer(twin_fmu, tmp_path, _cc())
     env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
-    states = []
+    states, outputs = [], []
     for extra in ({}, python_env):
         run = subprocess.run(args, env={**env, **extra}, capture_output=True, text=True,
                              timeout=120)
         assert run.returncode == 0, run.stdout + run.stderr
         assert "log 3" not in run.stdout and "log 4" not in run.stdout
         states.append([float(x) for x in run.stdout.split("state")[1].split()])
+        outputs.append(run.stdout)
 
     s = Slave(twin_fmu)
     try:
@@ -686,6 +694,20 @@ def test_c_host_needs_no_python_environment(twin_fmu: Path, tmp_path: Path) -> N
             np.testing.assert_allclose(got, s.state(), rtol=0, atol=1e-12)
     finally:
         s.close()
+
+    # per period against the closed form, at the FMU's default parameters
+    start = {v.name: v.start for v in read_model_description(str(twin_fmu)).modelVariables}
+    wall = {v: k for k, v in WALLS.items()}[int(start["wall"])]
+    osc = ExactOscillator(float(start["nu"]), float(start["Omega"]), float(start["sigma"]),
+                          r=float(start["r"]), Gamma=float(start["Gamma"]), wall=wall)
+    rows = np.array([[float(x) for x in line.split()[1:]]
+                     for line in outputs[0].splitlines() if line.startswith("period ")])
+    exact, counts = osc.strobe(-2.2, 0.0, rows[:, 0], 0.5)
+    assert counts[-1] > 0  # the run hits the wall
+    np.testing.assert_array_equal(rows[:, 3], counts)
+    np.testing.assert_allclose(rows[:, 1:3], exact, rtol=0, atol=1e-8)
+    print("C driver vs closed form per period: u", np.abs(rows[:, 1] - exact[:, 0]).max(),
+          "v", np.abs(rows[:, 2] - exact[:, 1]).max(), "impacts", int(counts[-1]))
 
 
 @pytest.mark.parametrize(
