@@ -180,12 +180,13 @@ def cmd_strobe(args: argparse.Namespace) -> int:
     orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
     ly = None
     if s.lyapunov:
-        from ..dynamics.classify import DYNAMICS_NAMES, classify_dynamics, still_settling
+        from ..dynamics.classify import DECIDED, DYNAMICS_NAMES, REASON_NAMES, explain_dynamics, still_settling
         from ..dynamics.lyapunov import lyapunov_continued
 
         ly = lyapunov_continued(sim, exp.params, s.lyapunov, exact)
         settling = orbit.periodic and still_settling(r.u, r.v, orbit.period, s.tol)
-        dynamics = DYNAMICS_NAMES[classify_dynamics(orbit.period, settling, ly.largest, ly.largest_uncertainty)]
+        code, reason = explain_dynamics(orbit.period, settling, ly.largest, ly.largest_uncertainty)
+        dynamics = DYNAMICS_NAMES[code] + ("" if reason == DECIDED else f" ({REASON_NAMES[reason]})")
     attrs = provenance(exp.as_attrs(), exp.model, "serial", time.perf_counter() - t_start, _command_line(args))
     ds = strobe_dataset(r, orbit, attrs)
     if ly is not None:

@@ -141,6 +141,7 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         "period": np.full(shape, -1, dtype=np.int64),
         "orbit_impacts": np.full(shape, -1, dtype=np.int64),
         "dynamics": np.full(shape, -1, dtype=np.int64),
+        "dynamics_reason": np.full(shape, -1, dtype=np.int64),
         "lyapunov": np.full(shape + [2], np.nan),
         "lyapunov_err": np.full(shape + [2], np.nan),
     }
@@ -169,16 +170,23 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         coords=coords,
         attrs=dict(attrs),
     )
-    from ..dynamics.classify import DYNAMICS_NAMES
+    from ..dynamics.classify import DYNAMICS_NAMES, REASON_KEYS, REASON_NAMES
 
     codes = sorted(DYNAMICS_NAMES)
     ds["dynamics"] = (dims, arrays["dynamics"], {
         "long_name": "dynamics of the orbit", "flag_values": np.array(codes, dtype=np.int64),
         "flag_meanings": " ".join(DYNAMICS_NAMES[c].replace(" ", "_").replace("-", "_") for c in codes),
-        "comment": "periodic: periodic samples, converged; chaotic: largest Lyapunov exponent > 0 by more "
-                   "than 3 standard errors; quasi_periodic: largest exponent 0 within 3 standard errors (band "
-                   "< 0.02); not_converged: largest exponent < 0 (attracting orbit not reached), still "
-                   "settling, or undecided; unclassified: not periodic and no exponents (sampling.lyapunov = 0)"})
+        "comment": "periodic: a period found and converged, or a period found and largest Lyapunov exponent "
+                   "< 0; chaotic: no period, largest exponent > 0 by more than 3 standard errors; "
+                   "quasi_periodic: no period, largest exponent 0 within 3 standard errors (band <= 0.02); "
+                   "not_converged: neither the period nor the exponent decides (why: dynamics_reason); "
+                   "unclassified: no period and no exponents (sampling.lyapunov = 0)"})
+    reasons = sorted(REASON_NAMES)
+    ds["dynamics_reason"] = (dims, arrays["dynamics_reason"], {
+        "long_name": "why dynamics is not_converged or unclassified (0: decided; -1: not computed)",
+        "flag_values": np.array(reasons, dtype=np.int64),
+        "flag_meanings": " ".join(REASON_KEYS[c] for c in reasons),
+        "comment": "; ".join(f"{REASON_KEYS[c]}: {REASON_NAMES[c]}" for c in reasons)})
     if sampling.lyapunov:
         ds = ds.assign_coords(exponent=[1, 2])
         ds["lyapunov"] = (dims + ["exponent"], arrays["lyapunov"], {
@@ -362,7 +370,8 @@ def run_sweep(
         first = first_of[key]
         if first:  # the leading points came from the checkpoint
             for name in RESULT_FIELDS:
-                arrays[name][:first] = np.asarray(rows[name][:first])
+                if name in rows:  # a checkpoint written before a field existed lacks it
+                    arrays[name][:first] = np.asarray(rows[name][:first])
         if store is not None:
             store.save(key, arrays)
             store.remove_partial(key)
