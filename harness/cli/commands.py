@@ -291,9 +291,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if "lyapunov" in ds:
         from ..dynamics.classify import DYNAMICS_NAMES
 
-        codes, counts = np.unique(ds["dynamics"].values, return_counts=True)
+        ran = ds["period"].values >= 0  # -1: a start inside a rigid wall, not run
+        codes, counts = np.unique(ds["dynamics"].values[ran], return_counts=True)
+        invalid = int(np.sum(~ran))
         print("  dynamics (Lyapunov exponents over " f"{exp.sampling.lyapunov} periods): "
-              + ", ".join(f"{DYNAMICS_NAMES[int(c)]} {n}" for c, n in zip(codes, counts)))
+              + ", ".join([f"{DYNAMICS_NAMES[int(c)]} {n}" for c, n in zip(codes, counts)]
+                          + ([f"invalid start {invalid}"] if invalid else [])))
     if spec.scan_param is None:
         for direction in ds["direction"].values:
             sel = ds.sel(direction=direction)
@@ -303,7 +306,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     print(f"wrote {out}")
     if plot:
         # matplotlib only now: its 0.8 s import would sit on the serial path of every sweep
-        from ..io.plots import bifurcation_diagram, period_map
+        from ..io.sweep_plots import bifurcation_diagram, period_map
 
         drawn = period_map(ds, plot) if spec.scan_param else bifurcation_diagram(ds, plot)
         print(f"plot: {drawn}")
