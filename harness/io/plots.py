@@ -113,6 +113,13 @@ def jacobian_plot(ds: xr.Dataset, path: str | os.PathLike) -> Path:
         err = ds["error"].values[x > 0]
         if np.any(err > 0):  # below this line an element is difference noise, not signal
             axes[0].loglog(xs[err > 0], err[err > 0], ":", color="0.5", lw=1.2, label="estimated error of J")
+    if "exponent" in ds:  # the fitted regimes: range shaded, exponent +- standard error
+        for k, regime in enumerate(ds["regime"].values):
+            q, se = float(ds["exponent"].values[k]), float(ds["exponent_stderr"].values[k])
+            if np.isfinite(q):
+                lo, hi = float(ds["fit_x_min"].values[k]), float(ds["fit_x_max"].values[k])
+                axes[0].axvspan(lo, hi, color=("tab:green", "tab:purple", "tab:olive")[k % 3], alpha=0.08,
+                                label=f"fit ({regime}): |J11 - P11| ~ x^({q:+.3f} +- {se:.1g})")
     axes[0].set_xlabel("x (wall-free penetration at t = n)")
     axes[0].set_ylabel("|J - P|")
     axes[0].legend(fontsize=8)
