@@ -100,7 +100,13 @@ def task_rows(task: SweepTask) -> list[tuple[str, float]]:
 def sweep_fingerprint(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, float],
                       sampling: SamplingSpec, fmu_sha256: str) -> str:
     """Identity of a sweep for checkpoints: same fingerprint, same results."""
-    return fingerprint({
+    return fingerprint(sweep_identity(spec, params, state0, sampling, fmu_sha256))
+
+
+def sweep_identity(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, float],
+                   sampling: SamplingSpec, fmu_sha256: str) -> dict[str, Any]:
+    """What a sweep's results depend on (the checkpoint's manifest keeps it, to say what changed)."""
+    return {
         "tasks": 2,  # 2: up+down as one loop task, chains checkpointed per point
         "fmu": fmu_sha256,
         "params": dict(params),
@@ -111,7 +117,7 @@ def sweep_fingerprint(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[
         "modes": list(spec.modes),
         "scan_param": spec.scan_param,
         "scan_values": None if spec.scan_values is None else np.asarray(spec.scan_values, dtype=float),
-    })
+    }
 
 
 # ----------------------------------------------------------------------------------------
@@ -299,7 +305,8 @@ def run_sweep(
 
     store = None
     if checkpoint is not None:
-        store = Checkpoint(checkpoint, sweep_fingerprint(spec, base, state0, sampling, sha))
+        identity = sweep_identity(spec, base, state0, sampling, sha)
+        store = Checkpoint(checkpoint, fingerprint(identity), identity=identity)
     results: dict[str, dict[str, np.ndarray]] = {}
     todo: dict[str, SweepTask] = {}
     # leading points of chains: from the checkpoint, then as the chains report them
