@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..config import Layered, RunSpec, SamplingSpec, SweepSpec, _number, default_fmu_path, load_toml
+from ..config import Layered, RunSpec, SamplingSpec, SweepSpec, _number, default_fmu_path, load_toml, parse_modes
 from ..errors import HarnessInputError
 
 
@@ -95,8 +95,13 @@ class Experiment:
             params.pop(key, None)  # the state travels separately
         sampling = found.check(SamplingSpec.from_layers, layers)
         run = found.check(RunSpec.from_layers, layers)
-        if any(section == "sweep" for section, _ in layers.origin):
-            found.check(SweepSpec.from_layers, layers, model)  # a [sweep] given is checked with the rest
+        # the [sweep] names and modes are checked with the rest; its grid later, by the budget
+        # first (a huge --num must be refused before it is allocated)
+        for key in ("param", "scan_param"):
+            if ("sweep", key) in layers.origin and layers.get("sweep", key) is not None:
+                found.check(model.check_settable, str(layers.get("sweep", key)), layers.arg("sweep", key))
+        if ("sweep", "mode") in layers.origin:
+            found.check(parse_modes, layers.get("sweep", "mode"), layers.arg("sweep", "mode"))
         found.raise_if_any()
         return cls(
             fmu_path=str(model.path),
