@@ -14,9 +14,10 @@ import pytest
 from matplotlib.colors import to_rgba
 
 from harness import SamplingSpec, SweepSpec, read_netcdf, run_sweep
-from harness.dynamics.classify import CHAOTIC, NOT_CONVERGED, PERIODIC, QUASI_PERIODIC, SIGMAS, UNCLASSIFIED
+from harness.dynamics.classify import (CHAOTIC, DYNAMICS_NAMES, NOT_CONVERGED, PERIODIC, QUASI_PERIODIC, SIGMAS,
+                                       UNCLASSIFIED)
 from harness.io import sweep_plots
-from harness.io.class_map import NON_PERIODIC_COLOURS, orbit_classes, wrap_title
+from harness.io.class_map import NON_PERIODIC_COLOURS, flag_names, orbit_classes, wrap_title
 from tests.cli_support import run_main
 
 
@@ -48,7 +49,8 @@ def test_orbit_classes_one_per_class() -> None:
     impacts = np.array([[1, 1, 2, -1, -1, -1, -1, -1], [1, 2, 2, -1, -1, -1, 1, -1]])
     dyn = np.array([[PERIODIC, PERIODIC, PERIODIC, CHAOTIC, QUASI_PERIODIC, NOT_CONVERGED, UNCLASSIFIED, UNCLASSIFIED],
                     [PERIODIC, PERIODIC, PERIODIC, CHAOTIC, CHAOTIC, NOT_CONVERGED, PERIODIC, UNCLASSIFIED]])
-    codes, classes = orbit_classes(period, impacts, dyn)
+    names = {c: DYNAMICS_NAMES[c].replace(" ", "_").replace("-", "_") for c in DYNAMICS_NAMES}  # as in the NetCDF
+    codes, classes = orbit_classes(period, impacts, dyn, names)
     labels = [c.label for c in classes]
     assert labels == ["P2, 1 impact", "P2, 2 impacts", "P3, 1 impact", "P6, 2 impacts", "chaotic", "quasi-periodic",
                       "not converged", "no period (no exponents)", "invalid start"]
@@ -57,7 +59,7 @@ def test_orbit_classes_one_per_class() -> None:
     assert labels[codes[0, 7]] == "invalid start" and labels[codes[1, 1]] == "P2, 2 impacts"
     assert len({str(c.colour) for c in classes}) == len(classes)  # every class its own colour
     # only what occurs: a map of one periodic class and chaos has two entries
-    _, few = orbit_classes(np.array([2, 0]), np.array([1, -1]), np.array([PERIODIC, CHAOTIC]))
+    _, few = orbit_classes(np.array([2, 0]), np.array([1, -1]), np.array([PERIODIC, CHAOTIC]), names)
     assert [c.label for c in few] == ["P2, 1 impact", "chaotic"]
     assert few[1].colour == NON_PERIODIC_COLOURS["chaotic"]
 
@@ -119,7 +121,8 @@ def test_u0_v0_scan_marks_starts_inside_the_wall_and_draws_every_class(tmp_path,
     assert (ds["period"].values[inside] == -1).all() and np.isnan(ds["u"].values[inside]).all()
     assert (ds["period"].values[~inside] >= 0).all() and np.isfinite(ds["u"].values[~inside]).all()
     assert "invalid start 2" in stdout
-    _, classes = orbit_classes(ds["period"].values, ds["orbit_impacts"].values, ds["dynamics"].values)
+    _, classes = orbit_classes(ds["period"].values, ds["orbit_impacts"].values, ds["dynamics"].values,
+                               flag_names(ds["dynamics"]))
     legend = seen["legends"][0]
     assert [t.rsplit(" (", 1)[0] for t in legend] == [c.label for c in classes]
     assert any(t.startswith("invalid start (33%)") for t in legend)

@@ -265,3 +265,27 @@ def classify_dynamics(period: int, settling: bool, largest: float, uncertainty: 
     """The code of :func:`explain_dynamics` alone (periodic, quasi-periodic, chaotic, not
     converged or unclassified)."""
     return explain_dynamics(period, settling, largest, uncertainty, sigmas, zero_band)[0]
+
+
+def dynamics_attrs() -> dict:
+    """CF attributes of the sweeps' ``dynamics`` variable (codes, meanings, the rules)."""
+    codes = sorted(DYNAMICS_NAMES)
+    return {
+        "long_name": "dynamics of the orbit", "flag_values": np.array(codes, dtype=np.int64),
+        "flag_meanings": " ".join(DYNAMICS_NAMES[c].replace(" ", "_").replace("-", "_") for c in codes),
+        "sigmas": SIGMAS,  # an exponent is positive / zero / negative beyond this many standard errors
+        "comment": "periodic: a period found and converged, or a period found and largest Lyapunov exponent "
+                   "< 0; chaotic: no period, largest exponent > 0 by more than 3 standard errors; "
+                   f"quasi_periodic: no period, largest exponent 0 within 3 standard errors (band <= {ZERO_BAND}); "
+                   "not_converged: neither the period nor the exponent decides (why: dynamics_reason); "
+                   "unclassified: no period and no exponents (sampling.lyapunov = 0)"}
+
+
+def reason_attrs() -> dict:
+    """CF attributes of the sweeps' ``dynamics_reason`` variable."""
+    reasons = sorted(REASON_NAMES)
+    return {
+        "long_name": "why dynamics is not_converged or unclassified (0: decided; -1: not computed)",
+        "flag_values": np.array(reasons, dtype=np.int64),
+        "flag_meanings": " ".join(REASON_KEYS[c] for c in reasons),
+        "comment": "; ".join(f"{REASON_KEYS[c]}: {REASON_NAMES[c]}" for c in reasons)}

@@ -59,8 +59,17 @@ def impacts_label(period: int, impacts: int) -> str:
     return f"P{period}, {impacts} impact{'' if impacts == 1 else 's'}"
 
 
-def orbit_classes(period: np.ndarray, orbit_impacts: np.ndarray,
-                  dynamics: np.ndarray | None = None) -> tuple[np.ndarray, list[PlotClass]]:
+def flag_names(variable: Any) -> dict[int, str]:
+    """code -> meaning of a CF flag variable (``flag_values``, ``flag_meanings``), e.g. the
+    sweeps' ``dynamics``: {-1: "unclassified", 0: "not_converged", 1: "periodic", ...}.  The
+    Dataset describes its own codes, so the figures need nothing from the layer that made them."""
+    values = np.atleast_1d(variable.attrs.get("flag_values", []))
+    meanings = str(variable.attrs.get("flag_meanings", "")).split()
+    return {int(v): m for v, m in zip(values, meanings)}
+
+
+def orbit_classes(period: np.ndarray, orbit_impacts: np.ndarray, dynamics: np.ndarray | None = None,
+                  names: dict[int, str] | None = None) -> tuple[np.ndarray, list[PlotClass]]:
     """Class codes of a sweep's points, and the classes that occur.
 
     Parameters
@@ -68,8 +77,11 @@ def orbit_classes(period: np.ndarray, orbit_impacts: np.ndarray,
     period, orbit_impacts : array_like of int
         The sweep's variables (period 0: none found; -1: the point was not run, an invalid start).
     dynamics : array_like of int, optional
-        The sweep's ``dynamics`` (codes of :mod:`harness.dynamics.classify`); splits the points
-        without a period into quasi-periodic, chaotic, not converged and no exponents.
+        The sweep's ``dynamics``; splits the points without a period into quasi-periodic,
+        chaotic, not converged and no exponents.
+    names : dict, optional
+        Meaning of each ``dynamics`` code (:func:`flag_names` of the variable; "chaotic",
+        "quasi_periodic", "not_converged", ...).
 
     Returns
     -------
@@ -78,31 +90,28 @@ def orbit_classes(period: np.ndarray, orbit_impacts: np.ndarray,
     classes : list of PlotClass
         Periodic classes sorted by (period, impacts), then the non-periodic ones that occur.
     """
-    from ..dynamics.classify import CHAOTIC, NOT_CONVERGED, PERIODIC, QUASI_PERIODIC
-
     period = np.asarray(period).astype(int)
     impacts = np.asarray(orbit_impacts).astype(int)
     dyn = np.full(period.shape, -1) if dynamics is None else np.asarray(dynamics).astype(int)
-    names = np.empty(period.shape, dtype=object)
+    meaning = {code: m.replace("_", "-" if m == "quasi_periodic" else " ") for code, m in (names or {}).items()}
+    label = np.empty(period.shape, dtype=object)
     pairs = sorted({(int(p), int(k)) for p, k in zip(period.ravel(), impacts.ravel()) if p > 0})
     for idx in np.ndindex(period.shape):
-        p, d = period[idx], dyn[idx]
+        p, m = period[idx], meaning.get(int(dyn[idx]), "unclassified")
         if p > 0:
-            names[idx] = (p, int(impacts[idx]))
+            label[idx] = (p, int(impacts[idx]))
         elif p < 0:
-            names[idx] = "invalid start"
-        elif d == CHAOTIC:
-            names[idx] = "chaotic"
-        elif d == QUASI_PERIODIC:
-            names[idx] = "quasi-periodic"
-        elif d in (NOT_CONVERGED, PERIODIC):  # PERIODIC without a period cannot happen; shown honestly
-            names[idx] = "not converged"
+            label[idx] = "invalid start"
+        elif m in ("chaotic", "quasi-periodic", "not converged"):
+            label[idx] = m
+        elif m == "periodic":  # no period but labelled periodic cannot happen; shown as undecided
+            label[idx] = "not converged"
         else:
-            names[idx] = "no period (no exponents)"
-    order: list[Any] = list(pairs) + [n for n in NON_PERIODIC_COLOURS if np.any(names == n)]
+            label[idx] = "no period (no exponents)"
+    order: list[Any] = list(pairs) + [n for n in NON_PERIODIC_COLOURS if np.any(label == n)]
     colours = periodic_palette(len(pairs)) + [NON_PERIODIC_COLOURS[n] for n in order[len(pairs):]]
     index = {name: i for i, name in enumerate(order)}
-    codes = np.vectorize(lambda n: index[n], otypes=[int])(names) if names.size else np.zeros(period.shape, int)
+    codes = np.vectorize(lambda n: index[n], otypes=[int])(label) if label.size else np.zeros(period.shape, int)
     classes = [PlotClass(impacts_label(*name) if isinstance(name, tuple) else name, colour, int(np.sum(codes == i)))
                for i, (name, colour) in enumerate(zip(order, colours))]
     return codes, classes

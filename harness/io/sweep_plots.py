@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import xarray as xr
 
-from .class_map import axis_positions, class_legend, draw_class_map, orbit_classes, wrap_title
+from .class_map import axis_positions, class_legend, draw_class_map, flag_names, orbit_classes, wrap_title
 from .plots import DIRECTION_STYLE, _save, parameter_title, plt, section_label
 
 
@@ -49,17 +49,15 @@ def _period_panel(axp: plt.Axes, x: np.ndarray, period: np.ndarray, impacts: np.
         previous = (p, k)
 
 
-def _lyapunov_panel(axl: plt.Axes, x: np.ndarray, lam: np.ndarray, err: np.ndarray, dynamics: np.ndarray,
-                    style: dict) -> None:
-    """lambda_1 with its standard error (3 sigma bars: the classification's band), chaotic
-    points filled red."""
-    from ..dynamics.classify import CHAOTIC, SIGMAS
-
+def _lyapunov_panel(axl: plt.Axes, x: np.ndarray, lam: np.ndarray, err: np.ndarray, chaotic: np.ndarray,
+                    sigmas: float, style: dict) -> None:
+    """lambda_1 with error bars of ``sigmas`` standard errors (the classification's band),
+    chaotic points filled red."""
     colour = style.get("color")
     ok = np.isfinite(lam)
-    axl.errorbar(x[ok], lam[ok], yerr=SIGMAS * np.nan_to_num(err[ok]), linestyle="-", lw=0.8, marker=".", ms=4,
+    axl.errorbar(x[ok], lam[ok], yerr=sigmas * np.nan_to_num(err[ok]), linestyle="-", lw=0.8, marker=".", ms=4,
                  color=colour, ecolor=colour, elinewidth=0.8, capsize=1.5, alpha=0.85)
-    chaotic = ok & (dynamics == CHAOTIC)
+    chaotic = ok & chaotic
     axl.plot(x[chaotic], lam[chaotic], linestyle="none", marker="o", ms=5, markerfacecolor="tab:red",
              markeredgecolor="black", markeredgewidth=0.5)
 
@@ -71,6 +69,9 @@ def bifurcation_diagram(ds: xr.Dataset, path: str | os.PathLike, variable: str =
     param = ds.attrs.get("sweep.param") or [d for d in ds[variable].dims if d not in ("direction", "sample")][0]
     data, scan = _scan_slice(ds, scan_index)
     lyap = "lyapunov" in data
+    # the Dataset names its own codes and band (written by harness.runs.sweeps)
+    chaotic_codes = [c for c, m in flag_names(data["dynamics"]).items() if m == "chaotic"] if lyap else []
+    sigmas = float(data["dynamics"].attrs.get("sigmas", 3.0)) if lyap else 3.0
     ratios = [3, 1.3] + ([1.6] if lyap else [])
     fig, axes = plt.subplots(len(ratios), 1, figsize=(8, 6.8 if lyap else 6), sharex=True,
                              gridspec_kw={"height_ratios": ratios})
@@ -84,7 +85,7 @@ def bifurcation_diagram(ds: xr.Dataset, path: str | os.PathLike, variable: str =
         _period_panel(axp, x, sel["period"].values.astype(int), sel["orbit_impacts"].values.astype(int), style)
         if lyap:
             _lyapunov_panel(axes[2], x, sel["lyapunov"].values[:, 0], sel["lyapunov_err"].values[:, 0],
-                            sel["dynamics"].values, style)
+                            np.isin(sel["dynamics"].values, chaotic_codes), sigmas, style)
     ax.set_ylabel(section_label(variable, ds.attrs.get("sampling.theta", 0)))
     ax.legend(loc="best", markerscale=3, fontsize=8)
     title = f"Bifurcation diagram over {param}"
@@ -105,7 +106,7 @@ def bifurcation_diagram(ds: xr.Dataset, path: str | os.PathLike, variable: str =
         axl = axes[2]
         axl.axhline(0.0, color="black", lw=0.8)
         axl.set_ylabel("lambda_1\n(per period)", fontsize=9)
-        axl.text(1.0, 1.02, "bars: 3 standard errors; red: chaotic", transform=axl.transAxes, ha="right",
+        axl.text(1.0, 1.02, f"bars: {sigmas:g} standard errors; red: chaotic", transform=axl.transAxes, ha="right",
                  va="bottom", fontsize=7, color="0.3")
     axes[-1].set_xlabel(param)
     fig.tight_layout()
@@ -120,7 +121,8 @@ def period_map(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     directions = list(ds["direction"].values)
     data = ds.transpose("direction", scan, param, ...)
     dyn = data["dynamics"].values if "dynamics" in data else None
-    codes, classes = orbit_classes(data["period"].values, data["orbit_impacts"].values, dyn)
+    codes, classes = orbit_classes(data["period"].values, data["orbit_impacts"].values, dyn,
+                                   flag_names(data["dynamics"]) if dyn is not None else None)
     fig, axes = plt.subplots(1, len(directions), figsize=(4.6 * len(directions) + 2.2, 4.6), squeeze=False)
     x = ds[param].values
     y_values = ds[scan].values

@@ -213,11 +213,17 @@ def _plot_jacobian(ctx: Context, r: float, x: np.ndarray, scans: dict, fits: dic
             if f:
                 lo, hi = f["x_range"]
                 ax.axvspan(lo, hi, color=line.get_color(), alpha=0.06)
-                ax.annotate(f"{f['slope']:+.2f}", (hi, np.interp(hi, x, d)), fontsize=7, color=line.get_color())
+                # soft slopes at the right end of their range, hard ones at the left end: the hard
+                # ranges all end at the largest x, where labels there would sit on each other
+                at = hi if name == "soft" else lo
+                ax.annotate(f"{f['slope']:+.2f}", (at, np.interp(at, x, d)), textcoords="offset points",
+                            xytext=(3, -9) if name == "soft" else (-4, 5), ha="left" if name == "soft" else "right",
+                            fontsize=7, color=line.get_color())
     ax.set_xlabel("x (penetration of the wall-free orbit at t = n)")
     ax.set_ylabel("|J11 - P11| (impact contribution, coordinates at t = n)")
-    ax.set_title(f"Jacobian of the FMU's map, (nu, Omega) = ({NU}, {OMEGA}), r = {r:g}; "
-                 f"shaded: fitted soft (beta <= {SOFT_BETA:g}) / hard (beta >= {HARD_BETA:g}) ranges", fontsize=8)
+    ax.set_title(f"Jacobian of the FMU's map, (nu, Omega) = ({NU}, {OMEGA}), r = {r:g}\n"
+                 f"shaded: fitted soft (beta <= {SOFT_BETA:g}) / hard (beta >= {HARD_BETA:g}) ranges, slopes written",
+                 fontsize=9)
     ax.legend(fontsize=7)
     fig.tight_layout()
     path = ctx.out / f"{ctx.target}_jacobian.png"

@@ -176,23 +176,10 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         coords=coords,
         attrs=dict(attrs),
     )
-    from ..dynamics.classify import DYNAMICS_NAMES, REASON_KEYS, REASON_NAMES
+    from ..dynamics.classify import dynamics_attrs, reason_attrs
 
-    codes = sorted(DYNAMICS_NAMES)
-    ds["dynamics"] = (dims, arrays["dynamics"], {
-        "long_name": "dynamics of the orbit", "flag_values": np.array(codes, dtype=np.int64),
-        "flag_meanings": " ".join(DYNAMICS_NAMES[c].replace(" ", "_").replace("-", "_") for c in codes),
-        "comment": "periodic: a period found and converged, or a period found and largest Lyapunov exponent "
-                   "< 0; chaotic: no period, largest exponent > 0 by more than 3 standard errors; "
-                   "quasi_periodic: no period, largest exponent 0 within 3 standard errors (band <= 0.02); "
-                   "not_converged: neither the period nor the exponent decides (why: dynamics_reason); "
-                   "unclassified: no period and no exponents (sampling.lyapunov = 0)"})
-    reasons = sorted(REASON_NAMES)
-    ds["dynamics_reason"] = (dims, arrays["dynamics_reason"], {
-        "long_name": "why dynamics is not_converged or unclassified (0: decided; -1: not computed)",
-        "flag_values": np.array(reasons, dtype=np.int64),
-        "flag_meanings": " ".join(REASON_KEYS[c] for c in reasons),
-        "comment": "; ".join(f"{REASON_KEYS[c]}: {REASON_NAMES[c]}" for c in reasons)})
+    ds["dynamics"] = (dims, arrays["dynamics"], dynamics_attrs())
+    ds["dynamics_reason"] = (dims, arrays["dynamics_reason"], reason_attrs())
     if sampling.lyapunov:
         ds = ds.assign_coords(exponent=[1, 2])
         ds["lyapunov"] = (dims + ["exponent"], arrays["lyapunov"], {
