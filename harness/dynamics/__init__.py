@@ -1,5 +1,6 @@
 """The oscillator as a dynamical system: stroboscopic sampling (:mod:`.sampling`), orbit and
-dynamics classification (:mod:`.classify`), map Jacobians (:mod:`.jacobian`), Newton shooting of
+dynamics classification (:mod:`.classify`), map Jacobians (:mod:`.jacobian`) and the exponent of
+their singularity near grazing (:mod:`.singularity_fit`), Newton shooting of
 periodic orbits and window edges (:mod:`.shooting`), Lyapunov exponents (:mod:`.lyapunov`).
 
 Layer: above :mod:`harness.fmu` and :mod:`harness.io`; may import those, the ground
