@@ -97,8 +97,8 @@ def test_sweep_figure_has_a_lyapunov_panel(lyapunov_sweep, tmp_path, monkeypatch
     # chaotic points marked: exactly those the Dataset calls chaotic
     chaotic = sel["dynamics"].values == CHAOTIC
     assert chaotic.sum() >= 1 and (~chaotic).sum() >= 1
-    red = to_rgba("tab:red")
-    marked = [line for line in axl.get_lines() if to_rgba(line.get_markerfacecolor()) == red]
+    star = to_rgba(sweep_plots.CHAOTIC_COLOUR)
+    marked = [line for line in axl.get_lines() if to_rgba(line.get_markerfacecolor()) == star]
     assert len(marked) == 1
     np.testing.assert_allclose(marked[0].get_xdata(), x[chaotic])
     _titles_fit(seen)

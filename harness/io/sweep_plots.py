@@ -22,6 +22,10 @@ from .class_map import axis_positions, class_legend, draw_class_map, flag_names,
 from .plots import DIRECTION_STYLE, _save, parameter_title, plt, section_label
 
 
+#: Chaotic points in the Lyapunov panel (neither direction's colour).
+CHAOTIC_COLOUR = "gold"
+
+
 def _scan_slice(ds: xr.Dataset, scan_index: int) -> tuple[xr.Dataset, str | None]:
     scan = ds.attrs.get("sweep.scan_param")
     if isinstance(scan, str) and scan != "none" and scan in ds.dims:
@@ -52,13 +56,13 @@ def _period_panel(axp: plt.Axes, x: np.ndarray, period: np.ndarray, impacts: np.
 def _lyapunov_panel(axl: plt.Axes, x: np.ndarray, lam: np.ndarray, err: np.ndarray, chaotic: np.ndarray,
                     sigmas: float, style: dict) -> None:
     """lambda_1 with error bars of ``sigmas`` standard errors (the classification's band),
-    chaotic points filled red."""
+    chaotic points as gold stars (a colour no direction uses)."""
     colour = style.get("color")
     ok = np.isfinite(lam)
     axl.errorbar(x[ok], lam[ok], yerr=sigmas * np.nan_to_num(err[ok]), linestyle="-", lw=0.8, marker=".", ms=4,
                  color=colour, ecolor=colour, elinewidth=0.8, capsize=1.5, alpha=0.85)
     chaotic = ok & chaotic
-    axl.plot(x[chaotic], lam[chaotic], linestyle="none", marker="o", ms=5, markerfacecolor="tab:red",
+    axl.plot(x[chaotic], lam[chaotic], linestyle="none", marker="*", ms=9, markerfacecolor=CHAOTIC_COLOUR,
              markeredgecolor="black", markeredgewidth=0.5)
 
 
@@ -106,7 +110,7 @@ def bifurcation_diagram(ds: xr.Dataset, path: str | os.PathLike, variable: str =
         axl = axes[2]
         axl.axhline(0.0, color="black", lw=0.8)
         axl.set_ylabel("lambda_1\n(per period)", fontsize=9)
-        axl.text(1.0, 1.02, f"bars: {sigmas:g} standard errors; red: chaotic", transform=axl.transAxes, ha="right",
+        axl.text(1.0, 1.02, f"bars: {sigmas:g} standard errors; stars: chaotic", transform=axl.transAxes, ha="right",
                  va="bottom", fontsize=7, color="0.3")
     axes[-1].set_xlabel(param)
     fig.tight_layout()
