@@ -134,8 +134,12 @@ def class_legend(ax: Any, classes: Sequence[PlotClass], title: str | None = None
     from matplotlib.patches import Patch
 
     total = sum(c.count for c in classes) or 1
+
+    def share(count: int) -> str:  # a class that occurs never reads "0%"
+        return "<1%" if 0 < count < 0.005 * total else f"{count / total:.0%}"
+
     handles = [Patch(facecolor=c.colour, edgecolor="black", linewidth=0.6,
-                     label=f"{c.label} ({c.count / total:.0%})" if shares else c.label) for c in classes]
+                     label=f"{c.label} ({share(c.count)})" if shares else c.label) for c in classes]
     options = dict(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, frameon=False, title=title,
                    title_fontsize=8, borderaxespad=0.0)
     options.update(kwargs)
