@@ -2,7 +2,9 @@
 # One-shot, idempotent set-up on a fresh Debian machine:
 #   1. Debian packages (SUNDIALS for the FMU, a C toolchain, CMake),
 #   2. a virtual environment .venv with the project installed (editable),
-#   3. the FMUs in build/fmu/.
+#   3. the FMUs in build/fmu/: binaries for x86_64-linux, x86_64-windows and aarch64-linux, each
+#      with CVODE built from Debian's SUNDIALS source, and the sources (docs/platforms.md).
+#      IMPACT_NATIVE_ONLY=1: the Linux binary only, linked with libsundials-dev, no sources (fast).
 # Each step is skipped when nothing it depends on changed, so a second run takes seconds.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -13,6 +15,10 @@ log() { printf '[setup] %s\n' "$*" >&2; }
 # --- 1. Debian packages -------------------------------------------------------------------
 # libtbb12: the ecos co-simulation master (ecospy, a test dependency) links against it.
 apt_pkgs=(libsundials-dev build-essential cmake zip valgrind libtbb12)
+native_only=${IMPACT_NATIVE_ONLY:-0}
+# The cross compilers, wine and qemu-user to run what they build, dpkg-dev for `apt-get source`.
+[[ $native_only == 1 ]] || apt_pkgs+=(gcc-mingw-w64-x86-64-win32 gcc-aarch64-linux-gnu
+                                      libc6-dev-arm64-cross wine64 qemu-user dpkg-dev)
 missing=()
 for p in "${apt_pkgs[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -48,9 +54,15 @@ fi
 
 # --- 3. FMUs ------------------------------------------------------------------------------
 # CMake rebuilds only what changed.
-if [[ ! -f build/fmu/CMakeCache.txt ]]; then
-    cmake -S fmu_src -B build/fmu -DCMAKE_BUILD_TYPE=Release >/dev/null
+if [[ $native_only == 1 ]]; then
+    fmu_args=(-DSUNDIALS_ROOT= -DSUNDIALS_SOURCE_DIR= -DIMPACT_CROSS_DIRS=)
+else
+    bash scripts/cross_build.sh
+    fmu_args=(-DSUNDIALS_ROOT="$root/build/cross/x86_64-linux/cvode"
+              -DSUNDIALS_SOURCE_DIR="$(bash scripts/sundials_source.sh)"
+              "-DIMPACT_CROSS_DIRS=$root/build/cross/x86_64-windows/fmu;$root/build/cross/aarch64-linux/fmu")
 fi
+cmake -S fmu_src -B build/fmu -DCMAKE_BUILD_TYPE=Release "${fmu_args[@]}" >/dev/null
 cmake --build build/fmu -j 2 >/dev/null
 log "FMU ready: build/fmu/ImpactOscillator.fmu"
 

@@ -65,3 +65,11 @@ def test_other_sections(quick_run):
     assert res["map_speed"]["per_s"] > 0
     assert res["parallel"] and all(p["wall_1"] > 0 and p["wall_2"] > 0 for p in res["parallel"])
     assert all(isinstance(g["met"], bool) for g in res["goals"].values())
+
+
+def test_continuation_bench_quick() -> None:
+    """``bench/continuation_bench.py --quick`` runs both solver modes and prints its section."""
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "continuation_bench.py"), "--quick"],
+                          capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr
+    assert "<!-- continuation:begin -->" in proc.stdout and "| closed form | 21 |" in proc.stdout

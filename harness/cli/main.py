@@ -26,7 +26,7 @@ from ..errors import FmuError, FmuRejectedInput, HarnessInputError, SweepTaskErr
 PROG = "impact-harness"
 
 #: Command modules always present.
-COMMAND_MODULES = ("harness.cli.commands", "harness.cli.basin_command")
+COMMAND_MODULES = ("harness.cli.commands", "harness.cli.basin_command", "harness.cli.continue_command")
 #: Command modules added by later issues; skipped while they do not exist.
 OPTIONAL_COMMAND_MODULES = ("harness.reproduce",)
 
@@ -176,7 +176,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 #: Options whose value is a list that may start with a minus sign ("-0.5,0.1").
-_LIST_OPTIONS = ("--values", "--state", "--scan")
+_LIST_OPTIONS = ("--values", "--state", "--scan", "--range")
 
 
 def _join_list_values(argv: list[str]) -> list[str]:

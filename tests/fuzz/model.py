@@ -5,6 +5,8 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
+import fmpy
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -75,7 +77,9 @@ def _parse(xml: Path, version: int, library: Path) -> Description:
 def describe(build: Path, version: int) -> Description:
     """The FMI 2.0 (`version` 2) or 3.0 binary of a CMake build directory such as build/asan."""
     sub = build / ("fmu" if version == 2 else "fmu3")
-    libs = sorted((sub / "binaries").glob("*/*.so"))
+    # the build machine's own binary (build/fmu also holds the other platforms' for packaging)
+    own = fmpy.platform if version == 2 else fmpy.platform_tuple
+    libs = sorted((sub / "binaries").glob(f"{own}/*.so")) or sorted((sub / "binaries").glob("*/*.so"))
     if not libs:
         raise FileNotFoundError(f"no FMU binary under {sub}/binaries (build it first)")
     src = ROOT / "fmu_src" / ("modelDescription.xml" if version == 2 else "modelDescription3.xml")

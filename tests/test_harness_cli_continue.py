@@ -1,0 +1,47 @@
+"""``impact-harness continue``: the files it writes, its report, and its refusals (one line, exit 2)."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from harness.io.results import read_netcdf
+from tests.cli_support import run_main
+
+FIG9 = ["--nu", "4.605170185988091", "--Omega", "0.3059238689620112", "--r", "0.9", "--wall", "compliant",
+        "--Gamma", "10"]
+
+
+def test_continue_writes_branch_plot_report(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "c.nc"
+    code, stdout, err = run_main(["continue", *FIG9, "--range", "0.7:1.1", "--start", "1.0", "--switch",
+                                  "--max-points", "40", "--out", str(out), "--no-progress"], capsys)
+    assert code == 0, err
+    ds = read_netcdf(out)
+    events = json.loads(ds.attrs["continuation.events"])
+    flips = [e for e in events if e["kind"] == "flip"]
+    # the period-1 flip, located on the down branch (Figure 9's M = 1 lower edge)
+    assert flips and abs(flips[0]["value"] - 0.8120764) < 1e-6
+    assert set(json.loads(ds.attrs["continuation.branches"])) >= {"down", "up"}
+    assert ds.attrs["model.solver"] == 1  # closed form by default
+    assert "fmu.sha256" in ds.attrs or any("sha256" in k for k in ds.attrs)
+    assert (tmp_path / "c.png").stat().st_size > 0
+    report = (tmp_path / "c.md").read_text()
+    assert "| flip | 0.81207" in report and "Stable parts" in report
+    assert "| flip |" in stdout
+
+
+@pytest.mark.parametrize("argv,needle", [
+    (["--range", "1:0.5", "--start", "0.7"], "--range"),
+    (["--range", "0.5:1", "--start", "2"], "--start"),
+    (["--range", "0.5:1", "--start", "0.7", "--param", "nonsense"], "--param"),
+    (["--range", "0.5:1", "--start", "0.7", "--state", "1,x", "-M", "1"], "--state"),
+    (["--range", "0.5:1", "--start", "0.7", "--state", "-3.4,0.01"], "-M"),
+    (["--range", "-0.5:-1", "--start", "-0.7"], "--range"),
+])
+def test_continue_refuses_bad_input(tmp_path: Path, capsys, argv: list[str], needle: str) -> None:
+    code, out, err = run_main(["continue", *FIG9, *argv, "--out", str(tmp_path / "x.nc"), "--no-progress"], capsys)
+    assert code == 2
+    assert needle in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "x.nc").exists()

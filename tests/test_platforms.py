@@ -1,0 +1,118 @@
+"""Every binary in the FMUs, tested where it runs (issue 20): x86_64 Linux natively, x86_64
+Windows under wine, aarch64 Linux under qemu-user, each through the same C host
+(tests/host/fmu_host.c) built with that target's toolchain, FMI 2.0 and 3.0, Co-Simulation and
+Model Exchange.
+
+Per period, not along a trajectory (the platforms' math libraries differ in the last bits and a
+trajectory would amplify that): the starts are the closed form's own states at t = k, k = 0..99,
+and each binary's state one period later is compared with the closed form's (mapcheck.exact, the
+independent truth) and with the native Linux binary's from the same start. Also: what each binary
+imports and exports, and fmpy's validation and the harness's archive check of both FMUs.
+"""
+from __future__ import annotations
+
+import subprocess
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+from fmpy.validation import validate_fmu
+
+from harness.fmu.fmi import check_archive
+from mapcheck.exact import ExactOscillator
+from tests.fmu_support import FMU3_PATH, FMU_PATH
+from tests.platform_support import (NATIVE, PLATFORMS, WINESERVER, env, host_input, imports,
+                                    require_cross_build, run_host, unpack)
+
+FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112, r=0.9, Gamma=10.0, sigma=0.5)
+UNDERDAMPED = dict(nu=0.8, Omega=2.5, r=0.8, Gamma=10.0, sigma=0.5)
+CASES = {
+    "fig9-compliant": dict(FIG9, wall="compliant"),
+    "fig9-rigid": dict(FIG9, wall="rigid"),
+    "underdamped-compliant": dict(UNDERDAMPED, wall="compliant"),
+    "underdamped-rigid": dict(UNDERDAMPED, wall="rigid"),
+}
+PERIODS = 100
+TOL = 1e-8  # per period, absolute on (u, v); the issue's bound
+INTERFACES = [(fmi, itf) for fmi in ("fmi2", "fmi3") for itf in ("cs", "me")]
+
+
+@pytest.fixture(scope="module")
+def unpacked(tmp_path_factory) -> dict[str, Path]:
+    require_cross_build()
+    base = tmp_path_factory.mktemp("platforms")
+    yield {"fmi2": unpack(FMU_PATH, base / "fmi2"), "fmi3": unpack(FMU3_PATH, base / "fmi3")}
+    # wine's server outlives its programs for a few seconds; end it with the module
+    subprocess.run([WINESERVER, "-k"], env=env(), capture_output=True)
+
+
+@pytest.fixture(scope="module")
+def truth() -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Per case: the start rows (k, u_k, v_k), k < 100, and the closed form's state at k + 1."""
+    out = {}
+    times = np.arange(PERIODS + 1, dtype=float)
+    for name, p in CASES.items():
+        ex = ExactOscillator(p["nu"], p["Omega"], p["sigma"], r=p["r"], Gamma=p["Gamma"], wall=p["wall"])
+        states, _ = ex.strobe(-1.0, 0.0, times)
+        out[name] = (np.column_stack([times[:-1], states[:-1]]), states[1:])
+    return out
+
+
+@pytest.fixture(scope="module")
+def results(unpacked, truth) -> dict[tuple[str, str, str], dict[str, np.ndarray]]:
+    """(platform, fmi, interface) -> case -> (u, v) one period after each start; runs lazily."""
+    cache: dict = {}
+    names = list(CASES)
+    text = host_input([(CASES[n], truth[n][0]) for n in names])
+
+    class Lazy(dict):
+        def __missing__(self, key):
+            plat, fmi, itf = key
+            platform = next(p for p in PLATFORMS if p.name == plat)
+            rows = run_host(platform, unpacked[fmi], fmi, itf, text)
+            assert rows.shape == (PERIODS * len(names), 2), rows.shape
+            self[key] = {n: rows[i * PERIODS:(i + 1) * PERIODS] for i, n in enumerate(names)}
+            return self[key]
+    return Lazy(cache)
+
+
+@pytest.mark.parametrize("fmi,itf", INTERFACES, ids=lambda x: x)
+@pytest.mark.parametrize("plat", [p.name for p in PLATFORMS])
+def test_each_period_matches_the_closed_form(results, truth, plat, fmi, itf):
+    got = results[(plat, fmi, itf)]
+    for name in CASES:
+        err = np.abs(got[name] - truth[name][1]).max(axis=1)
+        assert np.isfinite(err).all(), f"{name}: the FMU refused a start"
+        assert err.max() <= TOL, f"{name}: period {err.argmax()} off by {err.max():.3g}"
+
+
+@pytest.mark.parametrize("fmi,itf", INTERFACES, ids=lambda x: x)
+@pytest.mark.parametrize("plat", [p.name for p in PLATFORMS if p is not NATIVE])
+def test_each_period_matches_the_native_binary(results, plat, fmi, itf):
+    got, native = results[(plat, fmi, itf)], results[(NATIVE.name, fmi, itf)]
+    for name in CASES:
+        diff = np.abs(got[name] - native[name]).max()
+        assert diff <= TOL, f"{name}: {diff:.3g} from the native binary"
+
+
+@pytest.mark.parametrize("fmi", ["fmi2", "fmi3"])
+@pytest.mark.parametrize("plat", PLATFORMS, ids=lambda p: p.name)
+def test_binary_needs_only_the_system_and_exports_only_fmi(unpacked, plat, fmi):
+    binary = unpacked[fmi] / plat.binary(fmi)
+    needed, exported = imports(binary)
+    system = {"KERNEL32.dll", "msvcrt.dll"} if plat.suffix == ".dll" else {"libc.so.6", "libm.so.6"}
+    assert set(needed) <= system, needed
+    assert exported and all(s.startswith(fmi) for s in exported), exported
+    assert f"{fmi}Instantiate" in exported or "fmi3InstantiateCoSimulation" in exported
+
+
+@pytest.mark.parametrize("fmu", [FMU_PATH, FMU3_PATH], ids=lambda p: p.name)
+def test_archive_holds_every_platform_and_validates(fmu):
+    require_cross_build()
+    check_archive(fmu)
+    assert validate_fmu(str(fmu)) == []
+    names = set(zipfile.ZipFile(fmu).namelist())
+    fmi = "fmi3" if "fmi3" in fmu.name else "fmi2"
+    for p in PLATFORMS:
+        assert p.binary(fmi) in names
