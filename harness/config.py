@@ -103,17 +103,22 @@ class SamplingSpec:
     @classmethod
     def from_layers(cls, layers: Layered) -> "SamplingSpec":
         """Validated view of ``[sampling]`` (errors name the flag or file key)."""
-        theta = check_theta(layers.get("sampling", "theta"), layers.arg("sampling", "theta"))
-        mp = layers.get("sampling", "max_period")
-        return cls(
+        from .errors import ErrorCollector
+
+        c, s = ErrorCollector(), "sampling"  # every bad key at once
+        theta = c.check(check_theta, layers.get(s, "theta"), layers.arg(s, "theta"))
+        mp = layers.get(s, "max_period")
+        fields = dict(
             theta=theta,
-            n_transient=_count(layers, "sampling", "transient"),
-            n_samples=_count(layers, "sampling", "samples", minimum=2),
-            tol=_number(layers, "sampling", "tol", positive=True),
-            max_period=None if mp is None else _count(layers, "sampling", "max_period", minimum=1),
-            extend=_count(layers, "sampling", "extend"),
-            lyapunov=_count(layers, "sampling", "lyapunov"),
+            n_transient=c.check(_count, layers, s, "transient"),
+            n_samples=c.check(_count, layers, s, "samples", minimum=2),
+            tol=c.check(_number, layers, s, "tol", positive=True),
+            max_period=None if mp is None else c.check(_count, layers, s, "max_period", minimum=1),
+            extend=c.check(_count, layers, s, "extend"),
+            lyapunov=c.check(_count, layers, s, "lyapunov"),
         )
+        c.raise_if_any()
+        return cls(**fields)
 
 
 def parameter_values(start: Any, stop: Any, num: Any, values: Any, args: tuple[str, str, str, str]) -> np.ndarray:
@@ -236,21 +241,24 @@ class RunSpec:
     @classmethod
     def from_layers(cls, layers: Layered) -> "RunSpec":
         """Validated view of ``[run]`` (backend, workers, scheduler, outputs)."""
-        r = "run"
+        from .errors import ErrorCollector
+
+        r, c = "run", ErrorCollector()  # every bad key at once
         scheduler = layers.get(r, "scheduler") or None
         backend = layers.get(r, "backend")
         if backend is None:
             backend = "dask" if scheduler else "processes"
         backend = str(backend).lower()
         if backend not in BACKENDS:
-            raise HarnessInputError(layers.arg(r, "backend"), f"unknown backend {backend!r}; choose from {', '.join(BACKENDS)}")
-        if scheduler is not None:
+            c.add(HarnessInputError(layers.arg(r, "backend"), f"unknown backend {backend!r}; choose from {', '.join(BACKENDS)}"))
+        elif scheduler is not None:
             if backend != "dask":
-                raise HarnessInputError(layers.arg(r, "scheduler"), f"a scheduler address needs the dask backend, not {backend!r}")
-            if "://" not in str(scheduler):
-                raise HarnessInputError(layers.arg(r, "scheduler"), f"expected an address like tcp://HOST:PORT, got {scheduler!r}")
+                c.add(HarnessInputError(layers.arg(r, "scheduler"), f"a scheduler address needs the dask backend, not {backend!r}"))
+            elif "://" not in str(scheduler):
+                c.add(HarnessInputError(layers.arg(r, "scheduler"), f"expected an address like tcp://HOST:PORT, got {scheduler!r}"))
         workers = layers.get(r, "workers")
-        workers = default_workers() if workers is None else _count(layers, r, "workers", minimum=1)
+        workers = default_workers() if workers is None else c.check(_count, layers, r, "workers", minimum=1)
+        c.raise_if_any()
         return cls(
             backend=backend,
             workers=workers,

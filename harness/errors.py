@@ -43,3 +43,49 @@ class FmuRejectedInput(FmuError):
 
     Bad input, found by the FMU rather than by the harness: the CLI exits with status 2.
     """
+
+
+class SettingsErrors(HarnessInputError):
+    """Several bad settings, reported together (a config file with several mistakes is
+    answered once, not one mistake per run).  :attr:`errors` holds each; the message has one
+    line per error."""
+
+    def __init__(self, errors: list[HarnessInputError]) -> None:
+        self.errors = list(errors)
+        super().__init__(self.errors[0].argument, self.errors[0].reason)
+
+    def __str__(self) -> str:
+        return f"{len(self.errors)} problems in the settings:\n  " + "\n  ".join(
+            f"argument {e.argument}: {e.reason}" for e in self.errors)
+
+    def __reduce__(self) -> tuple:
+        return (type(self), (self.errors,))
+
+
+class ErrorCollector:
+    """Run checks, keep going past bad input, and raise everything found at the end.
+
+    ``value = collector.check(func, *args)`` returns ``func``'s result, or ``default`` after
+    recording its :class:`HarnessInputError`; :meth:`raise_if_any` raises the one error found,
+    or :class:`SettingsErrors` with all of them.
+    """
+
+    def __init__(self) -> None:
+        self.errors: list[HarnessInputError] = []
+
+    def check(self, func, *args, default=None, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN201 (any check)
+        try:
+            return func(*args, **kwargs)
+        except HarnessInputError as exc:
+            self.add(exc)
+            return default
+
+    def add(self, exc: HarnessInputError) -> None:
+        """Record ``exc`` (the errors of a :class:`SettingsErrors` one by one)."""
+        self.errors.extend(exc.errors if isinstance(exc, SettingsErrors) else [exc])
+
+    def raise_if_any(self) -> None:
+        if len(self.errors) == 1:
+            raise self.errors[0]
+        if self.errors:
+            raise SettingsErrors(self.errors)

@@ -141,24 +141,31 @@ class Layered:
         Unknown sections and keys are rejected (except in ``[model]``, whose keys are FMU
         variables checked later against the modelDescription).
         """
+        from .errors import ErrorCollector
+
+        found = ErrorCollector()  # every unknown section and key of the layer, not just the first
         for section, entries in layer.items():
             if section not in DEFAULTS:
-                raise HarnessInputError(
+                found.add(HarnessInputError(
                     f"{source}: [{section}]",
                     f"unknown section; known sections: {', '.join(DEFAULTS)}",
-                )
+                ))
+                continue
             if not isinstance(entries, Mapping):
-                raise HarnessInputError(f"{source}: {section}", "must be a table")
+                found.add(HarnessInputError(f"{source}: {section}", "must be a table"))
+                continue
             for key, value in entries.items():
                 if section != "model" and key not in DEFAULTS[section]:
-                    raise HarnessInputError(
+                    found.add(HarnessInputError(
                         f"{source}: {section}.{key}",
                         f"unknown key; known keys of [{section}]: {', '.join(DEFAULTS[section])}",
-                    )
+                    ))
+                    continue
                 if value is None:
                     continue  # "not given": keeps the lower layer
                 self.values[section][key] = value
                 self.origin[(section, key)] = source
+        found.raise_if_any()
 
     def arg(self, section: str, key: str) -> str:
         """How to name ``section.key`` in an error: its CLI flag or its file key."""

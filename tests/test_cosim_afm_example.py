@@ -34,3 +34,28 @@ def test_example_runs_in_one_command(tmp_path: Path) -> None:
     w, A = np.array(curve["u_wall"]), np.array(curve["amplitude"])
     assert np.all(np.abs(A[w > 0.51] - 3.0) < 1e-6)
     assert np.ptp(A[w < 0.45]) > 0.1  # below grazing: no longer the free period-1 orbit
+
+
+def test_example_options_reach_the_fmus(tmp_path: Path) -> None:
+    """Set-point, gains, Gamma, h and the master as options: the chosen master, run with them,
+    matches the monolithic reference run with the same values (so they reached both FMUs), and
+    the report and JSON say which values ran."""
+    argv = ["--quick", "--no-sweep", "--out", str(tmp_path), "--master", "ecos", "--A-set", "2.6", "--Kp", "0.15",
+            "--Ki", "0.25", "--Gamma", "20", "--h", "0.02"]
+    assert run.main(argv) == 0
+    data = json.loads((tmp_path / "afm.json").read_text())
+    assert set(data["masters"]) == {"ecos"} and "sweep" not in data
+    p = data["parameters"]
+    assert (p["controller"]["A_set"], p["controller"]["Kp"], p["controller"]["Ki"]) == (2.6, 0.15, 0.25)
+    assert p["oscillator"]["Gamma"] == 20.0 and p["h"] == 0.02
+    e = data["masters"]["ecos"]
+    assert max(e["u"], e["u_wall"], e["amplitude"]) <= 1e-8 and e["v"] <= 1e-7, e
+    assert len(data["updates"]) >= 5  # the controller acted (a window per period)
+    assert "h = 0.02, Gamma = 20, A_set = 2.6, Kp = 0.15, Ki = 0.25" in (tmp_path / "report.md").read_text()
+
+
+@pytest.mark.parametrize("bad", [["--h", "0.03"], ["--A-set", "-1"], ["--Kp", "nan"], ["--master", "simulink"]])
+def test_example_refuses_bad_options_in_one_line(bad: list[str]) -> None:
+    with pytest.raises(SystemExit) as exc:
+        run.parse_args(bad)
+    assert exc.value.code == 2

@@ -1,6 +1,6 @@
 """What a sweep's NetCDF and plots tell a reader: no stale attributes, the codes of period and
 orbit_impacts explained on the variables, titles with the parameters, natural axis labels,
-and period labels that tell impacts per period apart ("2(1)" vs "2(2)")."""
+and the period drawn as a number on a linear axis."""
 from __future__ import annotations
 
 import numpy as np
@@ -8,7 +8,8 @@ import pytest
 
 from harness import SamplingSpec, SweepSpec, read_netcdf, run_sweep, write_netcdf
 from harness.io import plots
-from harness.io.plots import parameter_title, period_labels, section_label
+from harness.io import sweep_plots
+from harness.io.plots import parameter_title, section_label
 
 
 @pytest.fixture(scope="module")
@@ -34,14 +35,6 @@ def test_swept_parameters_are_not_stale_attributes(sweep, tmp_path) -> None:
     assert np.array_equal(p == 0, k == -1)
 
 
-def test_period_labels_tell_impacts_apart() -> None:
-    period = np.array([[2, 2, 1, 0, 3]])
-    impacts = np.array([[1, 2, 1, -1, 1]])
-    rows, labels = period_labels(period, impacts)
-    assert labels == ["none", "1(1)", "2(1)", "2(2)", "3(1)"]
-    assert [labels[int(i)] for i in rows.ravel()] == ["2(1)", "2(2)", "1(1)", "none", "3(1)"]
-
-
 def test_labels_and_title_text() -> None:
     assert section_label("u", 0.0) == "position u at t = n"
     assert section_label("v", 0.5) == "velocity v at t = n + 1/2"
@@ -53,22 +46,38 @@ def test_labels_and_title_text() -> None:
     assert "rigid wall" in parameter_title({**attrs, "model.wall": 2})
 
 
-def test_bifurcation_diagram_says_what_it_shows(sweep, tmp_path, monkeypatch) -> None:
-    """The drawn figure: parameters in the title, a natural y label, "M(k)" period ticks."""
-    seen = {}
+def _capture(monkeypatch) -> dict:
+    """The figure a sweep plot is about to save, kept open for inspection."""
+    seen: dict = {}
+    orig = sweep_plots._save
 
     def capture(fig, path):
-        ax, axp = fig.axes[:2]
-        seen.update(title=ax.get_title(), ylabel=ax.get_ylabel(),
-                    ticks=[t.get_text() for t in axp.get_yticklabels()])
+        seen["fig"] = fig
+        seen["axes"] = list(fig.axes)
+        seen["suptitle"] = fig._suptitle.get_text() if fig._suptitle else ""
+        seen["titles"] = [ax.get_title() for ax in fig.axes]
+        seen["legends"] = [[t.get_text() for t in ax.get_legend().get_texts()] if ax.get_legend() else []
+                           for ax in fig.axes]
         return orig(fig, path)
 
-    orig = plots._save
-    monkeypatch.setattr(plots, "_save", capture)
-    path = plots.bifurcation_diagram(sweep, tmp_path / "b.png")
+    monkeypatch.setattr(sweep_plots, "_save", capture)
+    return seen
+
+
+def test_bifurcation_diagram_says_what_it_shows(sweep, tmp_path, monkeypatch) -> None:
+    """The drawn figure: parameters in the title, a natural y label, the period as numbers on a
+    linear axis (0 = "none"), no Lyapunov panel without exponents."""
+    seen = _capture(monkeypatch)
+    path = sweep_plots.bifurcation_diagram(sweep, tmp_path / "b.png")
     assert path.stat().st_size > 0
-    assert "(alpha, gamma) = (0.99, 0.01)" in seen["title"] and "r = 0.9" in seen["title"]
-    assert "Gamma = 10" in seen["title"]  # the scan value shown
-    assert seen["ylabel"] == "position u at t = n"
-    assert "t = n + 0.0" not in seen["ylabel"]
-    assert "2(1)" in seen["ticks"] and "1(1)" in seen["ticks"]
+    ax, axp = seen["axes"][:2]
+    assert len(seen["axes"]) == 2  # no exponents in this sweep: no Lyapunov panel
+    title = seen["titles"][0]
+    assert "(alpha, gamma) = (0.99, 0.01)" in title.replace("\n", " ") and "r = 0.9" in title
+    assert "Gamma = 10" in title  # the scan value shown
+    assert ax.get_ylabel() == "position u at t = n"
+    assert axp.get_yscale() == "linear"
+    ticks = [float(v) for v in axp.get_yticks() if axp.get_ylim()[0] <= v <= axp.get_ylim()[1]]
+    assert ticks == [float(round(v)) for v in ticks] and 1.0 in ticks and 2.0 in ticks  # integers, 1 and 2 drawn
+    assert axp.yaxis.get_major_formatter()(0.0, 0) == "none"  # no period found
+    assert axp.yaxis.get_major_formatter()(3.0, 0) == "3"

@@ -1,5 +1,9 @@
 """Run the AFM example in one command: ``.venv/bin/python examples/afm/run.py [--quick]``.
 
+Options set the loop (``--A-set``, ``--Kp``, ``--Ki``), the sample (``--Gamma``, ``--sweep-Gamma``),
+the communication step ``--h`` and the master(s) of the settling run (``--master ecos`` ...);
+``--no-sweep`` runs the settling part only.  ``--help`` lists them with their defaults.
+
 1. Loop settling: the cantilever (ImpactOscillator FMU) tapping a soft sample (compliant wall,
    Gamma = 10) under the PI z-feedback (AmplitudeController FMU), from the wall-free orbit with
    the surface at 0, in three masters (ecos, fmpy's SSP loop, fmpy's Container FMU) and in the
@@ -34,23 +38,27 @@ from examples.afm.monolithic import Controller, Oscillator, simulate  # noqa: E4
 OSC_FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
 CTRL_FMU = ROOT / "build" / "afm" / "AmplitudeController.fmu"
 H = 0.01
+#: ``--master`` choices and the names the results use.
+MASTERS = {"ecos": "ecos", "fmpy-ssp": "fmpy SSP", "fmpy-container": "fmpy Container FMU"}
 
 
-def settle(t1: float, work: Path) -> dict:
-    """The loop in every master and the reference; errors at the communication points."""
-    osc, ctrl = Oscillator(), Controller()
+def settle(t1: float, work: Path, osc: Oscillator | None = None, ctrl: Controller | None = None,
+           h: float = H, masters: tuple[str, ...] = tuple(MASTERS)) -> dict:
+    """The loop in the chosen masters and the reference; errors at the communication points."""
+    osc, ctrl = osc or Oscillator(), ctrl or Controller()
     u0, v0 = osc.sigma, 0.0
     t = time.perf_counter()
-    ref = simulate(osc, ctrl, 0.0, t1, H, u0, v0)
+    ref = simulate(osc, ctrl, 0.0, t1, h, u0, v0)
     out = {"reference_seconds": time.perf_counter() - t, "masters": {}}
     values = M.start_values(osc, ctrl, u0, v0)
     runs = {
-        "ecos": lambda: M.run_ecos(OSC_FMU, CTRL_FMU, values, t1, H),
+        "ecos": lambda: M.run_ecos(OSC_FMU, CTRL_FMU, values, t1, h),
         "fmpy SSP": lambda: M.run_fmpy_ssp(M.write_ssp(work / "afm.ssp", OSC_FMU, CTRL_FMU),
-                                           values, t1, H),
+                                           values, t1, h),
         "fmpy Container FMU": lambda: M.run_container(
-            M.build_container(work / "afm_container.fmu", OSC_FMU, CTRL_FMU, values, H), t1, H),
+            M.build_container(work / "afm_container.fmu", OSC_FMU, CTRL_FMU, values, h), t1, h),
     }
+    runs = {name: run for name, run in runs.items() if name in {MASTERS[m] for m in masters}}
     traces = {}
     for name, run in runs.items():
         t = time.perf_counter()
@@ -61,13 +69,13 @@ def settle(t1: float, work: Path) -> dict:
             **{k: float(np.max(np.abs(getattr(tr, k) - getattr(ref, k)[1:])))
                for k in ("u", "v", "u_wall", "amplitude")}}
     out["updates"] = [list(map(float, x)) for x in ref.updates]
-    out["parameters"] = {"oscillator": vars(osc), "controller": vars(ctrl), "h": H, "t1": t1,
+    out["parameters"] = {"oscillator": vars(osc), "controller": vars(ctrl), "h": h, "t1": t1,
                          "u0": u0, "v0": v0}
     out["_ref"], out["_traces"] = ref, traces
     return out
 
 
-def open_loop_curve(osc: Oscillator, walls: np.ndarray, periods: int) -> np.ndarray:
+def open_loop_curve(osc: Oscillator, walls: np.ndarray, periods: int, h: float = H) -> np.ndarray:
     """Amplitude (max - min of u at the samples, per period) against a fixed surface position,
     the FMU alone through fmpy, stepping the wall quasi-statically (each from the previous
     orbit): the last 5 periods' amplitudes per position, a bifurcation diagram."""
@@ -84,15 +92,15 @@ def open_loop_curve(osc: Oscillator, walls: np.ndarray, periods: int) -> np.ndar
     for k, x in {**vars(osc), "u0": osc.sigma, "v0": 0.0}.items():
         s.setReal([vr[k]], [float(x)])
     s.exitInitializationMode()
-    n, t, amps, last = int(round(1 / H)), 0.0, [], []
+    n, t, amps, last = int(round(1 / h)), 0.0, [], []
     for w in walls:
         s.setReal([vr["u_wall"]], [float(w)])
         for _ in range(periods):
             us = np.empty(n)
             for k in range(n):
                 us[k] = s.getReal([vr["u"]])[0]
-                s.doStep(t, H)
-                t += H
+                s.doStep(t, h)
+                t += h
             last.append(float(np.ptp(us)))
         amps.append(last[-5:])  # the last 5 periods: one value if period-1, a spread if not
         last = []
@@ -101,15 +109,17 @@ def open_loop_curve(osc: Oscillator, walls: np.ndarray, periods: int) -> np.ndar
     return np.array(amps)
 
 
-def sweep(set_points: np.ndarray, periods: int) -> dict:
+def sweep(set_points: np.ndarray, periods: int, osc: Oscillator | None = None, ctrl: Controller | None = None,
+          h: float = H) -> dict:
     """ecos: the loop on a stiff sample, A_set stepped down; per set-point the amplitudes of
     the last 5 windows and the surface position during each."""
     from ecospy import EcosLib, EcosSimulation, EcosSimulationStructure
 
-    osc, ctrl = Oscillator(Gamma=1000.0), Controller(A_set=float(set_points[0]), u_wall_start=0.6)
+    osc = osc or Oscillator(Gamma=1000.0)
+    ctrl = replace(ctrl or Controller(), A_set=float(set_points[0]), u_wall_start=0.6)
     values = M.start_values(osc, ctrl, osc.sigma, 0.0)
     EcosLib.set_log_level("warn")
-    n = int(round(periods / H))
+    n = int(round(periods / h))
     rows = []
     with EcosSimulationStructure() as ss:
         ss.add_model(M.OSC, str(OSC_FMU))
@@ -117,14 +127,14 @@ def sweep(set_points: np.ndarray, periods: int) -> dict:
         for a, x, b, y in M.connections(True):
             ss.make_real_connection(f"{a}::{x}", f"{b}::{y}")
         ss.add_parameter_set("init", {k.replace(".", "::", 1): v for k, v in values.items()})
-        with EcosSimulation(structure=ss, step_size=H) as sim:
+        with EcosSimulation(structure=ss, step_size=h) as sim:
             sim.init(parameter_set="init")
             for A_set in set_points:
                 sim.set_real(f"{M.CTRL}::A_set", float(A_set))
                 amps, walls = [], []
                 for k in range(n):
                     sim.step()
-                    if (k + 1) % int(round(1 / H)) == 0:
+                    if (k + 1) % int(round(1 / h)) == 0:
                         amps.append(sim.get_real(f"{M.CTRL}::amplitude"))
                         walls.append(sim.get_real(f"{M.CTRL}::u_wall"))
                 # each amplitude with the surface position held while it was measured: the
@@ -155,10 +165,15 @@ def plot(res: dict, sw: dict, curve: tuple, out: Path) -> None:
     ax[1].set_xlabel("t (forcing periods)")
     ax[1].set_ylabel("amplitude")
     ax[1].legend(fontsize=7)
-    fig.suptitle("AFM z-feedback settling (soft sample, Gamma = 10)")
+    p = res["parameters"]
+    c = p["controller"]
+    fig.suptitle(f"AFM z-feedback settling (Gamma = {p['oscillator']['Gamma']:g}; A_set = {c['A_set']:g}, "
+                 f"Kp = {c['Kp']:g}, Ki = {c['Ki']:g}, h = {p['h']:g})")
     fig.tight_layout()
     fig.savefig(out / "settle.png", dpi=120)
     plt.close(fig)
+    if sw is None:
+        return
 
     walls, amps = curve
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
@@ -179,35 +194,84 @@ def plot(res: dict, sw: dict, curve: tuple, out: Path) -> None:
     ax[1].set_xlabel("set-point A_set (swept down)")
     ax[1].set_ylabel("amplitude reached")
     ax[1].legend(fontsize=7)
-    fig.suptitle("Set-point swept through grazing (stiff sample, Gamma = 1000)")
+    fig.suptitle(f"Set-point swept through grazing (stiff sample, Gamma = {sw['oscillator']['Gamma']:g})")
     fig.tight_layout()
     fig.savefig(out / "sweep.png", dpi=120)
     plt.close(fig)
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=ROOT / "results" / "afm")
+def _positive(text: str) -> float:
+    value = float(text)
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number > 0, got {text}")
+    return value
+
+
+def _gain(text: str) -> float:
+    value = float(text)
+    if not (np.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"must be a finite number >= 0, got {text}")
+    return value
+
+
+def _step(text: str) -> float:
+    """h: positive and dividing the forcing period 1 (the controller's windows are whole periods)."""
+    value = _positive(text)
+    n = round(1.0 / value)
+    if n < 1 or abs(n * value - 1.0) > 1e-9:
+        raise argparse.ArgumentTypeError(f"must divide the forcing period 1 (1/h an integer), got {text}")
+    return value
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    """The example's options (defaults: the documented run)."""
+    ctrl = Controller()
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0],
+                                 formatter_class=argparse.ArgumentDefaultsHelpFormatter)
+    ap.add_argument("--out", type=Path, default=ROOT / "results" / "afm", help="output folder")
     ap.add_argument("--quick", action="store_true", help="short horizons (the tests' run)")
-    args = ap.parse_args(argv)
+    ap.add_argument("--A-set", dest="A_set", type=_positive, default=ctrl.A_set,
+                    help="amplitude set-point of the settling run")
+    ap.add_argument("--Kp", type=_gain, default=ctrl.Kp, help="proportional gain of the z-feedback")
+    ap.add_argument("--Ki", type=_gain, default=ctrl.Ki, help="integral gain of the z-feedback")
+    ap.add_argument("--Gamma", type=_positive, default=Oscillator().Gamma,
+                    help="sample (wall) stiffness of the settling run")
+    ap.add_argument("--sweep-Gamma", dest="sweep_Gamma", type=_positive, default=1000.0,
+                    help="sample stiffness of the set-point sweep")
+    ap.add_argument("--h", type=_step, default=H, help="communication step (1/h an integer)")
+    ap.add_argument("--master", action="append", choices=tuple(MASTERS),
+                    help="master(s) of the settling run, repeatable (default: all three)")
+    ap.add_argument("--no-sweep", action="store_true", help="the settling run only")
+    return ap.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
     for f in (OSC_FMU, CTRL_FMU):
         if not f.is_file():
             print(f"{f} missing: run bash scripts/setup.sh", file=sys.stderr)
             return 2
     args.out.mkdir(parents=True, exist_ok=True)
+    ctrl = Controller(A_set=args.A_set, Kp=args.Kp, Ki=args.Ki)
+    masters = tuple(dict.fromkeys(args.master or MASTERS))
     with tempfile.TemporaryDirectory() as work:
-        res = settle(12.0 if args.quick else 60.0, Path(work))
-    set_points = np.round(np.arange(3.04, 2.86 if args.quick else 2.80, -0.02), 4)
-    sw = sweep(set_points, 8 if args.quick else 25)
-    walls = np.linspace(0.56, 0.30, 14 if args.quick else 53)
-    curve = (walls, open_loop_curve(Oscillator(Gamma=1000.0), walls, 6 if args.quick else 20))
+        res = settle(12.0 if args.quick else 60.0, Path(work), Oscillator(Gamma=args.Gamma), ctrl, args.h, masters)
+    sw, curve = None, None
+    if not args.no_sweep:
+        set_points = np.round(np.arange(3.04, 2.86 if args.quick else 2.80, -0.02), 4)
+        stiff = Oscillator(Gamma=args.sweep_Gamma)
+        sw = sweep(set_points, 8 if args.quick else 25, stiff, replace(ctrl), args.h)
+        walls = np.linspace(0.56, 0.30, 14 if args.quick else 53)
+        curve = (walls, open_loop_curve(stiff, walls, 6 if args.quick else 20, args.h))
     plot(res, sw, curve, args.out)
     data = {k: v for k, v in res.items() if not k.startswith("_")}
-    data["sweep"] = sw
-    data["open_loop"] = {"u_wall": walls.tolist(), "amplitude": curve[1].tolist()}
+    if sw is not None:
+        data["sweep"] = sw
+        data["open_loop"] = {"u_wall": curve[0].tolist(), "amplitude": curve[1].tolist()}
     (args.out / "afm.json").write_text(json.dumps(data, indent=1))
     lines = ["# AFM example: PI z-feedback on the impact oscillator", "",
-             f"Loop settling, h = {H}, t = 0..{res['parameters']['t1']:g}: largest difference "
+             f"Loop settling, h = {args.h:g}, Gamma = {args.Gamma:g}, A_set = {args.A_set:g}, Kp = {args.Kp:g}, "
+             f"Ki = {args.Ki:g}, t = 0..{res['parameters']['t1']:g}: largest difference "
              "from the monolithic reference at any communication point", "",
              "| master | u | v | u_wall | amplitude | seconds |", "|---|---|---|---|---|---|"]
     for name, e in res["masters"].items():
@@ -215,12 +279,14 @@ def main(argv: list[str] | None = None) -> int:
                      f"{e['amplitude']:.1e} | {e['seconds']:.2f} |")
     last = res["updates"][-1]
     lines += ["", f"Last window (t = {last[0]:.2f}): amplitude {last[1]:.6f}, surface at "
-              f"{last[2]:.6f} (set-point {res['parameters']['controller']['A_set']}).", "",
-              "Set-point sweep (ecos, Gamma = 1000): A_set, the last 5 windows' amplitudes and the surface position during each",
-              "", "| A_set | amplitude (last 5 windows) | u_wall during them |", "|---|---|---|"]
-    for r in sw["rows"]:
-        lines.append(f"| {r['A_set']:.2f} | {' '.join(f'{a:.3f}' for a in r['amplitude'])} | "
-                     f"{' '.join(f'{w:.3f}' for w in r['u_wall'])} |")
+              f"{last[2]:.6f} (set-point {res['parameters']['controller']['A_set']})."]
+    if sw is not None:
+        lines += ["", f"Set-point sweep (ecos, Gamma = {args.sweep_Gamma:g}): A_set, the last 5 windows' "
+                  "amplitudes and the surface position during each",
+                  "", "| A_set | amplitude (last 5 windows) | u_wall during them |", "|---|---|---|"]
+        for r in sw["rows"]:
+            lines.append(f"| {r['A_set']:.2f} | {' '.join(f'{a:.3f}' for a in r['amplitude'])} | "
+                         f"{' '.join(f'{w:.3f}' for w in r['u_wall'])} |")
     (args.out / "report.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     worst = max(max(e[k] for k in ("u", "v")) for e in res["masters"].values())

@@ -62,9 +62,13 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     p.set_defaults(func=cmd_sweep)
 
     p = sub.add_parser("jacobian", parents=[common], help="Jacobian of the stroboscopic map (at a state, or J(x) near grazing)",
-                       description="Central-difference Jacobian of the one-period map, by restarts from perturbed states. "
-                       "Without --state: J against x along the grazing family (wall-free state (x, 0) at t = n), in the "
-                       "coordinates of phase --theta (0: the paper's t = n, where J11, not J12, is singular).")
+                       description="Jacobian J of the one-period map: exact by default (the FMU's variational "
+                       "equations with saltation matrices at impacts) when the FMU reports derivatives, else central "
+                       "differences by restarts from perturbed states (--method). With --state: J at that state and its "
+                       "eigenvalues (the Floquet multipliers of a fixed point). Without: J against x along the grazing "
+                       "family (wall-free state (x, 0) at t = n), in the coordinates of phase --theta (0: the paper's "
+                       "t = n, where J11, not J12, is singular), and the exponent q of |J11 - P11| ~ x^q with its "
+                       "standard error and fitted x range (a compliant wall: soft and hard contacts fitted apart).")
     g = p.add_argument_group("jacobian")
     g.add_argument("--theta", dest="jacobian__theta", type=float, metavar="PHASE",
                    help="section phase of the coordinates, in [0, 1) (default 0)")
@@ -73,7 +77,8 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     g.add_argument("--x-start", dest="jacobian__x_start", type=float, metavar="X", help="smallest x (default 1e-6)")
     g.add_argument("--x-stop", dest="jacobian__x_stop", type=float, metavar="X", help="largest x (default 1e-2)")
     g.add_argument("--x-num", dest="jacobian__x_num", type=count, metavar="N", help="number of x values, log-spaced (default 25)")
-    g.add_argument("--state", dest="jacobian__state", metavar="U,V", help="J at this state at t = theta instead of a scan")
+    g.add_argument("--state", dest="jacobian__state", metavar="U,V",
+                   help="J and its eigenvalues (multipliers) at this state at t = theta, instead of a scan")
     g.add_argument("--method", dest="jacobian__method", choices=("auto", "exact", "fd"),
                    help="exact: the FMU's own derivatives (variational equations); fd: central differences; "
                    "auto (default): exact when the FMU reports them")
@@ -180,12 +185,13 @@ def cmd_strobe(args: argparse.Namespace) -> int:
     orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
     ly = None
     if s.lyapunov:
-        from ..dynamics.classify import DYNAMICS_NAMES, classify_dynamics, still_settling
+        from ..dynamics.classify import DECIDED, DYNAMICS_NAMES, REASON_NAMES, explain_dynamics, still_settling
         from ..dynamics.lyapunov import lyapunov_continued
 
         ly = lyapunov_continued(sim, exp.params, s.lyapunov, exact)
         settling = orbit.periodic and still_settling(r.u, r.v, orbit.period, s.tol)
-        dynamics = DYNAMICS_NAMES[classify_dynamics(orbit.period, settling, ly.largest, ly.largest_uncertainty)]
+        code, reason = explain_dynamics(orbit.period, settling, ly.largest, ly.largest_uncertainty)
+        dynamics = DYNAMICS_NAMES[code] + ("" if reason == DECIDED else f" ({REASON_NAMES[reason]})")
     attrs = provenance(exp.as_attrs(), exp.model, "serial", time.perf_counter() - t_start, _command_line(args))
     ds = strobe_dataset(r, orbit, attrs)
     if ly is not None:
@@ -290,9 +296,12 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     if "lyapunov" in ds:
         from ..dynamics.classify import DYNAMICS_NAMES
 
-        codes, counts = np.unique(ds["dynamics"].values, return_counts=True)
+        ran = ds["period"].values >= 0  # -1: a start inside a rigid wall, not run
+        codes, counts = np.unique(ds["dynamics"].values[ran], return_counts=True)
+        invalid = int(np.sum(~ran))
         print("  dynamics (Lyapunov exponents over " f"{exp.sampling.lyapunov} periods): "
-              + ", ".join(f"{DYNAMICS_NAMES[int(c)]} {n}" for c, n in zip(codes, counts)))
+              + ", ".join([f"{DYNAMICS_NAMES[int(c)]} {n}" for c, n in zip(codes, counts)]
+                          + ([f"invalid start {invalid}"] if invalid else [])))
     if spec.scan_param is None:
         for direction in ds["direction"].values:
             sel = ds.sel(direction=direction)
@@ -302,7 +311,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     print(f"wrote {out}")
     if plot:
         # matplotlib only now: its 0.8 s import would sit on the serial path of every sweep
-        from ..io.plots import bifurcation_diagram, period_map
+        from ..io.sweep_plots import bifurcation_diagram, period_map
 
         drawn = period_map(ds, plot) if spec.scan_param else bifurcation_diagram(ds, plot)
         print(f"plot: {drawn}")
@@ -313,7 +322,8 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
     """``jacobian``: J at --state, or J(x) along the grazing family; NetCDF + plot."""
     from ..dynamics.jacobian import jacobian_vs_x, map_jacobian
     from ..io.plots import jacobian_plot
-    from ..io.results import jacobian_dataset, provenance, write_netcdf
+    from ..dynamics.singularity_fit import describe, fits_dataset, grazing_fits
+    from ..io.results import jacobian_dataset, provenance, state_jacobian_dataset, write_netcdf
     from ..dynamics.sampling import check_count, check_theta
     from ..fmu.simulator import FmuSimulator
 
@@ -334,11 +344,21 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
             u, v = (float(s) for s in str(state).replace(" ", "").split(","))
         except ValueError:
             raise HarnessInputError(L.arg("jacobian", "state"), f"expected U,V, got {state!r}") from None
+        out, _ = _outputs(args, exp, "jacobian")
         res = map_jacobian(sim, params, (u, v), theta=theta, method=str(L.get("jacobian", "method")))
+        mu = np.linalg.eigvals(res.J)
         print(f"J at (u, v) = ({u}, {v}), t = {theta}:")
         print(np.array2string(res.J, precision=8))
+        print("eigenvalues of J (multipliers): " + ", ".join(f"{m:.8g} (|mu| = {abs(m):.6g})" for m in mu)
+              + f"; det J = {np.linalg.det(res.J):.8g}")
         print(f"image {res.image}; " + ("exact (the FMU's derivatives)" if res.method == "exact" else
                                          f"central differences, step {res.step:.2e}, estimated error {res.error:.1e}"))
+        settings = {**exp.as_attrs(), **{f"model.{k}": v for k, v in params.items()},
+                    **{f"jacobian.{k}": v for k, v in L.values["jacobian"].items()}}
+        ds = state_jacobian_dataset(res, (u, v), theta, provenance(settings, exp.model, "serial",
+                                                                   time.perf_counter() - t_start, _command_line(args)))
+        write_netcdf(ds, out)
+        print(f"wrote {out}")
         return 0
     n = check_count(L.get("jacobian", "x_num"), L.arg("jacobian", "x_num"), minimum=1)
     Budget.from_args(args).check(jacobian_estimate(n, L.arg("jacobian", "x_num")))
@@ -355,12 +375,15 @@ def cmd_jacobian(args: argparse.Namespace) -> int:
     settings = {**exp.as_attrs(), **{f"model.{k}": v for k, v in params.items()},
                 **{f"jacobian.{k}": v for k, v in L.values["jacobian"].items()}}
     ds = jacobian_dataset(scan, provenance(settings, exp.model, "serial", time.perf_counter() - t_start, _command_line(args)))
+    fits, beta = grazing_fits(scan, params)
+    ds = ds.merge(fits_dataset(fits))
+    if beta is not None:
+        ds["beta"] = ("x", beta, {"long_name": "contact parameter beta = r kappa sqrt(8 pi^2 x) / |A~| "
+                                               "(soft <= 0.1, hard >= 5; docs/theory.md section 5)"})
     write_netcdf(ds, out)
-    dJ = np.abs(scan.J - scan.P1)
-    ok = (dJ[:, 0, 0] > 0)
-    if ok.sum() >= 2:
-        slope = np.polyfit(np.log(x[ok]), np.log(dJ[ok, 0, 0]), 1)[0]
-        print(f"log-log slope of |J11 - P11| against x ({scan.method}): {slope:+.3f}")
+    print(f"exponent q of |J11 - P11| ~ x^q ({scan.method}; scanned x in [{lo:g}, {hi:g}]):")
+    for regime, fit in fits.items():
+        print("  " + describe(regime, fit))
     print(f"wrote {out}")
     if plot:
         print(f"plot: {jacobian_plot(ds, plot)}")

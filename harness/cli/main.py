@@ -80,8 +80,11 @@ def common_parent() -> argparse.ArgumentParser:
                    help="FMU to drive (default: build/fmu/ImpactOscillator.fmu or $IMPACT_HARNESS_FMU)")
     g.add_argument("--set", dest="model_set", metavar="NAME=VALUE", action="append", default=[],
                    help="set an FMU parameter, e.g. --set sigma=0.3 --set wall=rigid (repeatable)")
-    g.add_argument("--u0", dest="initial__u0", type=float, metavar="U", help="initial displacement")
-    g.add_argument("--v0", dest="initial__v0", type=float, metavar="V", help="initial velocity")
+    g.add_argument("--u0", dest="initial__u0", type=float, metavar="U",
+                   help="initial displacement u at the start time t = theta (the section phase, --theta; "
+                   "simulate: t = --t0); default: the FMU's start value")
+    g.add_argument("--v0", dest="initial__v0", type=float, metavar="V",
+                   help="initial velocity v at the start time t = theta (simulate: t = --t0); default: the FMU's start value")
     g.add_argument("--solver", choices=("cvode", "closed-form"),
                    help="the FMU's integrator: cvode (default) or closed-form (exact propagation of the linear "
                    "contact law; an FMU without the parameter 'solver' has CVODE only)")

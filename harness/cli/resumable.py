@@ -48,10 +48,15 @@ def run_resumable(job: Callable[[str], Any], exp: Experiment, out: Path, stats: 
         try:
             result = job(str(ckpt))
         except HarnessInputError as exc:
-            if explicit or "different run" not in str(exc):
+            from ..runs.checkpoint import CheckpointMismatch
+
+            if explicit or not isinstance(exc, CheckpointMismatch):
                 raise
-            # The default checkpoint of an earlier, different run to the same file: start over.
-            print(f"note: discarding {ckpt} (checkpoint of a different sweep)", file=sys.stderr)
+            # The default checkpoint of an earlier, different run to the same file: start over,
+            # saying what differs (the user may have meant to resume it).
+            why = "; ".join(exc.changes) if exc.changes else "other parameters or FMU"
+            print(f"note: discarding {ckpt}, the checkpoint of a different run ({why}); starting afresh",
+                  file=sys.stderr)
             shutil.rmtree(ckpt)
             result = job(str(ckpt))
     except KeyboardInterrupt:

@@ -189,9 +189,34 @@ SIGMAS = 3.0
 ZERO_BAND = 0.02
 
 
-def classify_dynamics(period: int, settling: bool, largest: float, uncertainty: float,
-                      sigmas: float = SIGMAS, zero_band: float = ZERO_BAND) -> int:
-    """Periodic, quasi-periodic, chaotic or not (yet) converged.
+#: Why a point is :data:`NOT_CONVERGED` (or :data:`UNCLASSIFIED`): the sweeps' ``dynamics_reason``.
+DECIDED, SETTLING_NO_EXPONENT, SETTLING_EXPONENT_NOT_NEGATIVE, ATTRACTING_NO_PERIOD, BAND_TOO_WIDE, NO_PERIOD_NO_EXPONENT = \
+    0, 1, 2, 3, 4, 5
+#: One word per reason (the NetCDF ``flag_meanings``).
+REASON_KEYS = {DECIDED: "decided", SETTLING_NO_EXPONENT: "settling_no_exponent",
+               SETTLING_EXPONENT_NOT_NEGATIVE: "settling_exponent_not_negative",
+               ATTRACTING_NO_PERIOD: "attracting_no_period", BAND_TOO_WIDE: "exponent_band_too_wide",
+               NO_PERIOD_NO_EXPONENT: "no_period_no_exponent"}
+REASON_NAMES = {
+    DECIDED: "decided",
+    SETTLING_NO_EXPONENT: "period found but the samples still converge, no exponent computed",
+    SETTLING_EXPONENT_NOT_NEGATIVE: "period found but the samples still converge and lambda_1 is not negative",
+    ATTRACTING_NO_PERIOD: "lambda_1 < 0 but no period up to max_period: attracting orbit not reached or longer",
+    BAND_TOO_WIDE: "lambda_1 = 0 within 3 standard errors, band too wide to tell a torus from slow convergence",
+    NO_PERIOD_NO_EXPONENT: "no period found and no exponent computed",
+}
+
+
+def explain_dynamics(period: int, settling: bool, largest: float, uncertainty: float,
+                     sigmas: float = SIGMAS, zero_band: float = ZERO_BAND) -> tuple[int, int]:
+    """Periodic, quasi-periodic, chaotic or not (yet) converged, and why.
+
+    The period test and the exponent are read together, so that the label never contradicts
+    the numbers next to it: a detected period decides (periodic) unless the samples still
+    converge; then a negative lambda_1 (point estimate) decides (periodic: the orbit is
+    attracting, whichever divisor of the period it settles on).  Without a period the
+    exponent decides (chaotic, quasi-periodic); :data:`NOT_CONVERGED` is left for points
+    where neither does, with the reason.
 
     Parameters
     ----------
@@ -201,25 +226,66 @@ def classify_dynamics(period: int, settling: bool, largest: float, uncertainty: 
         From :func:`still_settling`: the samples look periodic but still converge.
     largest, uncertainty : float
         lambda_1 of the stroboscopic map and its standard error (NaN: not computed).
+    sigmas, zero_band : float
+        An exponent is positive (negative) beyond ``sigmas`` standard errors; zero within
+        them when that band is at most ``zero_band`` wide.
 
     Returns
     -------
-    int
-        :data:`PERIODIC` (periodic samples, converged); :data:`CHAOTIC` (lambda_1 > 0 by more
-        than ``sigmas`` standard errors); :data:`QUASI_PERIODIC` (lambda_1 = 0 within
-        ``sigmas`` standard errors, and that band narrower than ``zero_band``: motion on an
-        invariant circle of the map); :data:`NOT_CONVERGED` (lambda_1 < 0 beyond its
-        uncertainty -- an attracting orbit not reached yet, or periodic beyond the largest
-        period tried -- or still settling, or undecided: a band too wide to tell);
-        :data:`UNCLASSIFIED` (not periodic and no exponent).
+    (code, reason) : tuple of int
+        ``code`` one of :data:`PERIODIC`, :data:`CHAOTIC` (no period, lambda_1 > 0 beyond
+        ``sigmas`` standard errors), :data:`QUASI_PERIODIC` (no period, lambda_1 = 0 within a
+        band narrower than ``zero_band``: motion on an invariant circle), :data:`NOT_CONVERGED`,
+        :data:`UNCLASSIFIED` (no period, no exponent); ``reason`` a key of
+        :data:`REASON_NAMES` (:data:`DECIDED` unless not converged or unclassified).
     """
-    if period > 0 and not settling:
-        return PERIODIC
-    if not (math.isfinite(largest) and math.isfinite(uncertainty)):
-        return NOT_CONVERGED if settling else UNCLASSIFIED
+    have_exponent = math.isfinite(largest) and math.isfinite(uncertainty)
+    if period > 0:
+        if not settling:
+            return PERIODIC, DECIDED
+        if not have_exponent:
+            return NOT_CONVERGED, SETTLING_NO_EXPONENT
+        if largest < 0:
+            return PERIODIC, DECIDED
+        return NOT_CONVERGED, SETTLING_EXPONENT_NOT_NEGATIVE
+    if not have_exponent:
+        return UNCLASSIFIED, NO_PERIOD_NO_EXPONENT
     band = sigmas * uncertainty
     if largest - band > 0:
-        return CHAOTIC
-    if largest + band < 0 or settling:
-        return NOT_CONVERGED
-    return QUASI_PERIODIC if band <= zero_band else NOT_CONVERGED
+        return CHAOTIC, DECIDED
+    if largest + band < 0:
+        return NOT_CONVERGED, ATTRACTING_NO_PERIOD
+    if band <= zero_band:
+        return QUASI_PERIODIC, DECIDED
+    return NOT_CONVERGED, BAND_TOO_WIDE
+
+
+def classify_dynamics(period: int, settling: bool, largest: float, uncertainty: float,
+                      sigmas: float = SIGMAS, zero_band: float = ZERO_BAND) -> int:
+    """The code of :func:`explain_dynamics` alone (periodic, quasi-periodic, chaotic, not
+    converged or unclassified)."""
+    return explain_dynamics(period, settling, largest, uncertainty, sigmas, zero_band)[0]
+
+
+def dynamics_attrs() -> dict:
+    """CF attributes of the sweeps' ``dynamics`` variable (codes, meanings, the rules)."""
+    codes = sorted(DYNAMICS_NAMES)
+    return {
+        "long_name": "dynamics of the orbit", "flag_values": np.array(codes, dtype=np.int64),
+        "flag_meanings": " ".join(DYNAMICS_NAMES[c].replace(" ", "_").replace("-", "_") for c in codes),
+        "sigmas": SIGMAS,  # an exponent is positive / zero / negative beyond this many standard errors
+        "comment": "periodic: a period found and converged, or a period found and largest Lyapunov exponent "
+                   "< 0; chaotic: no period, largest exponent > 0 by more than 3 standard errors; "
+                   f"quasi_periodic: no period, largest exponent 0 within 3 standard errors (band <= {ZERO_BAND}); "
+                   "not_converged: neither the period nor the exponent decides (why: dynamics_reason); "
+                   "unclassified: no period and no exponents (sampling.lyapunov = 0)"}
+
+
+def reason_attrs() -> dict:
+    """CF attributes of the sweeps' ``dynamics_reason`` variable."""
+    reasons = sorted(REASON_NAMES)
+    return {
+        "long_name": "why dynamics is not_converged or unclassified (0: decided; -1: not computed)",
+        "flag_values": np.array(reasons, dtype=np.int64),
+        "flag_meanings": " ".join(REASON_KEYS[c] for c in reasons),
+        "comment": "; ".join(f"{REASON_KEYS[c]}: {REASON_NAMES[c]}" for c in reasons)}

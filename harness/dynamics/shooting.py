@@ -365,6 +365,9 @@ def map_guided_windows(smap: StroboscopicMap, c: Any, guide: Mapping[int, Any], 
         # spawn, as the sweep pool does: the parent holds a loaded FMU library
         ctx = multiprocessing.get_context("spawn")
         from ..io.children import init_child_process
+        from ..io.main_guard import require_main_guard
+
+        require_main_guard("workers")  # before any worker re-imports an unguarded script
 
         # workers die with this process (SIGKILL included) and clean their temp folders
         with ProcessPoolExecutor(max_workers=min(workers, len(todo)), mp_context=ctx,

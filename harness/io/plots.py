@@ -1,4 +1,5 @@
-"""Plots (matplotlib, Agg backend, PNG): bifurcation diagram, Poincare section, J(x).
+"""Plots (matplotlib, Agg backend, PNG): Poincare section, J(x), time series; the sweep figures
+are in :mod:`harness.io.sweep_plots`, class maps in :mod:`harness.io.class_map`.
 
 All functions take the harness's Datasets, write a PNG and return its path; they never
 open a window (the Agg backend is selected before pyplot is imported).
@@ -77,59 +78,6 @@ def section_label(variable: str, theta: float) -> str:
     return f"{what} at {phase}"
 
 
-def period_labels(period: np.ndarray, impacts: np.ndarray) -> tuple[np.ndarray, list[str]]:
-    """Rows of the period strip: one per (period M, impacts k per orbit period), labelled
-    "M(k)" (so a period-2 orbit with one impact, "2(1)", is told from one with two, "2(2)");
-    row 0 is "none" (no period found).  Returns (row index per point, labels)."""
-    period = np.asarray(period).astype(int)
-    impacts = np.asarray(impacts).astype(int)
-    pairs = sorted({(int(p), int(k)) for p, k in zip(period.ravel(), impacts.ravel()) if p > 0})
-    index = {pk: i + 1 for i, pk in enumerate(pairs)}
-    rows = np.array([index.get((int(p), int(k)), 0) for p, k in zip(period.ravel(), impacts.ravel())],
-                    dtype=float).reshape(period.shape)
-    return rows, ["none"] + [f"{p}({k})" for p, k in pairs]
-
-
-def bifurcation_diagram(ds: xr.Dataset, path: str | os.PathLike, variable: str = "u",
-                        scan_index: int = 0) -> Path:
-    """u (or v) at the section against the swept parameter, one colour per direction.
-
-    The period of each point is drawn in a strip below, so that period-adding windows and
-    hysteresis (up and down disagreeing) are visible directly.
-    """
-    param = ds.attrs.get("sweep.param") or [d for d in ds[variable].dims if d not in ("direction", "sample")][0]
-    data = ds
-    scan = ds.attrs.get("sweep.scan_param")
-    if isinstance(scan, str) and scan != "none" and scan in ds.dims:
-        data = ds.isel({scan: scan_index})
-    fig, (ax, axp) = plt.subplots(2, 1, figsize=(8, 6), sharex=True, gridspec_kw={"height_ratios": [3, 1]})
-    x = data[param].values
-    rows, labels = period_labels(data["period"].values, data["orbit_impacts"].values)
-    directions = list(data["direction"].values)
-    for j, direction in enumerate(directions):
-        style = dict(DIRECTION_STYLE.get(str(direction), {"label": str(direction)}))
-        sel = data.sel(direction=direction)
-        y = sel[variable].values  # (param, sample)
-        xs = np.repeat(x, y.shape[-1])
-        ax.plot(xs, y.ravel(), linestyle="none", markersize=2.5, alpha=0.7, **style)
-        axp.plot(x, np.take(rows, j, axis=data["period"].dims.index("direction")), linestyle="-",
-                 drawstyle="steps-mid", color=style.get("color"), marker=style.get("marker"), markersize=3)
-    ax.set_ylabel(section_label(variable, ds.attrs.get("sampling.theta", 0)))
-    ax.legend(loc="best", markerscale=3)
-    exclude = (param,) + ((scan,) if isinstance(scan, str) else ())
-    title = f"Bifurcation diagram over {param}"
-    if scan is not None and scan != "none" and scan in ds.dims:
-        title += f" ({scan} = {float(ds[scan].values[scan_index]):g})"
-    params = parameter_title(ds.attrs, exclude)
-    ax.set_title(title + (f"\n{params}" if params else ""), fontsize=10)
-    axp.set_ylabel("period M\n(impacts per period)", fontsize=9)
-    axp.set_yticks(range(len(labels)), labels, fontsize=8 if len(labels) < 12 else 6)
-    axp.set_ylim(-0.5, len(labels) - 0.5)
-    axp.set_xlabel(param)
-    fig.tight_layout()
-    return _save(fig, path)
-
-
 def poincare_section(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     """(u, v) samples of a stroboscopic run; impacting periods marked."""
     fig, ax = plt.subplots(figsize=(6, 5))
@@ -165,6 +113,13 @@ def jacobian_plot(ds: xr.Dataset, path: str | os.PathLike) -> Path:
         err = ds["error"].values[x > 0]
         if np.any(err > 0):  # below this line an element is difference noise, not signal
             axes[0].loglog(xs[err > 0], err[err > 0], ":", color="0.5", lw=1.2, label="estimated error of J")
+    if "exponent" in ds:  # the fitted regimes: range shaded, exponent +- standard error
+        for k, regime in enumerate(ds["regime"].values):
+            q, se = float(ds["exponent"].values[k]), float(ds["exponent_stderr"].values[k])
+            if np.isfinite(q):
+                lo, hi = float(ds["fit_x_min"].values[k]), float(ds["fit_x_max"].values[k])
+                axes[0].axvspan(lo, hi, color=("tab:green", "tab:purple", "tab:olive")[k % 3], alpha=0.08,
+                                label=f"fit ({regime}): |J11 - P11| ~ x^({q:+.3f} +- {se:.1g})")
     axes[0].set_xlabel("x (wall-free penetration at t = n)")
     axes[0].set_ylabel("|J - P|")
     axes[0].legend(fontsize=8)
@@ -190,39 +145,5 @@ def timeseries_plot(ds: xr.Dataset, path: str | os.PathLike) -> Path:
     a2.plot(ds["t"], ds["v"], lw=0.8, color="tab:orange")
     a2.set_ylabel("velocity v")
     a2.set_xlabel("t (forcing periods)")
-    fig.tight_layout()
-    return _save(fig, path)
-
-
-def period_map(ds: xr.Dataset, path: str | os.PathLike) -> Path:
-    """2D scan: orbit period over (swept parameter, second parameter), one panel per direction.
-
-    Maximal orbits (one impact per orbit period) are drawn in colour by period; other
-    periodic orbits hatched grey; "not periodic" white.
-    """
-    param = ds.attrs["sweep.param"]
-    scan = ds.attrs["sweep.scan_param"]
-    directions = list(ds["direction"].values)
-    fig, axes = plt.subplots(1, len(directions), figsize=(5 * len(directions), 4.2), squeeze=False)
-    x = ds[param].values
-    # the second axis usually has few, unevenly spaced values (Gamma = 10, 100, 1000):
-    # one row per value, labelled with the value
-    y_values = ds[scan].values
-    y = np.arange(len(y_values))
-    vmax = max(1, int(ds["period"].max()))
-    for ax, direction in zip(axes[0], directions):
-        sel = ds.sel(direction=direction).transpose(scan, param, ...)
-        period = sel["period"].values.astype(float)
-        maximal = np.where(sel["orbit_impacts"].values == 1, period, np.nan)
-        other = np.where((period > 0) & (sel["orbit_impacts"].values != 1), 1.0, np.nan)
-        ax.pcolormesh(x, y, other, cmap="Greys", vmin=0, vmax=2, shading="nearest")
-        mesh = ax.pcolormesh(x, y, np.where(maximal > 0, maximal, np.nan), cmap="viridis", vmin=0.5,
-                             vmax=vmax + 0.5, shading="nearest")
-        ax.set_xlabel(param)
-        ax.set_ylabel(scan)
-        ax.set_yticks(y, [f"{v:g}" for v in y_values])
-        params = parameter_title(ds.attrs, (param, scan))
-        ax.set_title(f"{direction}: period of maximal orbits" + (f"\n{params}" if params else ""), fontsize=9)
-        fig.colorbar(mesh, ax=ax, label="period M (1 impact per M periods)")
     fig.tight_layout()
     return _save(fig, path)

@@ -209,3 +209,23 @@ def jacobian_dataset(scan: Any, attrs: Mapping[str, Any]) -> xr.Dataset:
     )
     ds["x"].attrs["long_name"] = "wall-free penetration u at t = n of the family (x, 0)"
     return ds
+
+
+def state_jacobian_dataset(res: Any, state: tuple[float, float], theta: float, attrs: Mapping[str, Any]) -> xr.Dataset:
+    """J of the one-period map at one state and its eigenvalues (the multipliers)."""
+    mu = np.linalg.eigvals(res.J)
+    ds = xr.Dataset(
+        {
+            "J": (("row", "col"), res.J, {"long_name": f"map Jacobian at (u, v) = {tuple(state)}, t = {theta}",
+                                          "method": res.method}),
+            "multiplier_real": ("eigenvalue", mu.real, {"long_name": "eigenvalues of J, real part"}),
+            "multiplier_imag": ("eigenvalue", mu.imag, {"long_name": "eigenvalues of J, imaginary part"}),
+            "multiplier_abs": ("eigenvalue", np.abs(mu), {"long_name": "modulus of the eigenvalues of J"}),
+            "image": ("component", np.asarray(res.image, dtype=float)[:2], {"long_name": "(u, v) one period later"}),
+        },
+        coords={"row": ["d_u_next", "d_v_next"], "col": ["d_u", "d_v"], "eigenvalue": [1, 2],
+                "component": ["u", "v"]},
+        attrs={**dict(attrs), "jacobian.u": float(state[0]), "jacobian.v": float(state[1]),
+               "jacobian.error": float(res.error), "jacobian.step": float(res.step)},
+    )
+    return ds

@@ -21,19 +21,18 @@ from typing import Any
 
 import numpy as np
 
-from mapcheck.compare import loglog_slope, power_law_with_offset
+from mapcheck.compare import power_law_with_offset
 
 from ..config import SamplingSpec, SweepSpec
 from ..dynamics.jacobian import jacobian_vs_x, resolve_method
+from ..dynamics.singularity_fit import HARD_BETA, RELIABLE, SOFT_BETA, contact_beta, fit_singularity, regime_masks
 from . import Context
 
 NU, OMEGA = 0.196, 7.368
-A_ABS = 4.0 * math.pi ** 2
 GAMMAS = (10.0, 1e2, 1e3, 1e4)
 #: Stiffer walls than the paper's, for the hard limit (beta -> infinity).
 GAMMAS_EXTRA = (1e5, 1e6)
 R_OF = {"fig6": 1.0, "fig7": 0.9}
-SOFT_BETA, HARD_BETA = 0.1, 5.0
 #: x range per Jacobian method.  Differences: x >= 1e-5, the steps must stay below x (else
 #: the stencil straddles grazing), and near grazing the FMU's own error is ~1e-9 in u
 #: (measured by `reproduce direct`), so below x ~ 1e-5 the differences are noise at the
@@ -46,8 +45,6 @@ X_RANGE = X_RANGES["fd"]
 X_PER_DECADE = {True: 3, False: 8}
 #: x of the exact-vs-differences cross-check (where both are reliable).
 X_CHECK = (1e-4, 1e-3, 1e-2)
-#: A fit needs >= 3 points over >= 1 decade of x.
-MIN_POINTS, MIN_DECADES = 3, 1.0
 #: sigma ranges of the bifurcation diagrams.  At r = 0.9 and Gamma = 10 (low velocity,
 #: map (48)) the scale is (1-r)^2/(1+r)^2 ~ 1/361 of the hard wall's: the paper expands
 #: that axis by 10^2.
@@ -61,7 +58,7 @@ SETTINGS = {
 
 def beta_of(x: np.ndarray, r: float, Gamma: float) -> np.ndarray:
     """beta = r kappa sqrt(8 pi^2 x) / |A| at sigma = 0, v_n = 0 (docs/theory.md section 8)."""
-    return r * math.sqrt(Gamma) * OMEGA * np.sqrt(8.0 * math.pi ** 2 * np.asarray(x)) / A_ABS
+    return contact_beta(x, r, Gamma, OMEGA)
 
 
 def x_grid(method: str, quick: bool) -> np.ndarray:
@@ -95,21 +92,21 @@ def cross_check(ctx: Context, r: float) -> dict[str, Any]:
 
 
 def fit_regimes(x: np.ndarray, scan: Any, r: float, Gamma: float) -> dict[str, Any]:
-    """Slopes of |J11 - P11| in the soft and hard regimes (plain log-log, and with the
-    regular O(1) part P (N - I) removed by fitting a x^q + b)."""
+    """Slopes of |J11 - P11| in the soft and hard regimes (plain log-log with its standard
+    error, :func:`harness.dynamics.singularity_fit.fit_singularity`, and with the regular O(1)
+    part P (N - I) removed by fitting a x^q + b)."""
     d = scan.J[:, 0, 0] - scan.P1[0, 0]
-    beta = beta_of(x, r, Gamma)
-    reliable = scan.error < 0.05 * np.abs(d)  # the Jacobian's own error estimate
     out: dict[str, Any] = {}
-    for name, sel in (("soft", beta <= SOFT_BETA), ("hard", beta >= HARD_BETA)):
-        sel = sel & reliable
-        xs = x[sel]
-        if xs.size < MIN_POINTS or math.log10(xs.max() / xs.min()) < MIN_DECADES - 1e-9:
+    for name, fit in fit_singularity(x, d, scan.error, beta_of(x, r, Gamma)).items():
+        if fit is None:
             out[name] = None
             continue
-        q, a, b = power_law_with_offset(xs, d[sel])
-        out[name] = {"slope": loglog_slope(xs, d[sel]), "slope_offset_removed": q, "x_range": [xs.min(), xs.max()],
-                     "beta_range": [float(beta[sel].min()), float(beta[sel].max())], "points": int(xs.size)}
+        sel = (x >= fit.x_min) & (x <= fit.x_max) & regime_masks(x, beta_of(x, r, Gamma))[name]
+        sel &= scan.error < RELIABLE * np.abs(d)
+        q, a, b = power_law_with_offset(x[sel], d[sel])
+        out[name] = {"slope": fit.exponent, "slope_stderr": fit.stderr, "slope_offset_removed": q,
+                     "x_range": [fit.x_min, fit.x_max], "beta_range": [fit.beta_min, fit.beta_max],
+                     "points": fit.points}
     return out
 
 
@@ -216,11 +213,17 @@ def _plot_jacobian(ctx: Context, r: float, x: np.ndarray, scans: dict, fits: dic
             if f:
                 lo, hi = f["x_range"]
                 ax.axvspan(lo, hi, color=line.get_color(), alpha=0.06)
-                ax.annotate(f"{f['slope']:+.2f}", (hi, np.interp(hi, x, d)), fontsize=7, color=line.get_color())
+                # soft slopes at the right end of their range, hard ones at the left end: the hard
+                # ranges all end at the largest x, where labels there would sit on each other
+                at = hi if name == "soft" else lo
+                ax.annotate(f"{f['slope']:+.2f}", (at, np.interp(at, x, d)), textcoords="offset points",
+                            xytext=(3, -9) if name == "soft" else (-4, 5), ha="left" if name == "soft" else "right",
+                            fontsize=7, color=line.get_color())
     ax.set_xlabel("x (penetration of the wall-free orbit at t = n)")
     ax.set_ylabel("|J11 - P11| (impact contribution, coordinates at t = n)")
-    ax.set_title(f"Jacobian of the FMU's map, (nu, Omega) = ({NU}, {OMEGA}), r = {r:g}; "
-                 f"shaded: fitted soft (beta <= {SOFT_BETA:g}) / hard (beta >= {HARD_BETA:g}) ranges", fontsize=8)
+    ax.set_title(f"Jacobian of the FMU's map, (nu, Omega) = ({NU}, {OMEGA}), r = {r:g}\n"
+                 f"shaded: fitted soft (beta <= {SOFT_BETA:g}) / hard (beta >= {HARD_BETA:g}) ranges, slopes written",
+                 fontsize=9)
     ax.legend(fontsize=7)
     fig.tight_layout()
     path = ctx.out / f"{ctx.target}_jacobian.png"

@@ -100,8 +100,10 @@ class ProcessBackend:
         self._pool: ProcessPoolExecutor | None = None
 
     def _new_pool(self) -> ProcessPoolExecutor:
+        from ..io.main_guard import require_main_guard
         from .tasks import init_pool_worker
 
+        require_main_guard("backend")  # before any worker re-imports an unguarded script
         # spawn, not fork: the parent may hold loaded FMU libraries and helper threads
         # (tqdm's monitor, Dask), which a forked child must not inherit.
         ctx = multiprocessing.get_context("spawn")

@@ -19,18 +19,58 @@ import numpy as np
 from ..errors import HarnessInputError
 
 
+def _json_default(o: Any) -> Any:
+    if isinstance(o, np.ndarray):
+        return o.tolist()
+    if isinstance(o, np.generic):
+        return o.item()
+    return repr(o)
+
+
 def fingerprint(obj: Any) -> str:
     """sha256 of a JSON rendering of ``obj`` (numpy arrays and scalars included)."""
-
-    def default(o: Any) -> Any:
-        if isinstance(o, np.ndarray):
-            return o.tolist()
-        if isinstance(o, np.generic):
-            return o.item()
-        return repr(o)
-
-    text = json.dumps(obj, sort_keys=True, default=default)
+    text = json.dumps(obj, sort_keys=True, default=_json_default)
     return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _short(value: Any) -> str:
+    if isinstance(value, list) and len(value) > 4 and all(isinstance(v, (int, float)) for v in value):
+        return f"{len(value)} values {value[0]:g}..{value[-1]:g}"
+    text = json.dumps(value, sort_keys=True)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def differences(stored: Any, current: Any, prefix: str = "") -> list[str]:
+    """What differs between two run identities (JSON renderings), e.g.
+    ``["params.sigma: 0.5 -> 0.3", "values: 31 values 0.1..1 -> 41 values 0.1..1"]``."""
+    if isinstance(stored, dict) and isinstance(current, dict):
+        out = []
+        for key in sorted(set(stored) | set(current)):
+            name = f"{prefix}{key}"
+            if key not in stored:
+                out.append(f"{name}: (none) -> {_short(current[key])}")
+            elif key not in current:
+                out.append(f"{name}: {_short(stored[key])} -> (none)")
+            else:
+                out += differences(stored[key], current[key], name + ".")
+        return out
+    if stored != current:
+        name = prefix.rstrip(".")
+        if name == "fmu":
+            return ["fmu: another FMU binary (sha256 differs)"]
+        return [f"{name}: {_short(stored)} -> {_short(current)}"]
+    return []
+
+
+class CheckpointMismatch(HarnessInputError):
+    """The checkpoint directory holds another run's results; :attr:`changes` says what differs."""
+
+    def __init__(self, argument: str, reason: str, changes: list[str] | None = None) -> None:
+        super().__init__(argument, reason)
+        self.changes = list(changes or [])
+
+    def __reduce__(self) -> tuple:
+        return (type(self), (self.argument, self.reason, self.changes))
 
 
 class Checkpoint:
@@ -46,25 +86,33 @@ class Checkpoint:
         Name used in error messages (``"--checkpoint"``).
     """
 
-    def __init__(self, directory: str | os.PathLike, run_fingerprint: str, argument: str = "--checkpoint") -> None:
+    def __init__(self, directory: str | os.PathLike, run_fingerprint: str, argument: str = "--checkpoint",
+                 identity: Any = None) -> None:
         self.directory = Path(directory)
         self.fingerprint = run_fingerprint
         manifest = self.directory / "manifest.json"
+        # the identity (parameters, grids, sampling, FMU hash) is kept beside its hash so that a
+        # mismatch can say what changed
+        current = None if identity is None else json.loads(json.dumps(identity, sort_keys=True,
+                                                                      default=_json_default))
         if manifest.exists():
             try:
-                stored = json.loads(manifest.read_text())["fingerprint"]
-            except (ValueError, KeyError):
+                record = json.loads(manifest.read_text())
+                stored = record["fingerprint"]
+            except (ValueError, KeyError, TypeError):
                 raise HarnessInputError(argument, f"{self.directory} is not a harness checkpoint") from None
             if stored != run_fingerprint:
-                raise HarnessInputError(
+                changes = (differences(record["identity"], current)
+                           if current is not None and "identity" in record else [])
+                what = "; ".join(changes) if changes else "other parameters or FMU"
+                raise CheckpointMismatch(
                     argument,
-                    f"{self.directory} holds a checkpoint of a different run (other parameters or FMU); "
-                    "delete it or choose another directory",
-                )
+                    f"{self.directory} holds a checkpoint of a different run ({what}); "
+                    "delete it or choose another directory", changes)
         else:
             try:
                 self.directory.mkdir(parents=True, exist_ok=True)
-                manifest.write_text(json.dumps({"fingerprint": run_fingerprint}))
+                manifest.write_text(json.dumps({"fingerprint": run_fingerprint, "identity": current}))
             except OSError as exc:
                 raise HarnessInputError(argument, f"cannot create the checkpoint {str(self.directory)!r}: "
                                         f"{exc.strerror or exc}") from None

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..config import Layered, RunSpec, SamplingSpec, SweepSpec, _number, default_fmu_path, load_toml
+from ..config import Layered, RunSpec, SamplingSpec, SweepSpec, _number, default_fmu_path, load_toml, parse_modes
 from ..errors import HarnessInputError
 
 
@@ -51,14 +51,22 @@ class Experiment:
         """
         from ..fmu.fmi import FmuModel, INITIAL_STATE, SOLVER_PARAMETER
 
+        from ..errors import ErrorCollector
+
+        # every mistake of the file and the flags is reported at once (one run, not one per mistake)
+        found = ErrorCollector()
         layers = Layered()
         if config is not None:
-            layers.merge(load_toml(config), Path(config).name)
+            found.check(layers.merge, load_toml(config), Path(config).name)
         if overrides:
-            layers.merge(overrides, "cli")
+            found.check(layers.merge, overrides, "cli")
         path = layers.get("fmu", "path") or default_fmu_path()
         if model is None:
-            model = FmuModel(path, argument=layers.arg("fmu", "path") if layers.origin.get(("fmu", "path")) else "--fmu")
+            try:
+                model = FmuModel(path, argument=layers.arg("fmu", "path") if layers.origin.get(("fmu", "path")) else "--fmu")
+            except HarnessInputError as exc:  # nothing below can be checked without the FMU
+                found.add(exc)
+                found.raise_if_any()
         params = model.defaults()
         for name, value in layers.values["model"].items():
             arg = (f"--set {name}" if layers.origin.get(("model", name)) == "cli"
@@ -69,25 +77,39 @@ class Experiment:
                 # an FMU without the parameter integrates with CVODE: that choice is a no-op
                 if str(value).lower() in ("cvode", "0"):
                     continue
-                raise HarnessInputError(arg, f"{model.path.name} has no closed-form solver mode (no parameter "
-                                        f"{SOLVER_PARAMETER!r}); it integrates with CVODE only")
-            params[name] = model.coerce(name, value, arg)
+                found.add(HarnessInputError(arg, f"{model.path.name} has no closed-form solver mode (no parameter "
+                                            f"{SOLVER_PARAMETER!r}); it integrates with CVODE only"))
+                continue
+            try:
+                params[name] = model.coerce(name, value, arg)
+            except HarnessInputError as exc:
+                found.add(exc)
         state = []
         for key in INITIAL_STATE:
             given = layers.get("initial", key)
             if given is None:
                 state.append(float(params.get(key, -1.0 if key == "u0" else 0.0)))
             else:
-                state.append(_number(layers, "initial", key))
+                state.append(found.check(_number, layers, "initial", key, default=0.0))
         for key in INITIAL_STATE:
             params.pop(key, None)  # the state travels separately
+        sampling = found.check(SamplingSpec.from_layers, layers)
+        run = found.check(RunSpec.from_layers, layers)
+        # the [sweep] names and modes are checked with the rest; its grid later, by the budget
+        # first (a huge --num must be refused before it is allocated)
+        for key in ("param", "scan_param"):
+            if ("sweep", key) in layers.origin and layers.get("sweep", key) is not None:
+                found.check(model.check_settable, str(layers.get("sweep", key)), layers.arg("sweep", key))
+        if ("sweep", "mode") in layers.origin:
+            found.check(parse_modes, layers.get("sweep", "mode"), layers.arg("sweep", "mode"))
+        found.raise_if_any()
         return cls(
             fmu_path=str(model.path),
             model=model,
             params=params,
             state0=(state[0], state[1]),
-            sampling=SamplingSpec.from_layers(layers),
-            run=RunSpec.from_layers(layers),
+            sampling=sampling,
+            run=run,
             layers=layers,
         )
 

@@ -100,7 +100,13 @@ def task_rows(task: SweepTask) -> list[tuple[str, float]]:
 def sweep_fingerprint(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, float],
                       sampling: SamplingSpec, fmu_sha256: str) -> str:
     """Identity of a sweep for checkpoints: same fingerprint, same results."""
-    return fingerprint({
+    return fingerprint(sweep_identity(spec, params, state0, sampling, fmu_sha256))
+
+
+def sweep_identity(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, float],
+                   sampling: SamplingSpec, fmu_sha256: str) -> dict[str, Any]:
+    """What a sweep's results depend on (the checkpoint's manifest keeps it, to say what changed)."""
+    return {
         "tasks": 2,  # 2: up+down as one loop task, chains checkpointed per point
         "fmu": fmu_sha256,
         "params": dict(params),
@@ -111,7 +117,7 @@ def sweep_fingerprint(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[
         "modes": list(spec.modes),
         "scan_param": spec.scan_param,
         "scan_values": None if spec.scan_values is None else np.asarray(spec.scan_values, dtype=float),
-    })
+    }
 
 
 # ----------------------------------------------------------------------------------------
@@ -141,6 +147,7 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         "period": np.full(shape, -1, dtype=np.int64),
         "orbit_impacts": np.full(shape, -1, dtype=np.int64),
         "dynamics": np.full(shape, -1, dtype=np.int64),
+        "dynamics_reason": np.full(shape, -1, dtype=np.int64),
         "lyapunov": np.full(shape + [2], np.nan),
         "lyapunov_err": np.full(shape + [2], np.nan),
     }
@@ -169,16 +176,10 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         coords=coords,
         attrs=dict(attrs),
     )
-    from ..dynamics.classify import DYNAMICS_NAMES
+    from ..dynamics.classify import dynamics_attrs, reason_attrs
 
-    codes = sorted(DYNAMICS_NAMES)
-    ds["dynamics"] = (dims, arrays["dynamics"], {
-        "long_name": "dynamics of the orbit", "flag_values": np.array(codes, dtype=np.int64),
-        "flag_meanings": " ".join(DYNAMICS_NAMES[c].replace(" ", "_").replace("-", "_") for c in codes),
-        "comment": "periodic: periodic samples, converged; chaotic: largest Lyapunov exponent > 0 by more "
-                   "than 3 standard errors; quasi_periodic: largest exponent 0 within 3 standard errors (band "
-                   "< 0.02); not_converged: largest exponent < 0 (attracting orbit not reached), still "
-                   "settling, or undecided; unclassified: not periodic and no exponents (sampling.lyapunov = 0)"})
+    ds["dynamics"] = (dims, arrays["dynamics"], dynamics_attrs())
+    ds["dynamics_reason"] = (dims, arrays["dynamics_reason"], reason_attrs())
     if sampling.lyapunov:
         ds = ds.assign_coords(exponent=[1, 2])
         ds["lyapunov"] = (dims + ["exponent"], arrays["lyapunov"], {
@@ -291,7 +292,8 @@ def run_sweep(
 
     store = None
     if checkpoint is not None:
-        store = Checkpoint(checkpoint, sweep_fingerprint(spec, base, state0, sampling, sha))
+        identity = sweep_identity(spec, base, state0, sampling, sha)
+        store = Checkpoint(checkpoint, fingerprint(identity), identity=identity)
     results: dict[str, dict[str, np.ndarray]] = {}
     todo: dict[str, SweepTask] = {}
     # leading points of chains: from the checkpoint, then as the chains report them
@@ -362,7 +364,8 @@ def run_sweep(
         first = first_of[key]
         if first:  # the leading points came from the checkpoint
             for name in RESULT_FIELDS:
-                arrays[name][:first] = np.asarray(rows[name][:first])
+                if name in rows:  # a checkpoint written before a field existed lacks it
+                    arrays[name][:first] = np.asarray(rows[name][:first])
         if store is not None:
             store.save(key, arrays)
             store.remove_partial(key)

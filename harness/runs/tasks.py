@@ -14,13 +14,14 @@ from typing import Any, Callable
 import numpy as np
 
 from ..io.children import _exit_on_signal, die_with_parent
-from ..dynamics.classify import classify_dynamics, classify_orbit, still_settling
+from ..dynamics.classify import classify_orbit, explain_dynamics, still_settling
 from ..config import SamplingSpec
 from ..fmu.fmi import INITIAL_STATE, WALL_NAMES, FmuSource
 from ..dynamics.sampling import sample_periods
 from ..fmu.simulator import has_derivatives, simulator_for
 
-RESULT_FIELDS = ("u", "v", "impacts", "t", "period", "orbit_impacts", "dynamics", "lyapunov", "lyapunov_err")
+RESULT_FIELDS = ("u", "v", "impacts", "t", "period", "orbit_impacts", "dynamics", "dynamics_reason", "lyapunov",
+                 "lyapunov_err")
 
 
 @dataclass(frozen=True)
@@ -77,6 +78,7 @@ def execute(task: SweepTask, sim: Any, report: Callable[[str, int, dict], None] 
         "period": np.full(k, -1, dtype=np.int64),
         "orbit_impacts": np.full(k, -1, dtype=np.int64),
         "dynamics": np.full(k, -1, dtype=np.int64),
+        "dynamics_reason": np.full(k, -1, dtype=np.int64),
         "lyapunov": np.full((k, 2), np.nan),
         "lyapunov_err": np.full((k, 2), np.nan),
     }
@@ -162,7 +164,7 @@ def _run_points(task: SweepTask, sim: Any, params: dict[str, Any], state0: tuple
             ly = lyapunov_continued(sim, now, s.lyapunov, exact)
             out["lyapunov"][i], out["lyapunov_err"][i] = ly.exponents, ly.uncertainty
             lam, err = ly.largest, ly.largest_uncertainty
-        out["dynamics"][i] = classify_dynamics(orbit.period, settling, lam, err)
+        out["dynamics"][i], out["dynamics_reason"][i] = explain_dynamics(orbit.period, settling, lam, err)
         if report is not None and i + 1 < k:  # the last point arrives with the result
             row = {name: out[name][i].tolist() for name in RESULT_FIELDS}
             u_end, v_end, _ = sim.read()
