@@ -148,3 +148,16 @@ def test_rejected_sweep_leaves_no_checkpoint_and_no_note_next_time(tmp_path: Pat
     assert not (tmp_path / "s.nc.partial").exists() and not out.exists()
     code, _, err = _run_main([*base, "--values", "0", "--set", "contact=0"], capsys)
     assert code == 0 and err == "" and out.exists(), err
+
+
+def test_atomic_write_gives_the_file_the_umask_mode(tmp_path: Path) -> None:
+    """mkstemp's 0600 was kept: results and figures were unreadable to the user's group."""
+    from harness.io.outputs import atomic_write
+
+    old = os.umask(0o027)
+    try:
+        with atomic_write(tmp_path / "r.txt") as tmp:
+            tmp.write_text("x")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "r.txt").stat().st_mode & 0o777 == 0o640

@@ -59,6 +59,17 @@ def check_plot(path: str | os.PathLike, argument: str = "--plot") -> Path:
     return check_output(path, argument)
 
 
+def _umask() -> int:
+    """This process's umask, read without changing it (os.umask would, for every thread)."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except OSError:  # pragma: no cover - not Linux
+        pass
+    return 0o022
+
+
 @contextlib.contextmanager
 def atomic_write(path: str | os.PathLike, argument: str = "--out") -> Iterator[Path]:
     """Yield a temporary path next to ``path``; on success it replaces ``path``.
@@ -76,6 +87,8 @@ def atomic_write(path: str | os.PathLike, argument: str = "--out") -> Iterator[P
     tmp = Path(tmp_name)
     try:
         yield tmp
+        # mkstemp creates the file 0600; a result file gets the mode any new file would
+        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, target)
     except OSError as exc:
         raise HarnessInputError(argument, f"cannot write {str(path)!r}: {exc.strerror or exc}") from None
