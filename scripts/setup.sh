@@ -54,12 +54,12 @@ fi
 cmake --build build/fmu -j 2 >/dev/null
 log "FMU ready: build/fmu/ImpactOscillator.fmu"
 
-# The pythonfmu twin (same model in Python, CVODE through scikit-sundae); rebuilt only when its
-# sources are newer than the FMU.
+# The pythonfmu twin (same model in Python, CVODE through scikit-sundae, behind a C front that
+# keeps the FMI state machine); rebuilt only when its sources are newer than the FMU.
 twin_src=fmu_src/pytwin
 twin_fmu=build/fmu/ImpactOscillatorPy.fmu
 if [[ -f $twin_src/build.py ]]; then
-    if [[ ! -f $twin_fmu ]] || [[ -n $(find "$twin_src" -newer "$twin_fmu" -name '*.py' -print -quit) ]]; then
+    if [[ ! -f $twin_fmu ]] || [[ -n $(find "$twin_src" -newer "$twin_fmu" \( -name '*.py' -o -name '*.c' \) -print -quit) ]]; then
         .venv/bin/python "$twin_src/build.py" --out "$twin_fmu" >/dev/null
         log "twin FMU ready: $twin_fmu"
     fi

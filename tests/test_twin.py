@@ -55,7 +55,7 @@ THETA = 0.5  # strobe half a period away from the grazing phase t = n
 def twin_fmu() -> Path:
     """The twin as the set-up script builds it; rebuilt here if missing or older than its
     sources, so that the tests never run a stale twin."""
-    sources = list(TWIN_SRC.glob("*.py"))
+    sources = [*TWIN_SRC.glob("*.py"), *TWIN_SRC.glob("*.c")]
     if not TWIN_FMU.exists() or max(p.stat().st_mtime for p in sources) > TWIN_FMU.stat().st_mtime:
         subprocess.run(
             [sys.executable, str(TWIN_SRC / "build.py"), "--out", str(TWIN_FMU)],
@@ -525,8 +525,8 @@ def test_bad_parameters_are_rejected_and_the_instance_survives(twin_fmu, c_fmu, 
 
 def test_only_sigma_is_tunable_after_initialisation(twin_fmu, c_fmu) -> None:
     """After initialisation sigma may change, a fixed parameter may not: the same message as
-    the C FMU's, and the run goes on with the old value."""
-    messages, states = {}, {}
+    the C FMU's, with fmi2Error (not Fatal), and up to the refusal the same run."""
+    messages, states, statuses = {}, {}, {}
     for path in (twin_fmu, c_fmu):
         s = Slave(path, logging=True)
         try:
@@ -534,20 +534,16 @@ def test_only_sigma_is_tunable_after_initialisation(twin_fmu, c_fmu) -> None:
             s.step_to(1.0)
             s.set(sigma=0.3)  # tunable: accepted
             s.step_to(2.0)
-            saved = s.slave.getFMUstate()
-            with pytest.raises(FMICallException):
-                s.set(r=0.5)
-            # after fmi2Error the instance cannot go on (FMI 2.0.4 2.1.3; the C FMU is then in
-            # Error): restoring the state saved before continues with the old value
-            s.slave.setFMUstate(saved)
-            s.slave.freeFMUstate(saved)
-            s.step_to(3.0)
-            messages[path] = [m for st, _, m in s.messages if st >= 3][:1]
             states[path] = s.state()
+            with pytest.raises(FMICallException) as refused:
+                s.set(r=0.5)
+            statuses[path] = refused.value.status
+            messages[path] = [m for st, _, m in s.messages if st >= 3][:1]
         finally:
             s.close()
     assert "only sigma is tunable" in messages[twin_fmu][0]
     assert messages[twin_fmu] == messages[c_fmu]
+    assert statuses[twin_fmu] == statuses[c_fmu] == 3  # fmi2Error
     np.testing.assert_array_equal(states[twin_fmu], states[c_fmu])
 
 
@@ -591,12 +587,18 @@ print("guarded", len(sys.modules["ImpactOscillatorPy"]._EXIT_GUARDED),
 _C_IMPORTER = r"""
 #include <dlfcn.h>
 #include <stdio.h>
+#include <stdarg.h>
 #include <stdlib.h>
 #include "fmi2Functions.h"
 static void logger(fmi2ComponentEnvironment e, fmi2String name, fmi2Status s, fmi2String cat,
                    fmi2String msg, ...) {
+    va_list ap;
     (void)e; (void)name; (void)cat;
-    printf("log %d: %s\n", (int)s, msg);
+    printf("log %d: ", (int)s);
+    va_start(ap, msg);
+    vprintf(msg, ap);
+    va_end(ap);
+    printf("\n");
 }
 #define LOAD(f) f##TYPE *f = (f##TYPE *)dlsym(h, #f); if (!f) return 2;
 int main(int argc, char **argv) {
@@ -631,7 +633,8 @@ int main(int argc, char **argv) {
 
 def _c_importer(twin_fmu: Path, tmp_path: Path, cc: str) -> tuple[list[str], dict[str, str]]:
     """Compile the C importer and extract the twin: the command line that runs it, and the
-    environment a C host needs for the twin (libpython preloaded, PYTHONHOME, PYTHONPATH)."""
+    environment the README's old recipe gave a C host (libpython preloaded, PYTHONHOME,
+    PYTHONPATH), which the twin no longer needs."""
     import sysconfig
 
     src, exe = tmp_path / "importer.c", tmp_path / "importer"
@@ -650,34 +653,64 @@ def _c_importer(twin_fmu: Path, tmp_path: Path, cc: str) -> tuple[list[str], dic
     return args, python_env
 
 
-def test_non_python_importer_with_ld_preload(twin_fmu: Path, tmp_path: Path) -> None:
-    """A C program that dlopens the twin needs libpython preloaded, PYTHONHOME at its
-    installation and PYTHONPATH at the packages, exactly as the README says; then it computes
-    what fmpy gets in-process."""
+def _cc() -> str:
     import shutil
 
     cc = shutil.which("cc") or shutil.which("gcc")
     if cc is None:
         pytest.skip("no C compiler")
-    args, python_env = _c_importer(twin_fmu, tmp_path, cc)
+    return cc
+
+
+def test_c_host_needs_no_python_environment(twin_fmu: Path, tmp_path: Path) -> None:
+    """A C program that dlopens the twin, with no LD_PRELOAD, PYTHONHOME or PYTHONPATH and a
+    PATH without the project's Python, runs it (the FMU's front loads the libpython and
+    site-packages recorded at build time) and computes what fmpy gets in-process; the old
+    recipe of the README (preload and both variables) still works."""
+    args, python_env = _c_importer(twin_fmu, tmp_path, _cc())
     env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path)}
-
-    bare = subprocess.run(args, env=env, capture_output=True, text=True, timeout=60)
-    assert bare.returncode != 0 and "undefined symbol" in bare.stdout
-
-    run = subprocess.run(args, env={**env, **python_env},
-                         capture_output=True, text=True, timeout=120)
-    assert run.returncode == 0, run.stdout + run.stderr
-    got = [float(x) for x in run.stdout.split("state")[1].split()]
+    states = []
+    for extra in ({}, python_env):
+        run = subprocess.run(args, env={**env, **extra}, capture_output=True, text=True,
+                             timeout=120)
+        assert run.returncode == 0, run.stdout + run.stderr
+        assert "log 3" not in run.stdout and "log 4" not in run.stdout
+        states.append([float(x) for x in run.stdout.split("state")[1].split()])
 
     s = Slave(twin_fmu)
     try:
         s.start(t0=0.5, u0=-2.2, v0=0.0)
         for k in range(10):  # the same communication points (CVODE stops at each)
             s.step_to(1.5 + k)
-        np.testing.assert_allclose(got, s.state(), rtol=0, atol=1e-12)
+        for got in states:
+            np.testing.assert_allclose(got, s.state(), rtol=0, atol=1e-12)
     finally:
         s.close()
+
+
+@pytest.mark.parametrize(
+    "key, value, expect",
+    [
+        ("libpython", "/nonexistent/libpython3.11.so.1.0", "cannot load the Python library"),
+        ("site", "/nonexistent/site-packages", "No module named"),
+    ],
+)
+def test_c_host_missing_python_is_an_fmi_error(twin_fmu: Path, tmp_path: Path, key: str,
+                                               value: str, expect: str) -> None:
+    """Without the recorded libpython, or without the packages, the C host gets fmi2Error
+    (or a NULL instance) with the reason through its logger, and exits normally."""
+    args, _ = _c_importer(twin_fmu, tmp_path, _cc())
+    record = tmp_path / "fmu" / "resources" / "python_runtime.txt"
+    lines = [f"{key}={value}" if line.startswith(key + "=") else line
+             for line in record.read_text().splitlines()]
+    record.write_text("\n".join(lines) + "\n")
+    # no site-packages of the caller's either: an empty user base, no PYTHONPATH
+    env = {"PATH": "/usr/bin:/bin", "HOME": str(tmp_path), "PYTHONNOUSERSITE": "1"}
+    run = subprocess.run(args, env=env, capture_output=True, text=True, timeout=120)
+    assert run.returncode == 1, run.stdout + run.stderr  # refused, not aborted or crashed
+    errors = [line for line in run.stdout.splitlines() if line.startswith("log 3: ")]
+    assert any(expect in line for line in errors), run.stdout + run.stderr
+    assert "log 4" not in run.stdout
 
 
 @pytest.mark.skipif(os.environ.get("IMPACT_VALGRIND") != "1",

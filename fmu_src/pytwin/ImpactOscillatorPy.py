@@ -25,6 +25,31 @@ from pathlib import Path
 from typing import Any, Optional
 from xml.etree.ElementTree import Element, SubElement
 
+
+
+def _use_build_site_packages() -> None:
+    """Make numpy and scikit-sundae importable in a host that has no Python environment.
+
+    In a C host the interpreter pythonfmu starts has only its standard library.  build.py
+    records the site-packages of the Python that built the FMU in ``python_runtime.txt`` (next
+    to this file in the FMU's resources); they are appended to ``sys.path`` only when the
+    packages are not importable already, so a Python importer keeps its own.
+    """
+    import importlib.util
+
+    if all(importlib.util.find_spec(m) is not None for m in ("numpy", "sksundae")):
+        return
+    record = Path(__file__).resolve().parent / "python_runtime.txt"
+    if not record.is_file():
+        return
+    for line in record.read_text().splitlines():
+        key, _, value = line.partition("=")
+        if key == "site" and value not in sys.path and Path(value).is_dir():
+            sys.path.append(value)
+
+
+_use_build_site_packages()
+
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability
 from pythonfmu.default_experiment import DefaultExperiment
 from pythonfmu.enums import Fmi2Initial, Fmi2Status
@@ -277,10 +302,9 @@ class ImpactOscillatorPy(Fmi2Slave):
         clean-up (taken with ``Py_IncRef`` and owned by nobody on the Python side), keeps the
         counts balanced, so the instance survives a rejected parameter as the C FMU's does.
         """
+        # The FMU's C front (twin_export.c) keeps pythonfmu's logging on and forwards every
+        # error to the importer's logger, whatever the importer's logging setting.
         self.log(message, Fmi2Status.error, "logStatusError")
-        # pythonfmu 0.7 forwards log messages only while the importer has logging on; stderr
-        # makes sure the reason is seen even when it has not.
-        print(f"{self.instance_name}: {message}", file=sys.stderr, flush=True)
         for obj in (self, type(self), self.log_queue):
             ctypes.pythonapi.Py_IncRef(ctypes.py_object(obj))
         raise ModelError(message)
