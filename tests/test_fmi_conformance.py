@@ -148,3 +148,21 @@ def test_fmi3_nested_do_step_fails_the_outer_one() -> None:
                                     (C.c_double * 1)(), C.c_size_t(1)) == OK
     finally:
         x.free()
+
+
+@pytest.mark.parametrize("interface", ("fmi2-cs", "fmi3-cs"))
+def test_debug_logging_categories_are_checked(interface: str) -> None:
+    """Issue 19: SetDebugLogging(n = 3, categories = NULL) returned OK. Now n > 0 with a NULL
+    array, or a category not in the modelDescription's LogCategories, is an error; the declared
+    ones are accepted."""
+    fn = "fmi2SetDebugLogging" if interface == "fmi2-cs" else "fmi3SetDebugLogging"
+    for categories, expected in ((None, ERROR), ([b"logEvents", b"logStatusWarning"], OK),
+                                 ([b"logEverything"], ERROR)):
+        x = Instance(interface)
+        try:
+            n = 3 if categories is None else len(categories)
+            arr = None if categories is None else (C.c_char_p * n)(*categories)
+            st = getattr(x.lib, fn)(C.c_void_p(x.p), 1, C.c_size_t(n), arr)
+            assert st == expected, (categories, st, x.messages()[-1:])
+        finally:
+            x.free()
