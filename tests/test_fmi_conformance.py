@@ -166,3 +166,22 @@ def test_debug_logging_categories_are_checked(interface: str) -> None:
             assert st == expected, (categories, st, x.messages()[-1:])
         finally:
             x.free()
+
+
+@pytest.mark.parametrize("interface,state,expected", [
+    ("fmi2-me", "Continuous", ERROR), ("fmi2-me", "Event", OK),
+    ("fmi3-me", "Continuous", ERROR), ("fmi3-me", "Event", OK)])
+def test_tunable_parameter_only_in_event_mode_for_model_exchange(interface: str, state: str,
+                                                                 expected: int) -> None:
+    """Issue 19: FMI 2.0 Continuous-Time Mode accepted SetReal(sigma). There only continuous
+    inputs may be set (FMI 2.0.4 3.2.3, FMI 3.0 3.2); a tunable parameter changes in Event
+    Mode."""
+    x = Instance(interface)
+    try:
+        drive(x, state)
+        p, vr, val = C.c_void_p(x.p), (C.c_uint * 1)(2), (C.c_double * 1)(0.3)
+        st = (x.lib.fmi2SetReal(p, vr, C.c_size_t(1), val) if interface == "fmi2-me"
+              else x.lib.fmi3SetFloat64(p, vr, C.c_size_t(1), val, C.c_size_t(1)))
+        assert st == expected, x.messages()[-1:]
+    finally:
+        x.free()
