@@ -148,3 +148,40 @@ def test_fmi3_nested_do_step_fails_the_outer_one() -> None:
                                     (C.c_double * 1)(), C.c_size_t(1)) == OK
     finally:
         x.free()
+
+
+@pytest.mark.parametrize("interface", ("fmi2-cs", "fmi3-cs"))
+def test_debug_logging_categories_are_checked(interface: str) -> None:
+    """Issue 19: SetDebugLogging(n = 3, categories = NULL) returned OK. Now n > 0 with a NULL
+    array, or a category not in the modelDescription's LogCategories, is an error; the declared
+    ones are accepted."""
+    fn = "fmi2SetDebugLogging" if interface == "fmi2-cs" else "fmi3SetDebugLogging"
+    for categories, expected in ((None, ERROR), ([b"logEvents", b"logStatusWarning"], OK),
+                                 ([b"logEverything"], ERROR)):
+        x = Instance(interface)
+        try:
+            n = 3 if categories is None else len(categories)
+            arr = None if categories is None else (C.c_char_p * n)(*categories)
+            st = getattr(x.lib, fn)(C.c_void_p(x.p), 1, C.c_size_t(n), arr)
+            assert st == expected, (categories, st, x.messages()[-1:])
+        finally:
+            x.free()
+
+
+@pytest.mark.parametrize("interface,state,expected", [
+    ("fmi2-me", "Continuous", ERROR), ("fmi2-me", "Event", OK),
+    ("fmi3-me", "Continuous", ERROR), ("fmi3-me", "Event", OK)])
+def test_tunable_parameter_only_in_event_mode_for_model_exchange(interface: str, state: str,
+                                                                 expected: int) -> None:
+    """Issue 19: FMI 2.0 Continuous-Time Mode accepted SetReal(sigma). There only continuous
+    inputs may be set (FMI 2.0.4 3.2.3, FMI 3.0 3.2); a tunable parameter changes in Event
+    Mode."""
+    x = Instance(interface)
+    try:
+        drive(x, state)
+        p, vr, val = C.c_void_p(x.p), (C.c_uint * 1)(2), (C.c_double * 1)(0.3)
+        st = (x.lib.fmi2SetReal(p, vr, C.c_size_t(1), val) if interface == "fmi2-me"
+              else x.lib.fmi3SetFloat64(p, vr, C.c_size_t(1), val, C.c_size_t(1)))
+        assert st == expected, x.messages()[-1:]
+    finally:
+        x.free()

@@ -12,9 +12,8 @@ Criteria (the twin's messages are its own, so the state is judged from outside):
 * not allowed: Error (never Fatal), and then the Error state: fmi2GetReal answers, fmi2Terminate
   is refused.
 
-The twin's state machine is another branch's work (twin19). Until it is merged this column
-fails, so it is marked xfail(strict=True): when the twin conforms the mark makes the test fail
-(XPASS), the signal to delete the mark.
+Functions the twin's binary does not export (Model Exchange: it is a Co-Simulation-only FMU)
+are not called: 31 functions x 5 states.
 """
 from __future__ import annotations
 
@@ -36,7 +35,6 @@ TWIN_NOT_PROVIDED = {
     "fmi2GetStatus", "fmi2GetIntegerStatus", "fmi2GetBooleanStatus", "fmi2GetStringStatus",
     "fmi2SetRealInputDerivatives", "fmi2GetRealStatus",
 }
-TWIN_MERGED = False  # set True when the twin19 branch (the twin's state machine) is merged
 
 
 def _binding(unzipped: Path):  # noqa: ANN202 (tests.fuzz.bindings.Fmi2)
@@ -106,8 +104,6 @@ def unzipped(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return d
 
 
-@pytest.mark.xfail(not TWIN_MERGED, strict=True,
-                   reason="the twin's state machine is on branch twin19 (issue 19, item 2)")
 @pytest.mark.parametrize("state", std.STATES_FMI2_CS)
 def test_twin_state_machine(state: str, unzipped: Path) -> None:
     code = ("import json, sys; from pathlib import Path; "
