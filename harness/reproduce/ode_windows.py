@@ -53,6 +53,17 @@ class Family:
     seed_sigma: float
     seed: np.ndarray
     found_by: list[str] = field(default_factory=list)
+    #: (sigma, (u, v)) of every scan point classified as this family: Newton guesses near it
+    track: list[tuple[float, np.ndarray]] = field(default_factory=list)
+
+    def guess(self, sigma: float, offset: Any, ratio: float) -> np.ndarray | None:
+        """The scan's state nearest to ``sigma`` (in w = z - p(theta) coordinates); None outside
+        the range the scans saw the family in (widened by one grid ratio): beyond it the state
+        would belong to another sigma and Newton could land on a coexisting orbit."""
+        if not self.track or not self.lo / ratio <= sigma <= self.hi * ratio:
+            return None
+        s_k, z_k = min(self.track, key=lambda t: abs(math.log(t[0] / sigma)))
+        return np.asarray(z_k) - offset(s_k)
 
     @property
     def key(self) -> str:
@@ -89,7 +100,8 @@ def families_from_scans(grid: np.ndarray, ds: Any, M_max: int | None = None) -> 
                 j += 1
             mid = (k + j) // 2
             runs.append(Family(int(per[k]), int(imp[k]), float(grid[k]), float(grid[j]), float(grid[mid]),
-                               np.array([u[mid, 0], v[mid, 0]], dtype=float), [d]))
+                               np.array([u[mid, 0], v[mid, 0]], dtype=float), [d],
+                               [(float(grid[i]), np.array([u[i, 0], v[i, 0]], dtype=float)) for i in range(k, j + 1)]))
             k = j + 1
     merged: list[Family] = []
     for f in sorted(runs, key=lambda f: (f.M, f.impacts, f.lo)):
@@ -98,6 +110,7 @@ def families_from_scans(grid: np.ndarray, ds: Any, M_max: int | None = None) -> 
             if f.hi - f.lo > last.hi - last.lo:  # seed from the longer run
                 last.seed_sigma, last.seed = f.seed_sigma, f.seed
             last.hi = max(last.hi, f.hi)
+            last.track += f.track
             last.found_by = sorted(set(last.found_by) | set(f.found_by))
         else:
             merged.append(f)
@@ -141,6 +154,21 @@ def orbit_edge_kind(orb: PeriodicOrbit | None, iterated_entries: int, M: int, im
     return "flip" if m.real < 0 else "fold"
 
 
+def impact_velocity(smap: Any, orb: PeriodicOrbit, sigma: float) -> float:
+    """v_c = sqrt(chi) of the orbit's (first) impact: the state at the section before the
+    impacting period, propagated without the wall to t = n (the virtual state of the maps),
+    chi = v^2 - 2 A~ u with A~ = (1 + sigma) A + sigma Omega^2 (docs/theory.md sections 3, 5)."""
+    from mapcheck.coeffs import grazing_acceleration
+    from mapcheck.compare import free_flight
+
+    j = int(np.argmax(np.asarray(orb.contacts) > 0))
+    z = np.asarray(orb.z[j]) + smap.offset(sigma)
+    nu, Om = float(smap.params["nu"]), float(smap.params["Omega"])
+    u, v = free_flight(z, sigma, nu, Om, smap.theta, 1.0)
+    chi = v * v - 2.0 * float(grazing_acceleration(sigma, Om, "tilde")) * u
+    return math.sqrt(chi) if chi > 0 else 0.0
+
+
 def _accept(M: int, impacts: int):
     def accept(orb: PeriodicOrbit) -> bool:
         return bool(orb.converged and orb.stable and int(np.sum(orb.contacts)) == impacts
@@ -170,15 +198,19 @@ def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_
         return {"family": fam, "lower": None, "upper": None, "resolved": False}
     w0 = orb.z[0]
     width = math.log(max(fam.hi / fam.lo, grid_ratio))
-    dp = width / MARCH_STEPS
+    # at most half a scan step: a larger step near an edge can jump onto a coexisting orbit
+    dp = min(width / MARCH_STEPS, 0.5 * math.log(grid_ratio))
     try:
-        e_lo, e_hi = window_edges(smap, fam.M, fam.seed_sigma, w0, lambda s: None, sigma_range, dp,
+        # the scans' own states are the fallback guesses: continuation near a graze can land on a
+        # neighbouring orbit, and a state the scan reached on the family is a better start
+        e_lo, e_hi = window_edges(smap, fam.M, fam.seed_sigma, w0, lambda s: fam.guess(s, smap.offset, grid_ratio), sigma_range, dp,
                                   xtol_rel * (fam.seed_sigma if relative else 1.0), newton, True,
                                   accept=_accept(fam.M, fam.impacts),
                                   kind_of=lambda o, n: orbit_edge_kind(o, n, fam.M, fam.impacts))
     except ValueError:
         return {"family": fam, "lower": None, "upper": None, "resolved": False}
-    return {"family": fam, "lower": e_lo, "upper": e_hi, "resolved": True, "multipliers": orb.multipliers}
+    return {"family": fam, "lower": e_lo, "upper": e_hi, "resolved": True, "multipliers": orb.multipliers,
+            "v_c": impact_velocity(smap, orb, fam.seed_sigma)}
 
 
 def _shoot_task(source: Any, params: Mapping[str, Any], theta: float, fams: Sequence[Family],
@@ -273,7 +305,7 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
         if r["resolved"]:
             entry.update({"lo": lo.sigma, "hi": hi.sigma, "kinds": [lo.kind, hi.kind],
                           "intervals": [[lo.good, lo.bad], [hi.good, hi.bad]],
-                          "multipliers_inside": r.get("multipliers"),
+                          "multipliers_inside": r.get("multipliers"), "v_c": r.get("v_c"),
                           "multipliers_near_lower_edge": lo.multipliers,
                           "multipliers_near_upper_edge": hi.multipliers,
                           "xtol": xtol_rel * (f.seed_sigma if relative else 1.0)})
