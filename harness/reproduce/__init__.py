@@ -183,7 +183,7 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
                    "integrator solves it; closed-form: exact propagation, linear contact law)")
     p.set_defaults(func=cmd_reproduce)
     from .chart_command import register as register_chart
-    from .windows import register as register_windows
+    from .windows_cli import register as register_windows
 
     register_windows(sub, parents)
     register_chart(sub, parents)

@@ -138,7 +138,9 @@ def curves_from_values(problem: ChartProblem, per_value: Sequence[Mapping[str, A
             present.append(bool(cands))
             if not cands:
                 continue
-            e = max(cands, key=lambda e: (e["hi"] or e["seen"][1]) - (e["lo"] or e["seen"][0]))
+            # several windows of one M (e.g. a second period-1 window far from grazing): chart the
+            # one nearest grazing (lowest lower edge), the near-grazing maps' subject
+            e = min(cands, key=lambda e: e["lo"] if e["lo"] is not None else e["seen"][0])
             rows["value"].append(res["value"])
             rows["lower"].append(e["lo"])
             rows["upper"].append(e["hi"])
