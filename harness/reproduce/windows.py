@@ -389,8 +389,6 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     if workers is not None and workers < 1:
         raise HarnessInputError("--workers", f"must be >= 1, got {workers}")
     ctx = Context("windows", out, quick, workers, progress, fmu_path, solver)
-    from .windows_cli import command_line
-
     ctx.command = command_line(problem, quick, out)
     result, text = run_windows(ctx, problem, default_settings(problem, quick))
     write_outputs(ctx, result, text)
@@ -399,3 +397,12 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
 
 def problem_dict(problem: WindowProblem) -> dict[str, Any]:
     return asdict(problem)
+
+
+def command_line(problem: WindowProblem, quick: bool, out: Any) -> str:
+    a, g = problem.alpha_gamma
+    wall = f"--wall compliant --Gamma {problem.Gamma:g}" if problem.wall == "compliant" else "--wall rigid"
+    if problem.map_wall != "auto":
+        wall += f" --map {problem.map_wall}"
+    return (f"windows --nu {problem.nu!r} --Omega {problem.Omega!r} --r {problem.r:g} {wall} --M-max {problem.M_max or 'auto'}"
+            f"{' --quick' if quick else ''} --out {out}")

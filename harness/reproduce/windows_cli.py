@@ -8,18 +8,9 @@ from typing import Any
 
 from mapcheck.compare import markdown_window_table
 
-from .windows import MAP_WALLS, WALL_CODES, WindowProblem, compare_windows
+from .windows import MAP_WALLS, WALL_CODES, command_line, compare_windows
 
-__all__ = ["register", "cmd_windows", "command_line"]
-
-
-def command_line(problem: WindowProblem, quick: bool, out: Any) -> str:
-    a, g = problem.alpha_gamma
-    wall = f"--wall compliant --Gamma {problem.Gamma:g}" if problem.wall == "compliant" else "--wall rigid"
-    if problem.map_wall != "auto":
-        wall += f" --map {problem.map_wall}"
-    return (f"windows --nu {problem.nu!r} --Omega {problem.Omega!r} --r {problem.r:g} {wall} --M-max {problem.M_max or 'auto'}"
-            f"{' --quick' if quick else ''} --out {out}")
+__all__ = ["register", "cmd_windows"]
 
 
 def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
