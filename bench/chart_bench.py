@@ -65,7 +65,7 @@ Python {platform.python_version()}. Measured by `bench/chart_bench.py` in one ru
 
 CVODE / closed form per value: {per_cv / per_cf:.1f}x. Goal: the {a.num}-value chart in closed-form mode under
 10 minutes on 2 cores ({'met' if t_cf < 600 else 'NOT met'}: {t_cf / 60:.1f} min). Where each window closes
-(Gamma, bracketed between neighbouring values; null: present over the whole range):
+(Gamma, bracketed between neighbouring values; null: not closing in the range, see chart.json):
 {', '.join(f'M = {M}: {"null" if v is None else f"{v:.4g}"}' for M, v in closes.items())}.
 Picture: docs/img/soft_to_hard.png.
 <!-- chart:end -->"""
