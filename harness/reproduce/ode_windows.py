@@ -177,7 +177,7 @@ def _accept(M: int, impacts: int):
 
 
 def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_rel: float,
-                 grid_ratio: float, relative: bool = True) -> dict[str, Any]:
+                 grid_ratio: float, relative: bool = True, c: Any = None) -> dict[str, Any]:
     """Both edges of the family's window by Newton shooting on the FMU (geometric march).
 
     ``xtol_rel`` is relative to the seed's sigma (absolute when ``relative`` is False); the march step is a fraction of the window the
@@ -203,7 +203,19 @@ def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_
     try:
         # the scans' own states are the fallback guesses: continuation near a graze can land on a
         # neighbouring orbit, and a state the scan reached on the family is a better start
-        e_lo, e_hi = window_edges(smap, fam.M, fam.seed_sigma, w0, lambda s: fam.guess(s, smap.offset, grid_ratio), sigma_range, dp,
+        def guess_of(s: float) -> np.ndarray | None:
+            # a maximal orbit of the A~ map (where it has one) first: near an orbit with one more
+            # contact, Newton from it stayed on the maximal orbit where the scans' states did not
+            # (Figure 9, M = 2 at sigma ~ 0.52); the ODE still decides (Newton on the FMU)
+            if c is not None and fam.impacts == 1:
+                from mapcheck.compare import maximal_orbit_section_guess
+
+                z = maximal_orbit_section_guess(c, fam.M, s, smap.theta, "tilde")
+                if z is not None and np.all(np.isfinite(z)):
+                    return z - smap.offset(s)
+            return fam.guess(s, smap.offset, grid_ratio)
+
+        e_lo, e_hi = window_edges(smap, fam.M, fam.seed_sigma, w0, guess_of, sigma_range, dp,
                                   xtol_rel * (fam.seed_sigma if relative else 1.0), newton, True,
                                   accept=_accept(fam.M, fam.impacts),
                                   kind_of=lambda o, n: orbit_edge_kind(o, n, fam.M, fam.impacts))
@@ -215,21 +227,22 @@ def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_
 
 def _shoot_task(source: Any, params: Mapping[str, Any], theta: float, fams: Sequence[Family],
                 sigma_range: tuple[float, float], xtol_rel: float, grid_ratio: float,
-                relative: bool) -> tuple[list, int]:
+                relative: bool, c: Any = None) -> tuple[list, int]:
     from ..dynamics.shooting import StroboscopicMap
     from ..fmu.simulator import FmuSimulator
 
     smap = StroboscopicMap(FmuSimulator(source, instance_name="ode-windows"), params, theta)
-    out = [shoot_family(smap, f, sigma_range, xtol_rel, grid_ratio, relative) for f in fams]
+    out = [shoot_family(smap, f, sigma_range, xtol_rel, grid_ratio, relative, c) for f in fams]
     return out, smap.evaluations
 
 
 def shoot_families(smap: Any, fams: Sequence[Family], sigma_range: tuple[float, float], xtol_rel: float,
-                   grid_ratio: float, workers: int = 1, relative: bool = True) -> tuple[list[dict[str, Any]], int]:
+                   grid_ratio: float, workers: int = 1, relative: bool = True,
+                   c: Any = None) -> tuple[list[dict[str, Any]], int]:
     """:func:`shoot_family` for every family (in ``workers`` processes); returns (results,
     one-period FMU runs)."""
     if workers <= 1 or len(fams) <= 1:
-        res = [shoot_family(smap, f, sigma_range, xtol_rel, grid_ratio, relative) for f in fams]
+        res = [shoot_family(smap, f, sigma_range, xtol_rel, grid_ratio, relative, c) for f in fams]
         return res, smap.evaluations
     import multiprocessing
     import os
@@ -242,8 +255,8 @@ def shoot_families(smap: Any, fams: Sequence[Family], sigma_range: tuple[float, 
     n = 0
     with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
                              initializer=init_child_process, initargs=(os.getpid(),)) as pool:
-        futs = [pool.submit(_shoot_task, smap.sim.source, smap.params, smap.theta, c, sigma_range, xtol_rel,
-                            grid_ratio, relative) for c in chunks if c]
+        futs = [pool.submit(_shoot_task, smap.sim.source, smap.params, smap.theta, ch, sigma_range, xtol_rel,
+                            grid_ratio, relative, c) for ch in chunks if ch]
         for f in futs:
             r, k = f.result()
             results += r
@@ -294,7 +307,7 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
         cap = M_max or max([f.M for f in fams if f.impacts == 1] + [0]) + 2
         fams += _map_started_families(smap, c, guide, {(f.M, f.impacts) for f in fams}, cap)
     ratio = float(np.max(grid[1:] / grid[:-1]))
-    results, n = shoot_families(smap, fams, sigma_range, xtol_rel, ratio, workers, relative)
+    results, n = shoot_families(smap, fams, sigma_range, xtol_rel, ratio, workers, relative, c)
     out: dict[str, Any] = {"windows": {}, "kinds": {}, "brackets": {}, "intervals": {}, "unresolved": {},
                            "multipliers_at_lower_edge": {}, "xtol": {}, "all": []}
     best: dict[int, dict[str, Any]] = {}
