@@ -151,7 +151,7 @@ def maximal_orbit_section_guess(c: Coefficients, M: int, sigma: float, theta: fl
 def map_windows(c: Coefficients, M_max: int, sigma_grid: np.ndarray, variant: str = "tilde") -> Windows:
     """Stable maximal period-M windows in sigma of the 2D map (37)/(38) with the
     coefficients ``c`` ((39) rigid, (48) compliant), rho from A or A~(sigma) (``variant``).
-    The widest window per M; ``hi = None`` where it reaches the end of the grid."""
+    The widest window per M; ``lo``/``hi`` None where it reaches the start/end of the grid."""
     from .windows import windows
 
     p = MapParams.from_coefficients(c)
@@ -162,7 +162,8 @@ def map_windows(c: Coefficients, M_max: int, sigma_grid: np.ndarray, variant: st
             out[M] = None
             continue
         w = max(ws, key=lambda w: w.hi - w.lo)
-        out[M] = (float(w.lo), None if w.kind_hi == "range" else float(w.hi))
+        # an edge at the end of the grid is not an edge: None (beyond the searched range)
+        out[M] = (None if w.kind_lo == "range" else float(w.lo), None if w.kind_hi == "range" else float(w.hi))
     return out
 
 
@@ -284,20 +285,24 @@ def _fmt_window(w: Any, digits: int = 4) -> str:
     if w is None:
         return "none"
     # an edge that is None: no upper edge (maps, M = 1) or not bracketed inside the range
-    lo = "unresolved" if w[0] is None else f"{w[0]:.{digits}f}"
-    hi = "none (no upper edge)" if w[1] is None else f"{w[1]:.{digits}f}"
+    lo = "below range" if w[0] is None else f"{w[0]:.{digits}f}"
+    hi = "above range" if w[1] is None else f"{w[1]:.{digits}f}"
     return f"[{lo}, {hi}]"
 
 
 def markdown_window_table(rows: Mapping[str, Windows], labels: Mapping[str, str] | None = None,
-                          digits: int = 4) -> str:
-    """Markdown table: one row per source, one column per period M."""
+                          digits: int = 4, na: Mapping[str, str | None] | None = None) -> str:
+    """Markdown table: one row per source, one column per period M; a source whose ``na``
+    entry is a reason (the map does not apply) shows "n/a" in every cell."""
     Ms = sorted({M for w in rows.values() for M in w})
     head = "| source | " + " | ".join(f"M = {M}" for M in Ms) + " |"
     sep = "|---|" + "---|" * len(Ms)
     lines = [head, sep]
     for name, w in rows.items():
         label = (labels or {}).get(name, name)
+        if (na or {}).get(name):
+            lines.append(f"| {label} | " + " | ".join("n/a" for _ in Ms) + " |")
+            continue
         lines.append(f"| {label} | " + " | ".join(_fmt_window(w.get(M), digits) for M in Ms) + " |")
     return "\n".join(lines)
 

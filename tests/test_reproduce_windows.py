@@ -88,8 +88,8 @@ def test_bad_parameters_are_input_errors(extra, tmp_path) -> None:
 
 
 def test_rigid_wall_problem() -> None:
-    """A rigid wall uses the coefficients (39) and the FMU's rigid contact; the settings put
-    the scan and search range around the A~ map's windows."""
+    """A rigid wall uses the coefficients (39) and the FMU's rigid contact; the scan grid holds
+    the base range [1e-3, 3] and the A~ map's windows; the tolerance is relative to sigma."""
     pr = WindowProblem.from_alpha_gamma(0.5, 0.05, r=0.8, wall="rigid", M_max=3)
     assert pr.fmu_params()["wall"] == 2 and "Gamma" not in pr.fmu_params()
     assert pr.coefficient_eq() == "(39)"
@@ -97,7 +97,14 @@ def test_rigid_wall_problem() -> None:
     assert math.isclose(a, 0.5, rel_tol=1e-12) and math.isclose(g, 0.05, rel_tol=1e-12)
     st = default_settings(pr, quick=True)
     assert st.sigma_range[0] < st.scan_grid[0] < st.scan_grid[-1] < st.sigma_range[1]
-    assert set(st.xtol) <= {1, 2, 3} and all(0 < t <= 1e-4 for t in st.xtol.values())
+    assert st.xtol is None and 0 < st.xtol_rel <= 1e-3
+    from mapcheck.compare import predicted_windows
+
+    guide = predicted_windows(pr.coefficients(), 3, st.table_grid)["map_A_tilde"]
+    for w in guide.values():
+        if w is not None and w[0] is not None:
+            assert st.scan_grid[0] <= w[0] <= st.scan_grid[-1]
+    assert st.scan_grid[0] <= 1e-3 and st.scan_grid[-1] >= 3.0
 
 
 def test_map_coefficients_follow_the_wall_or_are_chosen() -> None:

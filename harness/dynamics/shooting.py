@@ -38,6 +38,7 @@ import numpy as np
 from mapcheck.orbits import PeriodicOrbit, edge_kind, solve_periodic_orbit
 
 from .jacobian import resolve_method
+from ..errors import FmuRejectedInput
 from ..fmu.simulator import Simulator
 
 __all__ = ["StroboscopicMap", "Edge", "NEWTON", "MARCH_STEPS", "good_orbit", "window_edges", "map_guided_windows", "newton_for"]
@@ -168,17 +169,24 @@ def _rotate_to_impact(orb: PeriodicOrbit, M: int) -> np.ndarray:
 
 
 def good_orbit(smap: StroboscopicMap, M: int, sigma: float, guesses: list[np.ndarray | None],
-               newton: Mapping[str, Any] | None = None) -> tuple[bool, PeriodicOrbit | None]:
+               newton: Mapping[str, Any] | None = None,
+               accept: Callable[[PeriodicOrbit], bool] | None = None) -> tuple[bool, PeriodicOrbit | None]:
     """Try Newton from each guess; True with the orbit if one converges to a stable maximal
-    period-M orbit, else False with the most informative failed orbit (a converged one)."""
+    period-M orbit (or one that ``accept`` takes), else False with the most informative failed
+    orbit (a converged one)."""
     step = smap.at(sigma)
     dstep = smap.at_with_jacobian(sigma)
     failed: PeriodicOrbit | None = None
+    ok_orbit = accept or (lambda o: o.maximal and o.stable)
     for g in guesses:
         if g is None:
             continue
-        orb = solve_periodic_orbit(step, g, M, **(newton or NEWTON), dstep=dstep)
-        if orb.maximal and orb.stable:
+        try:
+            orb = solve_periodic_orbit(step, g, M, **(newton or NEWTON), dstep=dstep)
+        except FmuRejectedInput:
+            # a Newton step put the start inside a rigid wall: no orbit from this guess
+            continue
+        if ok_orbit(orb):
             return True, orb
         if failed is None or (orb.converged and not failed.converged):
             failed = orb
@@ -188,7 +196,8 @@ def good_orbit(smap: StroboscopicMap, M: int, sigma: float, guesses: list[np.nda
 def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarray,
                  guess_of: Callable[[float], np.ndarray | None], sigma_range: tuple[float, float],
                  dp: float, xtol: float, newton: Mapping[str, Any] | None = None,
-                 geometric: bool = False) -> tuple[Edge, Edge]:
+                 geometric: bool = False, accept: Callable[[PeriodicOrbit], bool] | None = None,
+                 kind_of: Callable[[PeriodicOrbit | None, int], str] | None = None) -> tuple[Edge, Edge]:
     """Lower and upper sigma-edges of the stable maximal period-M window containing
     ``sigma_in``.
 
@@ -212,8 +221,14 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
         Settings of :func:`mapcheck.orbits.solve_periodic_orbit` (default :data:`NEWTON`).
     geometric : bool
         March by the factor exp(+-dp) instead of steps +-dp (windows at sigma -> 0).
+    accept : callable, optional
+        orbit -> True when it belongs to the window (default: a stable maximal orbit, one
+        impact per period); e.g. a stable orbit with k impacts per period.
+    kind_of : callable, optional
+        (orbit beyond the edge or None, wall entries of the last good orbit iterated there)
+        -> the edge's kind (default: :func:`mapcheck.orbits.edge_kind`, for maximal orbits).
     """
-    ok, orb = good_orbit(smap, M, sigma_in, [w_in, guess_of(sigma_in)], newton)
+    ok, orb = good_orbit(smap, M, sigma_in, [w_in, guess_of(sigma_in)], newton, accept)
     if not ok or orb is None:
         raise ValueError(f"no stable maximal period-{M} orbit found at sigma = {sigma_in}")
     edges = []
@@ -234,7 +249,7 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
                     out.append(z2 + (z2 - z1) * (s - s2) / (s2 - s1))
             return out + [anchor, guess_of(s)]
 
-        def accept(s: float, o: PeriodicOrbit) -> None:
+        def remember(s: float, o: PeriodicOrbit) -> None:
             history.append((s, _rotate_to_impact(o, M)))
             history.sort(key=lambda e: direction * e[0])  # the two nearest the edge last
             del history[:-2]
@@ -245,10 +260,10 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
                 if s_good == limit:
                     break
                 s = limit  # test the end of the range itself before giving up
-            ok, o = good_orbit(smap, M, s, guesses(s), newton)
+            ok, o = good_orbit(smap, M, s, guesses(s), newton, accept)
             if ok:
                 s_good, o_good = s, o
-                accept(s, o)
+                remember(s, o)
             else:
                 s_bad, o_bad = s, o
         if s_bad is None:
@@ -257,12 +272,19 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
             continue
         while abs(s_bad - s_good) > xtol:
             s = 0.5 * (s_good + s_bad)
-            ok, o = good_orbit(smap, M, s, guesses(s), newton)
+            ok, o = good_orbit(smap, M, s, guesses(s), newton, accept)
             if ok:
                 s_good, o_good = s, o
-                accept(s, o)
+                remember(s, o)
             else:
                 s_bad, o_bad = s, o
+        if kind_of is not None:
+            n_iter = -1
+            if o_bad is None or not o_bad.converged:
+                _, n_iter = smap.iterate(s_bad, _rotate_to_impact(o_good, M), M)
+            edges.append(Edge(0.5 * (s_good + s_bad), kind_of(o_bad, n_iter), abs(s_bad - s_good),
+                              o_good.multipliers, float(s_good), float(s_bad)))
+            continue
         kind = edge_kind(o_bad) if o_bad is not None else "lost"
         if kind == "lost":
             # Newton found no orbit beyond the edge: iterate the last good orbit there and

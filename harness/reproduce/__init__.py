@@ -182,9 +182,11 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
                    help="the FMU's integrator (default cvode: the paper's question is about the ODE as a general "
                    "integrator solves it; closed-form: exact propagation, linear contact law)")
     p.set_defaults(func=cmd_reproduce)
-    from .windows import register as register_windows
+    from .chart_command import register as register_chart
+    from .windows_cli import register as register_windows
 
     register_windows(sub, parents)
+    register_chart(sub, parents)
 
 
 def cmd_reproduce(args: argparse.Namespace) -> int:

@@ -20,7 +20,6 @@ scans as NetCDF.  ``reproduce fig9`` is this comparison with the paper's paramet
 """
 from __future__ import annotations
 
-import argparse
 import math
 import time
 from dataclasses import asdict, dataclass, field
@@ -32,8 +31,6 @@ import numpy as np
 from mapcheck.coeffs import Coefficients, coefficients
 from mapcheck.compare import (
     best_variant,
-    markdown_window_table,
-    phase_to_natural,
     predicted_windows,
     scan_confirmation,
     sweep_windows,
@@ -45,12 +42,14 @@ from ..errors import HarnessInputError
 from . import Context, write_outputs
 from .windows_report import SCAN_TOL, VARIANT_KEYS, report
 
-__all__ = ["WindowProblem", "WindowSettings", "compare_windows", "run_windows", "default_settings", "register"]
+__all__ = ["WindowProblem", "WindowSettings", "compare_windows", "run_windows", "default_settings"]
 
 #: FMU ``wall`` parameter codes.
 WALL_CODES = {"compliant": 1, "rigid": 2}
 #: Coefficients of the maps: "auto" (from the wall), or a ``wall`` of :func:`mapcheck.coeffs.coefficients`.
 MAP_WALLS = ("auto", "compliant", "compliant-high", "rigid")
+#: Highest period classified by the scans (and searched with --M-max auto).
+M_AUTO_LIMIT = 12
 
 
 @dataclass(frozen=True)
@@ -66,8 +65,9 @@ class WindowProblem:
     wall : {"compliant", "rigid"}
     Gamma : float
         Stiffness of the compliant wall (ignored for a rigid wall).
-    M_max : int
-        Highest period looked at.
+    M_max : int or None
+        Highest period looked at; None ("auto"): until period adding truncates (no stable
+        maximal window at M and M + 1), up to :data:`M_AUTO_LIMIT`.
     theta : float
         Phase of the FMU's stroboscopic section (1/2: half a period from the impacts).
     """
@@ -77,7 +77,7 @@ class WindowProblem:
     r: float = 0.9
     wall: str = "compliant"
     Gamma: float = 10.0
-    M_max: int = 4
+    M_max: int | None = 4
     theta: float = 0.5
     map_wall: str = "auto"
 
@@ -92,18 +92,22 @@ class WindowProblem:
             raise HarnessInputError("--Gamma", f"must be > 0, got {self.Gamma}")
         if not (self.nu > 0 and self.Omega > 0):
             raise HarnessInputError("--nu/--Omega", f"must be > 0, got nu = {self.nu}, Omega = {self.Omega}")
-        if not 1 <= self.M_max <= 8:
-            raise HarnessInputError("--M-max", f"must be in 1..8, got {self.M_max}")
+        if self.M_max is not None and not 1 <= self.M_max <= M_AUTO_LIMIT:
+            raise HarnessInputError("--M-max", f"must be 'auto' or in 1..{M_AUTO_LIMIT}, got {self.M_max}")
 
     @classmethod
-    def from_alpha_gamma(cls, alpha: float, gamma: float, **kw: Any) -> "WindowProblem":
-        """From the map's (alpha, gamma) of (9) (the overdamped, unique inverse)."""
-        if not (0.0 < alpha < 1.0 and 0.0 < gamma < 1.0):
-            raise HarnessInputError("--alpha/--gamma", f"must lie in (0, 1), got ({alpha}, {gamma})")
+    def from_alpha_gamma(cls, alpha: float, gamma: float, branch: int | None = None, **kw: Any) -> "WindowProblem":
+        """From the map's (alpha, gamma) of (9): unique when P(1) has real eigenvalues; underdamped
+        (alpha^2 < 4 gamma) the psi branch must be chosen (it sets sign(P12) = c1).  Whether the
+        maps apply to the oscillator is reported by the run, as for --nu/--Omega."""
+        if not 0.0 < gamma < 1.0:
+            raise HarnessInputError("--gamma", f"gamma = det P(1) = exp(-nu) must lie in (0, 1) (nu > 0), got {gamma}")
         try:
-            inv = invert_alpha_gamma(alpha, gamma)
+            inv = invert_alpha_gamma(alpha, gamma, branch)
         except (ValueError, ArithmeticError) as exc:
-            raise HarnessInputError("--alpha/--gamma", f"no (nu, Omega) for ({alpha}, {gamma}): {exc}") from exc
+            raise HarnessInputError("--alpha/--gamma", f"no (nu, Omega) for ({alpha}, {gamma}): {exc}"
+                                    + ("; give --branch 0, 1, ... or --nu/--Omega" if "branch" in str(exc) else "")
+                                    ) from exc
         return cls(float(inv.nu), float(inv.Omega), **kw)
 
     @property
@@ -146,8 +150,9 @@ class WindowSettings:
         Sorted sigma values of the up/down scans (and of the map's bifurcation diagrams).
     transient, samples : int
         Periods per scan point before classifying, and periods sampled.
-    xtol : float or dict
-        Bisection tolerance of the shooting in sigma (or {M: xtol}).
+    xtol : float or None
+        Bisection tolerance of the shooting in sigma (absolute); None: ``xtol_rel`` times the
+        sigma where the window was seen.
     sigma_range : (float, float)
         Search range of the shooting.
     table_grid : ndarray
@@ -164,36 +169,51 @@ class WindowSettings:
     table_grid: np.ndarray
     log_sigma: bool = False
     extra: dict[str, Any] = field(default_factory=dict)
+    xtol_rel: float = 1e-3
+
+
+#: The sigma range every default scan covers, whatever the maps say (geometric grid): the
+#: windows of the oscillators tried so far lie inside it (Figure 9: 0.12 to 0.8; underdamped
+#: nu = 0.8, Omega = 2.5, r = 0.8: period 1 from 1.6 (rigid), period 2 to 0.125 (Gamma = 100)).
+BASE_RANGE = (1e-3, 3.0)
+
+
+def map_guide(problem: WindowProblem, M_max: int) -> tuple[Coefficients | None, str | None]:
+    """The maps' coefficients, or None with the reason they do not exist."""
+    try:
+        return problem.coefficients(), None
+    except (ValueError, ArithmeticError) as exc:
+        return None, str(exc)
 
 
 def default_settings(problem: WindowProblem, quick: bool) -> WindowSettings:
-    """Grids and tolerances from where the maps put the windows.
-
-    The period-1 flip of the linear-rho and A~ maps (rho = 1/4) sets the top of the range;
-    the 2D maps' windows are searched on a geometric grid over five decades below it (the
-    2D map's windows of high M can lie far below (64)'s, where the 1D reduction fails), and
-    the scans and the shooting cover the A~ map's windows with margin.  When these spread
-    over more than a decade of sigma the scan grid is geometric.  The shooting's tolerance
-    is a fraction of each window's width (1e-2 quick, 1e-3 full), at most 1e-4 / 1e-5.
-    """
-    c = problem.coefficients()
-    s_1 = float(max(c.sigma_of_rho(0.25, "paper"), c.sigma_of_rho(0.25, "tilde")))
-    if not math.isfinite(s_1):  # rho~ saturates below 1/4: the period-1 flip is at no sigma
-        s_1 = float(c.sigma_of_rho(0.25, "paper"))
-    table_grid = np.geomspace(1e-5 * s_1, 4.0 * s_1, 12001)
-    guide = predicted_windows(c, problem.M_max, table_grid)["map_A_tilde"]
-    los = [w[0] for w in guide.values() if w is not None]
-    s_min = min(los) if los else float(c.sigma_of_rho(1.0 / (4.0 * problem.M_max), "tilde"))
-    widths = {M: (w[1] if w[1] is not None else 2.0 * w[0]) - w[0] for M, w in guide.items() if w is not None}
-    frac, cap = (1e-2, 1e-4) if quick else (1e-3, 1e-5)
-    xtol = {M: min(cap, frac * max(wd, 1e-12)) for M, wd in widths.items()}
-    s_scan_lo, s_scan_hi = 0.7 * s_min, 2.5 * s_1  # M = 1 and M = 2 overlap: see both
-    log_sigma = s_scan_hi / s_scan_lo > 10.0
-    n = 91 if quick else 361
-    grid = np.geomspace(s_scan_lo, s_scan_hi, n) if log_sigma else np.linspace(s_scan_lo, s_scan_hi, n)
+    """Grids and tolerances: the ODE is scanned over :data:`BASE_RANGE`, widened to hold the
+    maps' windows where the maps give finite ones, on a geometric grid (24 points per decade
+    quick, 80 full); the shooting may follow an orbit beyond the grid, a decade below and a factor
+    4 above.  The bisection tolerance is relative to the window's sigma (1e-3 quick, 1e-4 full)."""
+    lo, hi = BASE_RANGE
+    c, _ = map_guide(problem, problem.M_max or M_AUTO_LIMIT)
+    table_grid = np.geomspace(1e-6, 1e3, 12001)
+    if c is not None:
+        with np.errstate(all="ignore"):
+            s_1 = float(max(c.sigma_of_rho(0.25, "paper"), c.sigma_of_rho(0.25, "tilde")))
+            if not math.isfinite(s_1):
+                s_1 = float(c.sigma_of_rho(0.25, "paper"))
+        if math.isfinite(s_1) and s_1 > 0:
+            table_grid = np.geomspace(1e-5 * s_1, 4.0 * s_1, 12001)
+            guide = predicted_windows(c, problem.M_max or 8, table_grid)["map_A_tilde"]
+            los = [w[0] for w in guide.values() if w is not None and w[0] is not None]
+            if los:
+                lo, hi = min(lo, 0.7 * min(los)), max(hi, 2.5 * s_1)
+    lo, hi = max(lo, 1e-6), min(hi, 1e3)
+    # the maps are cheap: search them over the ODE's whole range too
+    table_grid = np.geomspace(min(table_grid[0], 0.01 * lo), max(table_grid[-1], 4.0 * hi), 16001)
+    per_decade = 24 if quick else 80
+    n = int(math.ceil(per_decade * math.log10(hi / lo))) + 1
+    grid = np.geomspace(lo, hi, n)
     return WindowSettings(scan_grid=grid, transient=200 if quick else 300, samples=24 if quick else 40,
-                          xtol=xtol, sigma_range=(0.5 * s_min, 4.0 * s_1), table_grid=table_grid,
-                          log_sigma=log_sigma)
+                          xtol=None, sigma_range=(0.1 * lo, 4.0 * hi), table_grid=table_grid, log_sigma=True,
+                          xtol_rel=1e-3 if quick else 1e-4)
 
 
 # ----------------------------------------------------------------------------------------
@@ -203,14 +223,6 @@ def _workers(ctx: Context) -> int:
     from ..config import default_workers
 
     return ctx.workers or min(2, default_workers())
-
-
-def ode_windows(ctx: Context, problem: WindowProblem, guide: dict, st: WindowSettings) -> dict[str, Any]:
-    """ODE windows by Newton shooting on the FMU, started in the A~ map's windows."""
-    from ..dynamics.shooting import StroboscopicMap, map_guided_windows
-
-    smap = StroboscopicMap(ctx.simulator(), ctx.params(**problem.fmu_params()), problem.theta)
-    return map_guided_windows(smap, problem.coefficients(), guide, st.sigma_range, st.xtol, workers=_workers(ctx))
 
 
 def ode_scans(ctx: Context, problem: WindowProblem, st: WindowSettings):
@@ -234,33 +246,66 @@ def ode_scans(ctx: Context, problem: WindowProblem, st: WindowSettings):
                      workers=_workers(ctx), progress=ctx.progress)
 
 
+def _safe_predictions(problem: WindowProblem, M_maps: int, st: WindowSettings) -> tuple[dict[str, dict], str | None]:
+    """The maps' windows, or empty tables with the reason the maps do not exist."""
+    c, why = map_guide(problem, M_maps)
+    if c is None:
+        return {k: {M: None for M in range(1, M_maps + 1)} for k in VARIANT_KEYS}, why
+    with np.errstate(all="ignore"):
+        return predicted_windows(c, M_maps, st.table_grid), None
+
+
 def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
                 predicted: dict[str, dict] | None = None) -> tuple[dict[str, Any], str]:
-    """The comparison: maps' predictions, scans, shooting, plots; returns (result, report)."""
-    c = problem.coefficients()
+    """The comparison: the ODE's windows (scans over the whole range, each attractor shot to its
+    edges), then the maps' predictions beside them; returns (result, report)."""
+    from mapcheck.applicability import map_applicability
+
+    from ..dynamics.shooting import StroboscopicMap
+    from .ode_windows import measure, period_adding_stop
+
     timings: dict[str, float] = {}
     t0 = time.perf_counter()
-    pred = predicted if predicted is not None else predicted_windows(c, problem.M_max, st.table_grid)
+    M_maps = problem.M_max or 8
+    pred, no_maps = (predicted, None) if predicted is not None else _safe_predictions(problem, M_maps, st)
     timings["maps"] = time.perf_counter() - t0
     # scans first, then the shooting (on 2 cores a sweep beside the shooting slowed both)
     t1 = time.perf_counter()
     ds = ode_scans(ctx, problem, st)
     timings["scans"] = time.perf_counter() - t1
     t1 = time.perf_counter()
-    shoot = ode_windows(ctx, problem, pred["map_A_tilde"], st)
+    smap = StroboscopicMap(ctx.simulator(), ctx.params(**problem.fmu_params()), problem.theta)
+    c = None if no_maps else problem.coefficients()
+    shoot = measure(smap, st.scan_grid, ds, st.sigma_range, st.xtol if st.xtol is not None else st.xtol_rel,
+                    problem.M_max, None if no_maps else pred["map_A_tilde"], c, _workers(ctx),
+                    relative=st.xtol is None)
     timings["shooting"] = time.perf_counter() - t1
-    windows = {"ode": shoot["windows"], **pred}
+    M_top = max([M_maps] + list(shoot["windows"]))
+    ode = {M: shoot["windows"].get(M) for M in range(1, M_top + 1)}
+    for k in VARIANT_KEYS:
+        for M in range(1, M_top + 1):
+            pred[k].setdefault(M, None)
+    windows = {"ode": ode, **pred}
+    a, g = problem.alpha_gamma
     grid = st.scan_grid
+    applies = map_applicability(problem.nu, problem.Omega, problem.r, problem.map_coefficients_wall, a, g,
+                                pred, (float(st.table_grid[0]), float(st.table_grid[-1])))
+    if no_maps:
+        applies = {k: f"the maps' coefficients do not exist: {no_maps}" for k in VARIANT_KEYS}
+    stop = period_adding_stop(ode, M_AUTO_LIMIT) if problem.M_max is None else None
     scan = {d: sweep_windows(grid, ds["period"].sel(direction=d).values, ds["orbit_impacts"].sel(direction=d).values)
             for d in ("up", "down")}
-    confirm = scan_confirmation(shoot["windows"], scan["up"], scan["down"])
-    variants = {k: windows[k] for k in VARIANT_KEYS}
-    best, score = best_variant(windows["ode"], variants)
-    diffs = {k: window_differences(windows["ode"], w) for k, w in variants.items()}
+    confirm = scan_confirmation(ode, scan["up"], scan["down"])
+    variants = {k: windows[k] for k in VARIANT_KEYS if applies[k] is None}
+    if variants and any(w is not None for w in ode.values()):
+        best, score = best_variant(ode, variants)
+    else:
+        best, score = None, {}
+    diffs = {k: window_differences(ode, w) for k, w in variants.items()}
     t1 = time.perf_counter()
     from .windows_plots import plot_all
 
-    files = plot_all(ctx, problem, st, ds, windows)
+    files = plot_all(ctx, problem, st, ds, windows, applies)
     timings["plots"] = time.perf_counter() - t1
     ds.attrs["reproduce.target"] = ctx.target
     from ..io.results import write_netcdf
@@ -268,14 +313,23 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
     write_netcdf(ds, ctx.out / f"{ctx.target}_ode_scans.nc")
     files.append(f"{ctx.target}_ode_scans.nc")
     finite = {k: v for k, v in score.items() if math.isfinite(v)}
-    verdict = (f"best map variant: {best} (largest edge difference to the ODE {score[best]:.2g} in sigma); "
-               + ", ".join(f"{k}: {v:.2g}" for k, v in score.items() if k != best)) if finite else \
-        "no map variant could be compared with the ODE (windows missing)"
-    a, g = problem.alpha_gamma
+    if finite and best is not None:
+        verdict = (f"best map variant: {best} (largest edge difference to the ODE {score[best]:.2g} in sigma)"
+                   + "".join(f"; {k}: {v:.2g}" for k, v in score.items() if k != best))
+    elif not any(w is not None for w in ode.values()):
+        verdict = (f"the ODE has no stable maximal (one impact per period) window in sigma "
+                   f"[{st.sigma_range[0]:.3g}, {st.sigma_range[1]:.3g}]; maps not compared")
+    elif not variants:
+        verdict = "no map applies to this oscillator (reasons in report.md); ODE windows only"
+    else:
+        verdict = "the maps miss windows that the ODE has (differences in report.md)"
     step = float(grid[1] / grid[0] - 1.0) if st.log_sigma else float(grid[1] - grid[0])
     result = {
         "figure": ctx.target,
         "windows": windows,
+        "ode_windows_all": shoot["all"],
+        "map_applicability": applies,
+        "period_adding_stop": stop,
         "edge_kinds": {"ode": shoot["kinds"]},
         "ode_edge_brackets": shoot["brackets"],
         "ode_edge_intervals": shoot["intervals"],
@@ -294,10 +348,14 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
         "parameters": {
             "alpha": a, "gamma": g, "nu": problem.nu, "Omega": problem.Omega, "r": problem.r, "wall": problem.wall,
             "map_coefficients": f"{problem.coefficient_eq()} (coefficients wall={problem.map_coefficients_wall!r})",
-            "Gamma": problem.Gamma if problem.wall == "compliant" else None, "M_max": problem.M_max,
-            "rho_per_sigma": c.rho_per_sigma, "theta": problem.theta,
+            "Gamma": problem.Gamma if problem.wall == "compliant" else None,
+            "M_max": problem.M_max if problem.M_max is not None else "auto", "M_scan_limit": M_AUTO_LIMIT,
+            "rho_per_sigma": None if c is None else c.rho_per_sigma, "theta": problem.theta,
             "sigma_grid": [float(grid[0]), float(grid[-1]), int(len(grid))], "transient": st.transient,
-            "samples": st.samples, "shooting_xtol": st.xtol, "shooting_sigma_range": list(st.sigma_range),
+            "samples": st.samples, "shooting_xtol": shoot["xtol"], "shooting_sigma_range": list(st.sigma_range),
+            "shooting_xtol_rule": (f"{st.xtol:g} absolute" if st.xtol is not None else
+                                   f"{st.xtol_rel:g} x the window's sigma"),
+            "map_sigma_range": [float(st.table_grid[0]), float(st.table_grid[-1])],
             "fmu_periods_shooting": shoot["fmu_periods"], "shooting_derivatives": shoot["derivatives"], **st.extra,
         },
     }
@@ -306,9 +364,9 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
 
 def compare_windows(alpha: float | None = None, gamma: float | None = None, *, nu: float | None = None,
                     Omega: float | None = None, r: float = 0.9, wall: str = "compliant", Gamma: float = 10.0,
-                    M_max: int = 4, quick: bool = False, out: str | Path = "results/windows",
+                    M_max: int | None = None, quick: bool = False, out: str | Path = "results/windows",
                     workers: int | None = None, progress: bool = False, fmu_path: str | None = None,
-                    solver: str = "cvode", map_wall: str = "auto") -> dict[str, Any]:
+                    solver: str = "cvode", map_wall: str = "auto", branch: int | None = None) -> dict[str, Any]:
     """Window edges of the maps and of the ODE (FMU) for one parameter set.
 
     Give either (``alpha``, ``gamma``) of the map (9) or (``nu``, ``Omega``) of the ODE.
@@ -324,71 +382,27 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     """
     if (alpha is None) != (gamma is None) or (nu is None) != (Omega is None) or (alpha is None) == (nu is None):
         raise HarnessInputError("--alpha/--gamma, --nu/--Omega", "give exactly one pair: (alpha, gamma) or (nu, Omega)")
-    kw = dict(r=float(r), wall=wall, Gamma=float(Gamma), M_max=int(M_max), map_wall=map_wall)
-    problem = (WindowProblem.from_alpha_gamma(float(alpha), float(gamma), **kw) if alpha is not None
+    kw = dict(r=float(r), wall=wall, Gamma=float(Gamma), M_max=None if M_max in (None, "auto") else int(M_max),
+              map_wall=map_wall)
+    problem = (WindowProblem.from_alpha_gamma(float(alpha), float(gamma), branch, **kw) if alpha is not None
                else WindowProblem(float(nu), float(Omega), **kw))
     if workers is not None and workers < 1:
         raise HarnessInputError("--workers", f"must be >= 1, got {workers}")
     ctx = Context("windows", out, quick, workers, progress, fmu_path, solver)
-    ctx.command = _command_line(problem, quick, out)
+    ctx.command = command_line(problem, quick, out)
     result, text = run_windows(ctx, problem, default_settings(problem, quick))
     write_outputs(ctx, result, text)
     return result
 
 
-def _command_line(problem: WindowProblem, quick: bool, out: Any) -> str:
+def problem_dict(problem: WindowProblem) -> dict[str, Any]:
+    return asdict(problem)
+
+
+def command_line(problem: WindowProblem, quick: bool, out: Any) -> str:
     a, g = problem.alpha_gamma
     wall = f"--wall compliant --Gamma {problem.Gamma:g}" if problem.wall == "compliant" else "--wall rigid"
     if problem.map_wall != "auto":
         wall += f" --map {problem.map_wall}"
-    return (f"windows --nu {problem.nu!r} --Omega {problem.Omega!r} --r {problem.r:g} {wall} --M-max {problem.M_max}"
+    return (f"windows --nu {problem.nu!r} --Omega {problem.Omega!r} --r {problem.r:g} {wall} --M-max {problem.M_max or 'auto'}"
             f"{' --quick' if quick else ''} --out {out}")
-
-
-def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
-    """Add the ``windows`` subcommand."""
-    p = sub.add_parser(
-        "windows", help="window edges of the maps vs the ODE (FMU) for any parameter set, with a report",
-        description="For (alpha, gamma) or (nu, Omega), r and a wall: the sigma-edges of the stable maximal "
-        "period-M windows from (64), the 2D map (37)/(38), the 2D map with A~(sigma), and the ODE (FMU; Newton "
-        "shooting, every edge bracketed and bisected, confirmed by up/down scans). Writes report.md, windows.json "
-        "(fig9.json's format), PNG plots and the scans' NetCDF into --out.")
-    g = p.add_argument_group("parameter set (one pair)")
-    g.add_argument("--alpha", type=float, help="map parameter alpha of (9), in (0, 1)")
-    g.add_argument("--gamma", type=float, help="map parameter gamma of (9), in (0, 1)")
-    g.add_argument("--nu", type=float, help="FMU parameter nu (instead of --alpha/--gamma)")
-    g.add_argument("--Omega", type=float, help="FMU parameter Omega (with --nu)")
-    p.add_argument("--r", type=float, default=0.9, help="coefficient of restitution (default 0.9)")
-    p.add_argument("--wall", choices=sorted(WALL_CODES), default="compliant",
-                   help="compliant (map coefficients (48)) or rigid ((39)); default compliant")
-    p.add_argument("--Gamma", type=float, default=10.0, help="compliant wall stiffness (default 10)")
-    p.add_argument("--map", choices=MAP_WALLS, default="auto", dest="map_wall",
-                   help="the maps' coefficients: auto (from --wall: (48) compliant, (39) rigid), or "
-                   "compliant ((48), low-velocity impacts), compliant-high ((39), high-velocity impacts on a stiff "
-                   "compliant wall), rigid ((39))")
-    p.add_argument("--M-max", type=int, default=4, dest="M_max", help="highest period (default 4)")
-    p.add_argument("--out", "-o", metavar="DIR", default="results/windows", help="output directory")
-    p.add_argument("--quick", action="store_true", help="coarse scans and tolerances (seconds to a minute)")
-    p.add_argument("--workers", "-j", type=int, metavar="N", help="worker processes (default: up to 2)")
-    p.add_argument("--fmu", metavar="PATH", help="FMU (default build/fmu/ImpactOscillator.fmu)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
-    p.add_argument("--solver", choices=("cvode", "closed-form"), default="cvode",
-                   help="the FMU's integrator (default cvode; closed-form: exact propagation, linear contact law)")
-    p.set_defaults(func=cmd_windows)
-
-
-def cmd_windows(args: argparse.Namespace) -> int:
-    t0 = time.perf_counter()
-    res = compare_windows(args.alpha, args.gamma, nu=args.nu, Omega=args.Omega, r=args.r, wall=args.wall,
-                          Gamma=args.Gamma, M_max=args.M_max, quick=args.quick, out=args.out, workers=args.workers,
-                          progress=not args.no_progress, fmu_path=args.fmu, solver=args.solver,
-                          map_wall=args.map_wall)
-    print(res["verdict"])
-    print(markdown_window_table(res["windows"]))
-    print(f"wrote {Path(args.out) / 'report.md'} and {Path(args.out) / 'windows.json'} "
-          f"({time.perf_counter() - t0:.1f} s)")
-    return 0
-
-
-def problem_dict(problem: WindowProblem) -> dict[str, Any]:
-    return asdict(problem)

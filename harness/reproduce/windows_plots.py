@@ -24,6 +24,12 @@ def labels_for(problem: Any) -> dict[str, str]:
             "map": f"2D map (37)/(38) with {eq}", "map_A_tilde": f"2D map (37)/(38) with {eq}, A~(sigma)"}
 
 
+def _wrap(text: str, width: int = 90) -> str:
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width))
+
+
 def _save(fig, path) -> str:
     import matplotlib.pyplot as plt
 
@@ -32,28 +38,46 @@ def _save(fig, path) -> str:
     return path.name
 
 
-def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any]) -> list[str]:
-    """TARGET_map.png (map, linear rho and A~), TARGET_ode.png (FMU up/down), TARGET_windows.png."""
+def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any],
+             applies: dict[str, str | None] | None = None) -> list[str]:
+    """TARGET_map.png (map, linear rho and A~), TARGET_ode.png (FMU up/down), TARGET_windows.png.
+
+    A map variant that does not apply (``applies[variant]`` a reason) is not drawn: its panel
+    says why."""
+    applies = applies or {}
     from ..io import plots  # noqa: F401  (selects the Agg backend)
     import matplotlib.pyplot as plt
 
 
-    c = problem.coefficients()
     eq = problem.coefficient_eq()
+    try:
+        c = problem.coefficients()
+    except (ValueError, ArithmeticError):
+        c = None
     params = problem.describe()
     grid = st.scan_grid
     n_map = int(st.extra.get("map_points", 4 * len(grid) + 1))
     sig = np.geomspace(grid[0], grid[-1], n_map) if st.log_sigma else np.linspace(grid[0], grid[-1], n_map)
-    f = PiecewiseMap(MapParams.from_coefficients(c))
     files = []
     fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
-    for ax, variant, what in ((axes[0], "paper", f"rho linear in sigma {eq}"),
-                              (axes[1], "tilde", f"rho with |A~(sigma)|, {eq}")):
-        od = orbit_diagram(f, c.rho(sig, variant), 0.0, 0.0, n_transient=400, n_keep=32, mode="down")
-        ax.plot(np.repeat(sig, od.x.shape[-1]), od.x[:, 0, :].ravel(), ",", color="k", alpha=0.6,
-                label="map iterates (down scan)")
+    for ax, variant, key, what in ((axes[0], "paper", "map", f"rho linear in sigma {eq}"),
+                                   (axes[1], "tilde", "map_A_tilde", f"rho with |A~(sigma)|, {eq}")):
+        if c is None or applies.get(key):
+            ax.text(0.5, 0.5, "map does not apply:\n" + _wrap(applies.get(key) or "no coefficients"),
+                    ha="center", va="center", transform=ax.transAxes, fontsize=8)
+            ax.set_title(f"map (37)/(38), {what}\n{params}", fontsize=9)
+            ax.set_xlim(float(grid[0]), float(grid[-1]))
+            continue
+        f = PiecewiseMap(MapParams.from_coefficients(c))
+        with np.errstate(all="ignore"):
+            od = orbit_diagram(f, c.rho(sig, variant), 0.0, 0.0, n_transient=400, n_keep=32, mode="down")
+        x = od.x[:, 0, :]
+        # an iterate that ran away (the map has no bounded attractor there) is not a point of it
+        x = np.where(np.isfinite(x) & (np.abs(x) < 1e3), x, np.nan)
+        ax.plot(np.repeat(sig, x.shape[-1]), x.ravel(), ",", color="k", alpha=0.6,
+                label="map iterates (down scan; runaway iterates left out)")
         first = True
-        for M in range(1, problem.M_max + 1):
+        for M in (range(1, (problem.M_max or 8) + 1) if not applies.get("theory_64") else ()):
             lo, hi = window_1d(M)
             if lo > hi:
                 continue
@@ -77,7 +101,9 @@ def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any]) 
                              ("down", dict(color="tab:red", marker="x", ms=2))):
         sel = ds.sel(direction=direction)
         s = np.broadcast_to(sel["sigma"].values[:, None], sel["u"].shape)
-        x, _ = phase_to_natural(sel["u"].values, sel["v"].values, s, c, problem.theta, "tilde")
+        x = sel["u"].values
+        if c is not None and not applies.get("map_A_tilde"):
+            x, _ = phase_to_natural(sel["u"].values, sel["v"].values, s, c, problem.theta, "tilde")
         ax.plot(s.ravel(), x.ravel(), ls="none", alpha=0.6, label=f"FMU, sigma stepped {direction}", **style)
     first = True
     for M, w in windows["ode"].items():
@@ -86,7 +112,8 @@ def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any]) 
                 ax.axvline(e, color="tab:green", lw=0.8, ls="--", label="ODE window edges (shooting)" if first else None)
                 first = False
     ax.set_xlabel("forcing amplitude above grazing, sigma")
-    ax.set_ylabel("x, pre-impact position\n(natural coordinates, A~)")
+    ax.set_ylabel("x, pre-impact position\n(natural coordinates, A~)" if c is not None and not applies.get("map_A_tilde")
+                  else f"u at t = n + {problem.theta:g}")
     if st.log_sigma:
         ax.set_xscale("log")
     ax.set_title(f"ODE (FMU): quasi-static up/down scans\n{params}", fontsize=9)
@@ -96,7 +123,7 @@ def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any]) 
 
     fig, ax = plt.subplots(figsize=(8, 4.0))
     labels = labels_for(problem)
-    names = ["ode", "theory_64", "map", "map_A_tilde"]
+    names = ["ode"] + [k for k in ("theory_64", "map", "map_A_tilde") if not applies.get(k)]
     cmap = plt.get_cmap("tab10")
     x_hi = float(grid[-1])
     for i, name in enumerate(names):
@@ -113,7 +140,7 @@ def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any]) 
     ax.set_xlim(float(grid[0]), x_hi)
     ax.set_ylim(-0.6, len(names) - 0.4)
     ax.set_title(f"Stable maximal period-M windows (M = 1 extends beyond the plot)\n{params}", fontsize=9)
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), fontsize=8, ncol=min(problem.M_max, 8), frameon=False)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), fontsize=8, ncol=8, frameon=False)
     fig.tight_layout()
     files.append(_save(fig, ctx.out / f"{ctx.target}_windows.png"))
     return files

@@ -2,6 +2,7 @@
 the four sources, the scans, the differences and the verdict."""
 from __future__ import annotations
 
+import math
 from typing import Any
 
 from mapcheck.compare import markdown_window_table
@@ -22,116 +23,149 @@ def _span(values: list) -> str:
 
 def _fmt_tol(xtol: Any) -> str:
     if isinstance(xtol, dict):
-        return ", ".join(f"M = {M}: {t:.2g}" for M, t in xtol.items())
+        return ", ".join(f"M = {M}: {t:.2g}" for M, t in xtol.items()) or "no window bisected"
     return f"{xtol:g}"
 
 
+def _cmplx(m: Any) -> str:
+    if m is None:
+        return "-"
+    vals = [complex(*x) if isinstance(x, (list, tuple)) else complex(x) for x in m]
+    return ", ".join(f"{z.real:+.3f}" if abs(z.imag) < 1e-9 else f"{z.real:+.3f}{z.imag:+.3f}i" for z in vals)
+
+
+def _all_windows_table(res: dict[str, Any], f: str) -> list[str]:
+    """Every ODE window: any number of impacts per period, with kinds and multipliers."""
+    rows = res["ode_windows_all"]
+    if not rows:
+        return []
+    out = ["| period M | impacts per period | window in sigma | edge kinds (lower/upper) | multipliers inside "
+           "(at the seed) | seen by |", "|---|---|---|---|---|---|"]
+    for e in rows:
+        if not e["resolved"]:
+            out.append(f"| {e['M']} | {e['impacts']} | Newton did not converge from the scan's state at sigma = "
+                       f"{e['seed_sigma']:{f}} | - | - | {', '.join(e['found_by'])} |")
+            continue
+        lo = "below the search range" if e["lo"] is None else format(e["lo"], f)
+        hi = "above the search range" if e["hi"] is None else format(e["hi"], f)
+        out.append(f"| {e['M']} | {e['impacts']} | [{lo}, {hi}] | {e['kinds'][0]}/{e['kinds'][1]} | "
+                   f"{_cmplx(e.get('multipliers_inside'))} (sigma = {e['seed_sigma']:{f}}) | {', '.join(e['found_by'])} |")
+    return out
+
+
 def report(ctx: Context, problem: Any, res: dict[str, Any], title: str | None = None) -> str:
-    """report.md: what was compared, the table, the scans, the differences, the verdict."""
+    """report.md: the ODE's windows (every attractor seen, shot to its edges), where each map
+    applies, the table, the scans, the differences, the verdict."""
     labels = labels_for(problem)
     p = res["parameters"]
-    digits = 4 if min([w[0] for w in res["windows"]["map_A_tilde"].values() if w] or [1.0]) > 0.01 else 6
-    table = markdown_window_table(res["windows"], labels, digits=digits)
+    applies = res.get("map_applicability", {})
+    ode_los = [w[0] for w in res["windows"]["ode"].values() if w and w[0]]
+    digits = 4 if min(ode_los or [1.0]) > 0.01 else 6
+    f = f".{digits}f"
+    table = markdown_window_table(res["windows"], labels, digits=digits, na=applies)
     eq = problem.coefficient_eq()
-    grid_txt = (f"geometric grid, {res['scan_grid_step']:.3g} relative step" if res["scan_grid_geometric"]
-                else f"{res['scan_grid_step']:.3g} grid")
+    g0, g1, gn = p["sigma_grid"]
+    grid_txt = (f"geometric grid of {gn} points, {res['scan_grid_step']:.3g} relative step" if res["scan_grid_geometric"]
+                else f"grid of {gn} points, step {res['scan_grid_step']:.3g}")
+    rho = "" if p["rho_per_sigma"] is None else f"; rho/sigma = {p['rho_per_sigma']:.6g} from {eq}"
+    auto = p["M_max"] == "auto"
     lines = [
-        f"# {title or 'Windows of maximal period-M orbits: maps vs ODE'}",
+        f"# {title or 'Windows of periodic orbits: the ODE, and the maps beside it'}",
         "",
-        f"Parameters: {problem.describe()} -> nu = {p['nu']:.6f}, Omega = {p['Omega']:.6f}; "
-        f"rho/sigma = {p['rho_per_sigma']:.6g} from {eq}. {'Quick' if ctx.quick else 'Full'} run.",
+        f"Parameters: {problem.describe()} -> nu = {p['nu']:.6f}, Omega = {p['Omega']:.6f}{rho}. "
+        f"{'Quick' if ctx.quick else 'Full'} run.",
         "",
-        "## What was compared",
+        "## How the ODE's windows were found",
         "",
-        "The sigma-edges of the stable maximal period-M windows (one impact per M forcing periods), from four "
-        "sources (docs/theory.md explains each):",
+        f"From the ODE alone: quasi-static up and down scans of the FMU over sigma in [{g0:.4g}, {g1:.4g}] "
+        f"({grid_txt}, {p['transient']} transient periods per point, periods classified up to "
+        f"{p['M_scan_limit']}) give every stable periodic orbit with impacts that they reach; each (period M, "
+        "impacts per period) seen is then followed by Newton shooting on the FMU's stroboscopic M-period map "
+        f"(phase {problem.theta}, {p['shooting_derivatives']} Jacobian) to both of its edges, marching beyond the "
+        f"scan grid if need be (search range [{p['shooting_sigma_range'][0]:.4g}, {p['shooting_sigma_range'][1]:.4g}]). "
+        "An orbit belongs to the window while Newton converges to it, it is stable, has the same number of impacts "
+        "per period and minimal period M. Each edge is the midpoint of a bracket that the shooting found and "
+        f"bisected to xtol ({p['shooting_xtol_rule']}: {_fmt_tol(p['shooting_xtol'])}); an edge it could not "
+        "bracket inside the search range is reported as beyond it, never as a number. Windows narrower than the "
+        "scan step can be missed by the scans: the maps' windows that the scans did not see were tried as extra "
+        "Newton starts (marked 'map-guided start'); the ODE decides whether the orbit is there.",
+        "",
+        "The maps are only compared with the ODE's windows (docs/theory.md explains each):",
         "",
         f"- **(64)**: rho in [1/(4M), 1/M^2] of the strongly damped 1D map, with rho(sigma) linear from {eq};",
         f"- **2D map**: (37)/(38) with {eq}, closed-form maximal orbits, edges by bisection;",
-        "- **2D map, A~(sigma)**: the same with |A~(sigma)| = (1+sigma) 4 pi^2 - sigma Omega^2 in rho;",
-        f"- **ODE**: the FMU. Newton shooting on its stroboscopic M-period map at phase {problem.theta} (one impact "
-        "per period), started inside the A~ map's window; lower edges where a multiplier leaves the unit circle, "
-        "upper edges where an extra contact appears. Each edge is the midpoint of a bracket that the shooting "
-        f"found and bisected to xtol ({_fmt_tol(p['shooting_xtol'])}); an edge it could not bracket is "
-        f"'unresolved'. Confirmed by quasi-static up/down scans on a {grid_txt} ({p['transient']} transient "
-        "periods per point).",
+        "- **2D map, A~(sigma)**: the same with |A~(sigma)| = (1+sigma) 4 pi^2 - sigma Omega^2 in rho.",
         "",
-        "## Window edges in sigma",
+        "## Where the maps apply",
+        "",
+    ]
+    for k in VARIANT_KEYS:
+        why = applies.get(k)
+        lines.append(f"- {labels[k]}: " + ("applies." if why is None else f"**does not apply**: {why}."))
+    lines += [
+        "",
+        "## Stable windows of maximal orbits (one impact per period), in sigma",
         "",
         table,
         "",
-        "ODE edge kinds (lower, upper): " + ", ".join(f"M = {M}: {k[0]}/{k[1]}" for M, k in res["edge_kinds"]["ode"].items()),
+        "'none' in the ODE row: no stable maximal orbit of that period was seen by the scans or found from the "
+        f"maps' starts in the searched range; 'none' in a map row: the map has no such window in sigma "
+        f"[{p['map_sigma_range'][0]:.3g}, {p['map_sigma_range'][1]:.3g}]; n/a: the map does not apply (above).",
     ]
-    if res["ode_unresolved"]:
-        lines += ["", "Unresolved ODE edges (no bracket inside the search range "
-                  f"[{p['shooting_sigma_range'][0]:.4g}, {p['shooting_sigma_range'][1]:.4g}]; last sigma with a "
-                  "stable maximal orbit given): " + "; ".join(
-                      f"M = {M} {side}: beyond {res['ode_edge_intervals'][M][0 if side == 'lower' else 1][0]}"
-                      if res["ode_edge_intervals"][M][0 if side == "lower" else 1][0] is not None
-                      else f"M = {M} {side}: no stable maximal orbit found in the map's window"
-                      for M, sides in res["ode_unresolved"].items() for side in sides)]
-    lines += [
-        "",
-        "## Confirmation by the up/down scans",
-        "",
-        "| M | shooting | lowest point in down scan | highest point in up scan |",
-        "|---|---|---|---|",
-    ]
-    f = f".{digits}f"
-    for M, cf in res["scan_confirmation"].items():
-        w = res["windows"]["ode"][M]
-        if w is None:
-            continue
-        lo = "unresolved" if w[0] is None else format(w[0], f)
-        hi = "none" if w[1] is None else format(w[1], f)
-        lo_s = "not seen" if cf["scan_lower"] is None else f"{cf['scan_lower']:{f}} ({cf['lower_minus_shooting']:+.2g})" \
-            if cf["lower_minus_shooting"] is not None else f"{cf['scan_lower']:{f}}"
-        hi_s = "-" if w[1] is None else ("not seen" if cf["scan_upper"] is None else
-                                         f"{cf['scan_upper']:{f}} ({cf['upper_minus_shooting']:+.2g})")
-        lines.append(f"| {M} | [{lo}, {hi}] | {lo_s} | {hi_s} |")
-    lines += [
-        "",
-        f"Scan minus shooting, in sigma. Lower edges: "
-        f"{_span([cf['lower_minus_shooting'] for cf in res['scan_confirmation'].values()])}; upper edges: "
-        f"{_span([cf['upper_minus_shooting'] for cf in res['scan_confirmation'].values()])}. "
-        "A scan edge is a grid point, so it lies up to one step inside the true edge. Near a flip the multiplier "
-        "is near -1 and the decaying period-2M oscillation needs many periods to fall below the classification "
-        f"tolerance ({SCAN_TOL:g}), so the down scan loses period M some steps inside the window (critical "
-        "slowing down); near an upper edge one grid step can knock the orbit onto a coexisting attractor, so the "
-        "up scan may leave the window early.",
-        "",
-        "## Where the maps and the ODE disagree",
-        "",
-        "| variant | " + " | ".join(f"M = {M} (lo, hi)" for M in res["windows"]["ode"]) + " | max abs |",
-        "|---|" + "---|" * (len(res["windows"]["ode"]) + 1),
-    ]
-    for name, d in res["differences_to_ode"].items():
-        cells = []
-        for M in res["windows"]["ode"]:
-            lo, hi = d[M]
-            cells.append(("-" if lo is None else f"{lo:+.4g}") + ", " + ("-" if hi is None else f"{hi:+.4g}"))
-        lines.append(f"| {labels[name]} | " + " | ".join(cells) + f" | {res['max_abs_difference_to_ode'][name]:.4g} |")
+    kinds = res["edge_kinds"]["ode"]
+    if kinds:
+        lines += ["", "ODE edge kinds (lower/upper): " + ", ".join(f"M = {M}: {k[0]}/{k[1]}" for M, k in kinds.items())]
+    if auto:
+        stop = res.get("period_adding_stop")
+        lines += ["", (f"--M-max auto: period adding truncates at M = {stop}: no stable maximal window at M = {stop} "
+                       f"and M = {stop + 1} (searched up to period {p['M_scan_limit']})." if stop is not None else
+                       f"--M-max auto: stable maximal windows up to the scan's limit M = {p['M_scan_limit']}; period "
+                       "adding did not truncate there.")]
+    all_rows = _all_windows_table(res, f)
+    lines += ["", "## Every periodic window of the ODE (any number of impacts per period)", ""]
+    lines += all_rows or [f"No stable periodic orbit with impacts was seen in sigma [{g0:.4g}, {g1:.4g}]."]
+    conf = [(M, cf) for M, cf in res["scan_confirmation"].items() if res["windows"]["ode"].get(M)]
+    if conf:
+        lines += ["", "## Confirmation by the up/down scans", "",
+                  "| M | shooting | lowest point in down scan | highest point in up scan |", "|---|---|---|---|"]
+        for M, cf in conf:
+            w = res["windows"]["ode"][M]
+            lo = "beyond the range" if w[0] is None else format(w[0], f)
+            hi = "beyond the range" if w[1] is None else format(w[1], f)
+            lo_s = "not seen" if cf["scan_lower"] is None else (
+                f"{cf['scan_lower']:{f}} ({cf['lower_minus_shooting']:+.2g})" if cf["lower_minus_shooting"] is not None
+                else f"{cf['scan_lower']:{f}}")
+            hi_s = "-" if w[1] is None else ("not seen" if cf["scan_upper"] is None else
+                                             f"{cf['scan_upper']:{f}} ({cf['upper_minus_shooting']:+.2g})")
+            lines.append(f"| {M} | [{lo}, {hi}] | {lo_s} | {hi_s} |")
+        lines += ["", "Scan minus shooting, in sigma. A scan edge is a grid point, so it lies up to one step inside "
+                  "the true edge; near a flip the decaying period-2M oscillation needs many periods to fall below "
+                  f"the classification tolerance ({SCAN_TOL:g}), so the down scan may lose period M some steps "
+                  "inside the window (critical slowing down)."]
+    diffs = res["differences_to_ode"]
+    Ms = [M for M, w in res["windows"]["ode"].items() if w is not None]
+    if diffs and Ms:
+        lines += ["", "## Where the maps and the ODE disagree", "",
+                  "| variant | " + " | ".join(f"M = {M} (lo, hi)" for M in Ms) + " | max abs |",
+                  "|---|" + "---|" * (len(Ms) + 1)]
+        for name, d in diffs.items():
+            cells = [("-" if d[M][0] is None else f"{d[M][0]:+.4g}") + ", " + ("-" if d[M][1] is None else f"{d[M][1]:+.4g}")
+                     for M in Ms]
+            lines.append(f"| {labels[name]} | " + " | ".join(cells) + f" | {res['max_abs_difference_to_ode'][name]:.4g} |")
+        lines += ["", "(map edge minus ODE edge, in sigma; inf: a window the ODE has is missing in the map.)"]
     mmax = {k: max([M for M, w in ws.items() if w is not None and w[0] is not None and (w[1] is None or w[1] >= w[0])]
                    or [0]) for k, ws in res["windows"].items()}
     best = res["best_variant"]
-    lines += [
-        "",
-        "(map edge minus ODE edge, in sigma; inf: a window the ODE has is missing in the variant.)",
-        "",
-        "## Verdict",
-        "",
-        f"{labels[best]} agrees best with the ODE: largest edge difference "
-        f"{res['max_abs_difference_to_ode'][best]:.2g} in sigma (variant `{best}`). "
-        f"Highest period with a stable maximal window: (64) M = {mmax['theory_64']}, 2D map M = {mmax['map']}, "
-        f"2D map with A~ M = {mmax['map_A_tilde']}, ODE M = {mmax['ode']} (searched up to M = {problem.M_max}).",
-        "",
-        f"Figures: `{ctx.target}_map.png` (the map's bifurcation diagrams, rho linear and with A~), "
-        f"`{ctx.target}_ode.png` (the FMU's up/down scans in natural coordinates), `{ctx.target}_windows.png` "
-        "(the four window tables).",
-    ]
+    lines += ["", "## Verdict", ""]
+    if best is not None and math.isfinite(res["max_abs_difference_to_ode"][best]):
+        lines.append(f"{labels[best]} agrees best with the ODE: largest edge difference "
+                     f"{res['max_abs_difference_to_ode'][best]:.2g} in sigma (variant `{best}`).")
+    else:
+        lines.append(res["verdict"] + ".")
+    lines.append("Highest period with a stable maximal window: ODE M = "
+                 f"{mmax['ode'] if mmax['ode'] else 'none'}" + "".join(
+                     f", {labels[k]} " + ("n/a" if applies.get(k) else f"M = {mmax[k] or 'none'}") for k in VARIANT_KEYS)
+                 + ".")
+    lines += ["", f"Figures: `{ctx.target}_map.png` (the maps' bifurcation diagrams, where they apply), "
+              f"`{ctx.target}_ode.png` (the FMU's up/down scans), `{ctx.target}_windows.png` (the window tables)."]
     return "\n".join(lines)
-
-
-# ----------------------------------------------------------------------------------------
-# One call
-# ----------------------------------------------------------------------------------------

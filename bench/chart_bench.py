@@ -1,0 +1,78 @@
+"""Benchmark of ``impact-harness chart`` (issue 18): the soft-to-hard chart of Figure 9's family
+(windows M = 1..5 over (sigma, Gamma), Gamma = 10 .. 1e6 on a log axis) in closed-form mode, and
+the same per-value cost in CVODE mode, measured in one run.  Writes the chart into
+docs/img/soft_to_hard.png (with chart.json beside it in OUT) and its section of BENCHMARKS.md.
+
+    .venv/bin/python bench/chart_bench.py [--num 30] [--cvode-num 4] [--workers 2] [--out results/chart-bench]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import shutil
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from bench.sections import write_section  # noqa: E402
+
+
+def _run(args: list[str]) -> tuple[float, dict]:
+    from harness.cli.main import main
+
+    t0 = time.perf_counter()
+    assert main(args) == 0
+    wall = time.perf_counter() - t0
+    out = Path(args[args.index("--out") + 1])
+    return wall, json.loads((out / "chart.json").read_text())
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--num", type=int, default=30)
+    ap.add_argument("--cvode-num", type=int, default=4)
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--out", default="results/chart-bench")
+    a = ap.parse_args()
+    common = ["chart", "--config", str(ROOT / "harness/experiments/fig9.toml"), "--param2", "Gamma", "--log",
+              "--M-max", "5", "--workers", str(a.workers)]
+    cf_out, cv_out = Path(a.out) / "closed-form", Path(a.out) / "cvode"
+    t_cf, cf = _run(common + ["--range", "10:1e6", "--num", str(a.num), "--solver", "closed-form",
+                              "--out", str(cf_out)])
+    t_cv, cv = _run(common + ["--range", "10:1e6", "--num", str(a.cvode_num), "--solver", "cvode",
+                              "--out", str(cv_out)])
+    (ROOT / "docs/img").mkdir(parents=True, exist_ok=True)
+    shutil.copy(cf_out / "chart.png", ROOT / "docs/img/soft_to_hard.png")
+    per_cf = sum(cf["task_seconds"]) / len(cf["task_seconds"])
+    per_cv = sum(cv["task_seconds"]) / len(cv["task_seconds"])
+    closes = {M: c["closes"] for M, c in cf["curves"].items()}
+    text = f"""<!-- chart:begin -->
+## Soft-to-hard chart (issue 18): `impact-harness chart`
+
+Figure 9's family (harness/experiments/fig9.toml), windows M = 1..5 over (sigma, Gamma), Gamma = 10 .. 1e6
+(log), sigma scanned over [{cf['parameters']['sigma_grid'][0]:g}, {cf['parameters']['sigma_grid'][1]:g}]
+({cf['parameters']['sigma_grid'][2]} points), {a.workers} worker processes; {platform.processor() or platform.machine()},
+Python {platform.python_version()}. Measured by `bench/chart_bench.py` in one run:
+
+| mode | Gamma values | wall time | mean time per value (in a worker) |
+|---|---|---|---|
+| closed form | {a.num} | {t_cf:.1f} s | {per_cf:.2f} s |
+| CVODE | {a.cvode_num} | {t_cv:.1f} s | {per_cv:.2f} s |
+
+CVODE / closed form per value: {per_cv / per_cf:.1f}x. Goal: the {a.num}-value chart in closed-form mode under
+10 minutes on 2 cores ({'met' if t_cf < 600 else 'NOT met'}: {t_cf / 60:.1f} min). Where each window closes
+(Gamma, bracketed between neighbouring values; null: not closing in the range, see chart.json):
+{', '.join(f'M = {M}: {"null" if v is None else f"{v:.4g}"}' for M, v in closes.items())}.
+Picture: docs/img/soft_to_hard.png.
+<!-- chart:end -->"""
+    write_section(ROOT / "BENCHMARKS.md", text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

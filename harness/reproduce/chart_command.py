@@ -1,0 +1,218 @@
+"""CLI, plot and report of ``impact-harness chart`` (:mod:`.chart`)."""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import HarnessInputError
+from .chart import ChartProblem, parse_range, run_chart
+
+__all__ = ["register", "cmd_chart", "plot_chart", "chart_report", "chart"]
+
+WALLS = {"compliant": 1, "rigid": 2}
+
+
+def _model_from_config(path: str | None) -> dict[str, Any]:
+    if path is None:
+        return {}
+    import tomllib
+
+    try:
+        with open(path, "rb") as fh:
+            data = tomllib.load(fh)
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise HarnessInputError("--config", f"cannot read {path}: {exc}") from exc
+    return dict(data.get("model", {}))
+
+
+def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: str) -> None:
+    """sigma against the second parameter: ODE windows as bands, map (48) and (39) windows as
+    lines, and beta along the orbits in a second panel."""
+    from ..io import plots  # noqa: F401  (Agg backend)
+    import matplotlib.pyplot as plt
+
+    fig, (ax, bx) = plt.subplots(2, 1, figsize=(8.5, 9), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
+    cmap = plt.get_cmap("tab10")
+    for M, cv in res["curves"].items():
+        col = cmap((int(M) - 1) % 10)
+        if cv["value"]:
+            v = np.array(cv["value"])
+            lo = np.array([np.nan if x is None else x for x in cv["lower"]], float)
+            hi = np.array([np.nan if x is None else x for x in cv["upper"]], float)
+            hi_plot = np.where(np.isfinite(hi), hi, problem.sigma_grid[-1] * 4.0)
+            ax.fill_between(v, lo, hi_plot, color=col, alpha=0.35, lw=0, label=f"ODE M = {M}")
+            ax.plot(v, lo, "-", color=col, lw=1.2)
+            ax.plot(v, hi, "-", color=col, lw=1.2)
+            beta = np.array([np.nan if b is None else b for b in cv["beta"]], float)
+            if np.any(np.isfinite(beta)):
+                bx.plot(v, beta, "o-", color=col, ms=3, label=f"M = {M}")
+        if cv["closes"] is not None:
+            ax.axvline(cv["closes"], color=col, ls=":", lw=1)
+        for key, ls, lab in (("map_48", "--", "map (48), A~"), ("map_39", "-.", "map (39), A~")):
+            mw = res["maps"][key][M]
+            if mw["value"]:
+                for edge in ("lower", "upper"):
+                    y = np.array([np.nan if x is None else x for x in mw[edge]], float)
+                    ax.plot(mw["value"], y, ls, color=col, lw=0.9,
+                            label=f"{lab} M = {M}" if edge == "lower" and M == "1" else None)
+    ax.set_yscale("log")
+    ax.set_ylim(problem.sigma_grid[0], problem.sigma_grid[-1] * 4.0)
+    ax.set_ylabel("forcing above grazing, sigma")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=7, ncol=3, loc="upper left")
+    bx.axhline(1.0, color="k", lw=0.8, ls=":")
+    bx.set_ylabel("beta = r v_c kappa / |A~|\n(at each window's seed)", fontsize=8)
+    bx.set_yscale("log")
+    bx.set_xlabel(problem.param2)
+    if problem.log:
+        bx.set_xscale("log")
+    if bx.get_legend_handles_labels()[0]:
+        bx.legend(fontsize=7, ncol=5)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
+def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> str:
+    g = problem.sigma_grid
+    lines = [f"# Chart: windows of the ODE over (sigma, {problem.param2})", "",
+             f"Parameters: {', '.join(f'{k} = {v:g}' if isinstance(v, float) else f'{k} = {v}' for k, v in problem.params.items())}; "
+             f"{problem.param2} over {len(problem.values)} values from {problem.values[0]:g} to {problem.values[-1]:g}"
+             f"{' (log)' if problem.log else ''}.", "",
+             "Method: for each value, up/down scans of the FMU over sigma in "
+             f"[{g[0]:.3g}, {g[-1]:.3g}] ({len(g)} points, geometric), every attractor seen shot by Newton to its "
+             f"edges (bisected to {problem.xtol_rel:g} x sigma); the edges of the stable maximal period-M windows are "
+             "joined across values into curves. This is a 1-D continuation per value of the second parameter "
+             "joined into curves (not a two-parameter continuation of the events): where a window disappears is "
+             "bracketed between two neighbouring values.", "",
+             "| M | present at | closes (bracket) | opens (bracket) | edge kinds at the last value | beta range |",
+             "|---|---|---|---|---|---|"]
+    for M, cv in res["curves"].items():
+        pres = f"{len(cv['present_at'])} of {len(problem.values)}"
+        cl = ("null (present up to the end of the range searched, "
+              f"{cv['searched'][0]:g} to {cv['searched'][1]:g})" if cv["closes"] is None and cv["value"] else
+              "never present in the range searched" if cv["closes"] is None else
+              f"{cv['closes']:.4g} ([{cv['bracket'][0]:.4g}, {cv['bracket'][1]:.4g}])")
+        op = "-" if cv["opens"] is None else f"{cv['opens']:.4g} ([{cv['opens_bracket'][0]:.4g}, {cv['opens_bracket'][1]:.4g}])"
+        kinds = "-" if not cv["value"] else f"{cv['kind_lower'][-1]}/{cv['kind_upper'][-1]}"
+        b = [x for x in cv["beta"] if x is not None]
+        br = "-" if not b else f"{min(b):.3g} to {max(b):.3g}"
+        lines.append(f"| {M} | {pres} | {cl} | {op} | {kinds} | {br} |")
+    lines += ["", "How each window closes: its lower and upper edges (kinds in the table) approach each other as "
+              f"{problem.param2} grows; the last value with the window and the width there:", ""]
+    for M, cv in res["curves"].items():
+        if cv["value"] and cv["closes"] is not None:
+            lo, hi = cv["lower"][-1], cv["upper"][-1]
+            width = "unbounded" if lo is None or hi is None else f"{hi - lo:.3g} ({(hi - lo) / lo:.2%} of sigma)"
+            lines.append(f"- M = {M}: at {problem.param2} = {cv['value'][-1]:g} the window is "
+                         f"[{lo if lo is None else format(lo, '.5g')}, {hi if hi is None else format(hi, '.5g')}] "
+                         f"({cv['kind_lower'][-1]}/{cv['kind_upper'][-1]}), width {width}; none at "
+                         f"{cv['bracket'][1]:g}.")
+    lines += ["", f"Other windows (more than one impact per period): {len(res['other_windows'])} found (chart.json).",
+              "", f"Backend: {res['backend']}; {res['seconds']:.1f} s wall, {sum(res['task_seconds']):.1f} s in tasks.",
+              "", f"Run: `impact-harness {command}`."]
+    return "\n".join(lines)
+
+
+def chart(problem: ChartProblem, out: str | Path, fmu_path: str | None = None, backend: Any = None,
+          workers: int | None = None, scheduler: str | None = None, command: str = "chart") -> dict[str, Any]:
+    """Run the chart, write chart.json, chart.png and report.md into ``out``; return the result."""
+    from ..config import default_fmu_path
+    from ..fmu.fmi import FmuModel
+    from . import to_jsonable
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    fmu = FmuModel(fmu_path or default_fmu_path(), "--fmu")
+    for k in list(problem.params) + [problem.param2]:
+        if k not in fmu.variables:
+            raise HarnessInputError("--param2" if k == problem.param2 else k, f"{fmu.path.name} has no parameter {k!r}")
+    res = run_chart(problem, fmu.source(), backend, workers, scheduler)
+    res["parameters"] = {**problem.params, "param2": problem.param2, "values": problem.values, "log": problem.log,
+                         "M_max": problem.M_max, "sigma_grid": [float(problem.sigma_grid[0]),
+                                                                 float(problem.sigma_grid[-1]), len(problem.sigma_grid)]}
+    (out / "chart.json").write_text(json.dumps(to_jsonable(res), indent=1) + "\n")
+    title = (f"Windows of the ODE (bands) and of maps (48)/(39) (lines) over (sigma, {problem.param2})\n"
+             + ", ".join(f"{k} = {v:.4g}" for k, v in problem.params.items() if isinstance(v, float)))
+    plot_chart(res, problem, out / "chart.png", title)
+    (out / "report.md").write_text(chart_report(res, problem, command) + "\n")
+    return res
+
+
+def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
+    """Add the ``chart`` subcommand."""
+    p = sub.add_parser("chart", help="windows of the ODE over (sigma, a second parameter), maps (48)/(39) beside them",
+                       description="For each value of --param2, the ODE's windows (scans over sigma, every attractor "
+                       "shot to its edges); the edges joined into curves per period M; chart.json, chart.png, report.md.")
+    p.add_argument("--config", help="TOML with a [model] table (nu, Omega, r, Gamma, wall), e.g. "
+                   "harness/experiments/fig9.toml")
+    for k in ("nu", "Omega", "r", "Gamma"):
+        p.add_argument(f"--{k}", type=float, help=f"{k} (overrides --config)")
+    p.add_argument("--wall", choices=sorted(WALLS), help="wall (overrides --config; default compliant)")
+    p.add_argument("--param2", required=True, help="second parameter: Gamma, r, nu, Omega or any FMU parameter")
+    p.add_argument("--range", required=True, dest="range_", metavar="START:STOP", help="its range")
+    p.add_argument("--num", type=int, default=30, help="values of the second parameter (default 30)")
+    p.add_argument("--log", action="store_true", help="geometric values, log axis")
+    p.add_argument("--M-max", type=int, default=5, dest="M_max", help="highest period charted (default 5)")
+    p.add_argument("--sigma-range", default="0.05:400", help="sigma range of the scans (default 0.05:400)")
+    p.add_argument("--per-decade", type=int, default=None, help="scan points per decade of sigma (default 16, quick 10)")
+    p.add_argument("--quick", action="store_true", help="coarser scans and tolerances")
+    p.add_argument("--solver", choices=("cvode", "closed-form"), default="closed-form",
+                   help="the FMU's integrator (default closed-form)")
+    p.add_argument("--backend", choices=("processes", "dask", "serial"), default=None)
+    p.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
+    p.add_argument("--workers", "-j", type=int, help="worker processes (default: all cores)")
+    p.add_argument("--fmu", help="FMU (default build/fmu/ImpactOscillator.fmu)")
+    p.add_argument("--out", "-o", default="results/chart", help="output directory")
+    p.set_defaults(func=cmd_chart)
+
+
+def cmd_chart(args: argparse.Namespace) -> int:
+    from ..fmu.fmi import SOLVER_NAMES, SOLVER_PARAMETER
+
+    model = _model_from_config(args.config)
+    for k in ("nu", "Omega", "r", "Gamma", "wall"):
+        if getattr(args, k) is not None:
+            model[k] = getattr(args, k)
+    wall = model.get("wall", "compliant")
+    if wall not in WALLS:
+        raise HarnessInputError("--wall", f"must be compliant or rigid, got {wall!r}")
+    for k in ("nu", "Omega", "r"):
+        if k not in model:
+            raise HarnessInputError(f"--{k}", "required (or --config with a [model] table)")
+    params: dict[str, Any] = {"nu": float(model["nu"]), "Omega": float(model["Omega"]), "r": float(model["r"]),
+                              "wall": WALLS[wall], SOLVER_PARAMETER: SOLVER_NAMES[args.solver]}
+    if wall == "compliant":
+        params["Gamma"] = float(model.get("Gamma", 10.0))
+    a, b = parse_range(args.range_)
+    if args.num < 2:
+        raise HarnessInputError("--num", f"must be >= 2, got {args.num}")
+    if args.log and a <= 0:
+        raise HarnessInputError("--range", "a log range must be positive")
+    if not 1 <= args.M_max <= 12:
+        raise HarnessInputError("--M-max", f"must be in 1..12, got {args.M_max}")
+    s0, s1 = parse_range(args.sigma_range)
+    if s0 <= 0:
+        raise HarnessInputError("--sigma-range", "must be positive (geometric grid)")
+    per = args.per_decade or (10 if args.quick else 16)
+    grid = np.geomspace(s0, s1, int(math.ceil(per * math.log10(s1 / s0))) + 1)
+    values = np.geomspace(a, b, args.num) if args.log else np.linspace(a, b, args.num)
+    problem = ChartProblem(params, args.param2, values, args.log, args.M_max, grid,
+                           transient=150 if args.quick else 250, samples=24,
+                           xtol_rel=1e-3 if args.quick else 1e-4)
+    t0 = time.perf_counter()
+    cmd = " ".join(["chart", *([f"--config {args.config}"] if args.config else []), f"--param2 {args.param2}",
+                    f"--range {args.range_}", f"--num {args.num}", *(["--log"] if args.log else []),
+                    f"--M-max {args.M_max}", f"--solver {args.solver}", f"--out {args.out}"])
+    res = chart(problem, args.out, args.fmu, args.backend, args.workers, args.scheduler, cmd)
+    for M, cv in res["curves"].items():
+        c = "null" if cv["closes"] is None else f"{cv['closes']:.4g}"
+        print(f"M = {M}: present at {len(cv['present_at'])}/{len(values)} values; closes at {c}")
+    print(f"wrote {Path(args.out) / 'chart.json'}, chart.png, report.md ({time.perf_counter() - t0:.1f} s)")
+    return 0
