@@ -171,9 +171,8 @@ def _rotate_to_impact(orb: PeriodicOrbit, M: int) -> np.ndarray:
 def good_orbit(smap: StroboscopicMap, M: int, sigma: float, guesses: list[np.ndarray | None],
                newton: Mapping[str, Any] | None = None,
                accept: Callable[[PeriodicOrbit], bool] | None = None) -> tuple[bool, PeriodicOrbit | None]:
-    """Try Newton from each guess; True with the orbit if one converges to a stable maximal
-    period-M orbit (or one that ``accept`` takes), else False with the most informative failed
-    orbit (a converged one)."""
+    """Newton from each guess: True with the first stable maximal period-M orbit (or one that
+    ``accept`` takes), else False with the most informative failed orbit (a converged one)."""
     step = smap.at(sigma)
     dstep = smap.at_with_jacobian(sigma)
     failed: PeriodicOrbit | None = None
