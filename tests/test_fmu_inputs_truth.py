@@ -155,3 +155,48 @@ def test_grazing_exit_from_inside_the_compliant_wall(fmu, phase, depth, solver):
     fmu.step_to(t_star + 0.4 * half)
     assert fmu.impacts() == (1 if depth < 0 else 0)
     assert fmu.in_contact()
+
+
+def _ref_end(sigma: float, dw: float, y0, T: float) -> np.ndarray:
+    ref = InputsReference(sigma=sigma, r=0.0, wall="rigid", **UNDERDAMPED)
+    st = ref.run(RefState(0.0, *y0), Piece(0.0, T, 0.0, 0.0, 0.02, dw))
+    return np.array([st.u, st.v])
+
+
+@SOLVERS
+@pytest.mark.parametrize("dw", [0.05, 0.0])
+@pytest.mark.parametrize("T", [0.1, 0.5], ids=["still-stuck", "released"])
+def test_sensitivities_over_a_period_that_sticks(fmu, T, dw, solver):
+    """sensitivities = true, r = 0 on a rigid wall (moving at dw or still): the mass sticks at
+    t ~ 0.03.  Every nearby start sticks too, so J = d(u, v)(T)/d(u0, v0) is exactly 0, still
+    stuck or released after; S = d(u, v)(T)/d sigma against central differences of the
+    independent reference (the forcing's sigma-derivative does not act while the wall holds the
+    mass; the release time moves with sigma, but the state leaves the wall with zero
+    acceleration, so the release adds nothing to first order)."""
+    sigma, y0 = 10.0, (-0.03, 0.0)
+    fmu.start(wall=WALLS["rigid"], solver=solver, sigma=sigma, r=0.0, u_wall=0.02, u0=y0[0], v0=y0[1],
+              sensitivities=True, **UNDERDAMPED)
+    fmu.slave.setRealInputDerivatives([fmu.vr["u_wall"]], [1], [dw])
+    fmu.step_to(T)
+    assert [fmu.get(k) for k in ("J_uu", "J_uv", "J_vu", "J_vv")] == [0.0] * 4
+    assert fmu.impacts() == 1 and fmu.in_contact() == (T == 0.1)
+    h = 1e-5
+    want = (_ref_end(sigma + h, dw, y0, T) - _ref_end(sigma - h, dw, y0, T)) / (2 * h)
+    got = np.array([fmu.get("S_u"), fmu.get("S_v")])
+    np.testing.assert_allclose(got, want, rtol=1e-5, atol=1e-7)
+
+
+@SOLVERS
+def test_a_wall_jumping_onto_a_mass_it_outruns_is_no_impact(fmu, solver):
+    """A rigid wall moving away at 0.5 jumps 0.01 past a mass that follows at 0.3: relative to
+    the wall the mass moves away (-0.2), so it is placed on the wall without an impact and keeps
+    its velocity (the documented rule of model_input_jump, decided on the relative velocity; the
+    absolute one, +0.3, would invent an impact)."""
+    fmu.start(wall=WALLS["rigid"], solver=solver, sigma=0.0, r=0.8, u0=-0.5, v0=0.3, u_wall=0.5, nu=0.0,
+              Omega=1e-3)
+    u, v = fmu.state()
+    fmu.slave.setRealInputDerivatives([fmu.vr["u_wall"]], [1], [0.5])
+    fmu.set(u_wall=u - 0.01)
+    fmu.step_to(1e-9)
+    assert fmu.impacts() == 0
+    assert fmu.state()[0] <= u - 0.01 + 1e-9 * 0.5 and fmu.state()[1] == pytest.approx(v, abs=1e-6)
