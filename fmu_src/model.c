@@ -248,6 +248,11 @@ int model_release_now(ModelData *m, double tau) {
     return 0;
 }
 
+/* STICK_ULPS ulps of a wall at w (0 at w = 0, where u has full relative precision). */
+static double wall_resolution(double w) {
+    return w == 0.0 ? 0.0 : STICK_ULPS * (nextafter(fabs(w), INFINITY) - fabs(w));
+}
+
 /* The rigid wall's impact at relative velocity vc (v - w' before the jump): (11) in the wall's
  * frame, and sticking when the rebound is negligible while the net force pushes in. */
 static void rigid_impact(ModelData *m, double tau, double y[2], double w, double dw) {
@@ -259,7 +264,7 @@ static void rigid_impact(ModelData *m, double tau, double y[2], double w, double
      * push) cannot be represented, its crossings are found late, and the late finds pump energy
      * into a chatter that then never ends. Sticking is the limit of that chatter too. (w = 0:
      * u has full relative precision; only the velocity threshold acts, as before the ports.) */
-    const double res = w == 0.0 ? 0.0 : STICK_ULPS * (nextafter(fabs(w), INFINITY) - fabs(w));
+    const double res = wall_resolution(w);
     if (push > 0.0 &&
         (fabs(vr) <= STICK_VELOCITY * fmax(1.0, fabs(vc)) || vr * vr <= 2.0 * push * res)) {
         y[0] = w;
@@ -274,6 +279,14 @@ EventResult model_event_update(ModelData *m, double tau, double y[2], int which)
 
     switch (m->mode) {
     case MODE_FREE:
+        if (m->wall == WALL_RIGID && y[1] - dw <= 0.0 && model_wall_force(m, tau) <= 0.0) {
+            /* Not an impact: a mass that leaves the wall (just released from sticking on a moving
+             * wall: relative velocity 0, the net force pulling it off) put an ulp beyond it by the
+             * integrator's error, which exceeds the separation -|a| t^2 / 2 for a while. It is
+             * placed back beside the wall; no impact is counted (one was, at every release). */
+            y[0] = beside_wall(w, -1.0);
+            return EVENT_JUMP;
+        }
         /* entering the wall: u = w (the root), v > w' */
         m->impacts += 1;
         m->v_impact = y[1] - dw;
@@ -320,7 +333,9 @@ int model_input_jump(ModelData *m, double tau, double y[2]) {
         if (m->mode == MODE_FREE && y[0] > w) m->mode = MODE_CONTACT;
         else if (m->mode == MODE_CONTACT && y[0] < w) m->mode = MODE_FREE;
     } else if (m->mode == MODE_STICK) {
-        if (y[0] >= w) {
+        /* a wall set to where it is up to the rounding of the master's own w0 + w' t (a few ulps)
+         * has not gone away: the mass stays on it */
+        if (y[0] >= w - wall_resolution(w)) {
             y[0] = w; /* pushed along (or not moved) */
             y[1] = dw;
             if (model_wall_force(m, tau) <= 0.0) {

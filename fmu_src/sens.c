@@ -33,6 +33,8 @@ void sens_saltation(const ModelData *before, const ModelData *after, double tau,
     X[0][0] = X[1][1] = 1.0;
     X[0][1] = X[1][0] = 0.0;
     if (before->mode == MODE_STICK) return; /* release: a time event, the state is fixed */
+    if (before->mode == MODE_FREE && after->mode == MODE_FREE && after->impacts == before->impacts)
+        return; /* a leaving mass placed back beside the wall (model_event_update): no jump */
     double DR = 1.0; /* DR = diag(1, DR) */
     if (after->mode == MODE_STICK) DR = 0.0; /* R(u, v) = (u, w'): every nearby state sticks */
     if (before->mode == MODE_FREE && after->mode == MODE_CONTACT)

@@ -240,6 +240,14 @@ static void set_model_state(const Solver *s, ModelData *m, const double *y) {
     if (s->n == SENS_NEQ) sens_unpack(m, y);
     m->u = y[0];
     m->v = y[1];
+    if (m->mode == MODE_STICK) {
+        /* A sticking mass is on the wall by definition, as in the closed form's stuck_state.
+         * CVODE's u' = w' gathers rounding: an ulp below the wall's own position, the next input
+         * change (even the master writing the wall's current value) read as a wall that went
+         * away, released the mass at rest and counted a new impact on every other step. */
+        m->u = model_wall_position(m, s->tau);
+        m->v = m->du_wall;
+    }
 }
 
 /* The wall indicator lies on its mode's side at lo and on the far side at hi (both in CVODE's

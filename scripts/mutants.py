@@ -52,7 +52,7 @@ class Mutant:
 
 
 def _m(id: str, path: str, find: str, replace: str, tests: str, what: str) -> Mutant:
-    return Mutant(id, path, find, replace, tuple(tests.split()), what)
+    return Mutant(id, path, find, replace, tuple(ALSO_RUN.get(id, "").split() + tests.split()), what)
 
 
 FMU_PORTS = "tests/test_fmu_ports.py"
@@ -60,6 +60,9 @@ EVENTS = "tests/test_fmu_events_total.py"
 PHYS = "tests/test_fmu_physics.py"
 SENS = "tests/test_fmu_sensitivities.py tests/test_harness_sensitivities.py"
 CF = "tests/test_fmu_closed_form.py"
+TRUTH = "tests/test_fmu_inputs_truth.py"
+# mutants that survived the first run (issue 22): the independent-truth tests that now kill them run first
+ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28")}
 
 MUTANTS: tuple[Mutant, ...] = (
     # -- fmu_src/model.c: the physics ------------------------------------------------------------
@@ -192,6 +195,18 @@ MUTANTS: tuple[Mutant, ...] = (
     _m("M46", "mapcheck/linear.py", "disc = np.sqrt(complex(nu * nu - 4.0 * Omega * Omega))",
        "disc = np.sqrt(complex(nu * nu - 2.0 * Omega * Omega))", "tests/test_mapcheck_linear.py",
        "free-flight eigenvalues from the wrong discriminant"),
+    # -- found by tests/test_fmu_inputs_truth.py (issue 22): CVODE on a moving wall ---------------
+    _m("M47", "fmu_src/solver_cvode.c", "        m->u = model_wall_position(m, s->tau);\n        m->v = m->du_wall;\n",
+       "", TRUTH, "a sticking mass integrated by CVODE drifts an ulp off the moving wall (released at rest, "
+       "an impact counted every other step)"),
+    _m("M48", "fmu_src/model.c", "if (m->wall == WALL_RIGID && y[1] - dw <= 0.0 && model_wall_force(m, tau) <= 0.0) {",
+       "if (0) {", TRUTH, "a mass leaving the wall after a release, put an ulp beyond it by the integrator, "
+       "counts an impact"),
+    _m("M49", "fmu_src/model.c", "if (y[0] >= w - wall_resolution(w)) {", "if (y[0] >= w) {", TRUTH,
+       "a sticking mass is released when the master writes the wall's position rounded differently"),
+    _m("M50", "fmu_src/sens.c", "        return; /* a leaving mass placed back beside the wall (model_event_update): no jump */",
+       "        ; /* a leaving mass placed back beside the wall (model_event_update): no jump */", f"{TRUTH} {SENS}",
+       "a placement without impact treated as a rigid impact in the saltation matrix"),
 )
 
 

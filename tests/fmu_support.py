@@ -56,6 +56,8 @@ class LoggedSlave:
                 x = WALLS[x]
             if self.types[k] == "Integer":
                 self.slave.setInteger([self.vr[k]], [int(x)])
+            elif self.types[k] == "Boolean":
+                self.slave.setBoolean([self.vr[k]], [bool(x)])
             else:
                 self.slave.setReal([self.vr[k]], [float(x)])
 

@@ -91,3 +91,21 @@ def test_still_settling_tells_a_converging_alternation_from_a_true_period_two() 
     assert still_settling(converging, zeros, period=2)
     assert not still_settling(true_p2, zeros, period=2)
     assert not still_settling(true_p2, zeros, period=1)  # no shorter period to settle to
+
+
+@pytest.mark.parametrize("size", [0.02, 1.0, 200.0])
+@pytest.mark.parametrize("factor,periodic", [(0.9, True), (1.1, False)], ids=["below", "above"])
+def test_periodicity_threshold_scales_with_the_orbit_on_both_sides(size: float, factor: float, periodic: bool) -> None:
+    """The threshold is tol (1 + amplitude), amplitude = the orbit's largest peak-to-peak range:
+    a deviation of 0.9 times the threshold is periodic, of 1.1 times is not, for orbits of
+    size 0.02, 1 and 200 (a threshold not scaled, or scaled by the wrong power, fails one side).
+    The deviation is one spike at the last sample, so every shift's residual is exactly its
+    height (no random noise whose maximum is only known statistically)."""
+    tol = 1e-5
+    u, v, imp = _cycle([(size / 2, 0.0), (-size / 2, size / 4)], [1, 0], 30)
+    threshold = tol * (1.0 + size)
+    u[-1] += factor * threshold
+    c = classify_orbit(u, v, imp, tol=tol)
+    assert (c.period == 2) is periodic
+    if not periodic:
+        assert c.period == NOT_PERIODIC and c.residual == pytest.approx(factor * threshold, rel=1e-6)

@@ -32,6 +32,13 @@ def _wait_for(condition, what: str, limit: float = 120.0) -> None:
         time.sleep(0.02)
 
 
+def _default_sigint() -> None:
+    """Run in the child before exec: a suite started from a background job (or a CI runner that
+    starts jobs so) hands its children SIGINT as SIG_IGN, and Python then installs no
+    KeyboardInterrupt handler, so the CLI would never see the Ctrl-C this test sends."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _partial_rows(path: Path) -> int:
     try:
         with np.load(path) as data:
@@ -94,7 +101,8 @@ def test_interrupted_loop_keeps_its_points_and_resumes(tmp_path: Path, model: Fm
            "--v0", "0", *[f"--set={k}={v}" for k, v in LOOP_PARAMS.items()], "--transient", "60", "--samples", "8",
            "--workers", "1", "--out", str(out), "--no-plot", "--no-progress"]
     env = {**os.environ, TEST_HOOK_ENV: f"both:5:block:{release}"}
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
+                            preexec_fn=_default_sigint)
     try:
         _wait_for(lambda: Path(str(release) + ".reached").exists() and _partial_rows(ckpt / "both.partial.npz") == 5,
                   "the loop to stop before point 5 with 5 points stored")

@@ -80,6 +80,27 @@ def fig9_orbits(model, sim):
 
 
 @pytest.mark.parametrize("sigma", [0.5, 0.03])
+def _rotation(a: float) -> np.ndarray:
+    return np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+
+
+def test_qr_accumulates_full_matrices_in_orbit_order() -> None:
+    """J_k = R(a_k) D R(a_{k-1})^T with random angles: every J_k is a full matrix (Q turns at
+    every step), but the product J_N .. J_1 = R(a_N) D^N R(a_0)^T telescopes, so the exponents
+    are exactly log d_1, log d_2 (up to the O(1/N) transient of the first steps).  An
+    accumulation in the wrong order (Q J instead of J Q) multiplies non-telescoping rotations."""
+    rng = np.random.default_rng(7)
+    a = rng.uniform(0.0, 2.0 * math.pi, 2001)
+    D = np.diag([math.exp(0.3), -math.exp(-0.8)])
+    Js = np.array([_rotation(a[k + 1]) @ D @ _rotation(a[k]).T for k in range(2000)])
+    assert np.median(np.abs(Js[:, 1, 0])) > 0.1  # full matrices, not triangular
+    res = lyapunov_from_jacobians(Js)
+    np.testing.assert_allclose(res.exponents, [0.3, -0.8], atol=2e-3)
+    # the per-step logs after the transient are the exponents themselves, step by step
+    logs = qr_logs(Js)
+    np.testing.assert_allclose(logs[50:], np.broadcast_to([0.3, -0.8], logs[50:].shape), atol=1e-12)
+
+
 def test_sum_of_exponents_is_the_impact_dissipation(fig9_orbits, sigma) -> None:
     p, res = fig9_orbits[sigma]
     assert res.impacts > 0
