@@ -27,7 +27,8 @@ def me_fmu(tmp_path_factory: pytest.TempPathFactory) -> Path:
         for item in src.infolist():
             data = src.read(item.filename)
             if item.filename == "modelDescription.xml":
-                data = re.sub(rb"<CoSimulation[^>]*/>", b'<ModelExchange modelIdentifier="ImpactOscillator"/>', data)
+                data = re.sub(rb"<CoSimulation[^>]*?(/>|>.*?</CoSimulation>)",  # empty, or with <SourceFiles>
+                              b'<ModelExchange modelIdentifier="ImpactOscillator"/>', data, flags=re.S)
             dst.writestr(item, data)
     return out
 

@@ -42,7 +42,9 @@ def test_model_exchange_only_fmu_is_rejected(tmp_path: Path) -> None:
     import re
 
     def to_me(xml: str) -> str:
-        return re.sub(r"<CoSimulation[^>]*/>", '<ModelExchange modelIdentifier="ImpactOscillator"/>', xml, flags=re.S)
+        # the element is empty, or holds the <SourceFiles> list of the FMU's sources
+        return re.sub(r"<CoSimulation[^>]*?(/>|>.*?</CoSimulation>)", '<ModelExchange modelIdentifier="ImpactOscillator"/>',
+                      xml, flags=re.S)
 
     with pytest.raises(HarnessInputError, match="not a Co-Simulation FMU") as err:
         FmuModel(_rewritten_fmu(tmp_path, to_me), argument="--fmu")

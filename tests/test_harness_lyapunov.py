@@ -101,6 +101,7 @@ def test_qr_accumulates_full_matrices_in_orbit_order() -> None:
     np.testing.assert_allclose(logs[50:], np.broadcast_to([0.3, -0.8], logs[50:].shape), atol=1e-12)
 
 
+@pytest.mark.parametrize("sigma", [0.5, 0.03])
 def test_sum_of_exponents_is_the_impact_dissipation(fig9_orbits, sigma) -> None:
     p, res = fig9_orbits[sigma]
     assert res.impacts > 0
