@@ -27,6 +27,16 @@ def test_free_flight_jacobian_is_the_propagator(model, sim, nu, Omega) -> None:
     assert res.error < 1e-6
 
 
+@pytest.mark.parametrize("method", ["fd", "exact"])
+@pytest.mark.parametrize("nu, Omega", [(4.605170185988091, 0.3059238689620112), (0.196, 7.368)])
+def test_each_method_gives_the_propagator(model, sim, nu, Omega, method) -> None:
+    """The differences too, not only the default (exact) path: a difference quotient with the
+    wrong step (f(x+h) - f(x-h)) / h doubles J."""
+    p = _params(model, nu=nu, Omega=Omega, wall=0, sigma=0.2)
+    res = map_jacobian(sim, p, (-0.7, 0.4), theta=0.3, method=method)
+    np.testing.assert_allclose(res.J, propagator(1.0, nu, Omega), rtol=1e-6, atol=1e-7)
+
+
 @pytest.fixture(scope="module")
 def fig9_scans(model, sim):
     p = _params(model, sigma=0.0)
