@@ -189,7 +189,7 @@ MUTANTS: tuple[Mutant, ...] = (
        "return nu * Omega ** 2 * np.asarray(sigma, dtype=float) / (2.0 * np.abs(A) * (1.0 + r_eff))",
        "tests/test_mapcheck_maps.py tests/test_mapcheck_windows.py", "rho(sigma) with (1 + r), not (1 + r)^2"),
     _m("M44", "mapcheck/maps.py", "    vt = v - one * (sq - 2.0 * nu * u)\n", "    vt = v - one * (sq - nu * u)\n",
-       "tests/test_mapcheck_maps.py tests/test_mapcheck_orbits.py", "(27) with nu instead of 2 nu"),
+       "tests/test_mapcheck_maps.py tests/test_reproduce_direct.py", "(27) with nu instead of 2 nu"),
     _m("M45", "mapcheck/exact.py", "        vr = -self.r * st.v", "        vr = -self.r * st.v * (1.0 - 1e-6)",
        f"tests/test_mapcheck_exact.py {PHYS}", "the closed form's rigid impact law off by 1e-6 relative"),
     _m("M46", "mapcheck/linear.py", "disc = np.sqrt(complex(nu * nu - 4.0 * Omega * Omega))",
