@@ -197,6 +197,25 @@ def predicted_windows(c: Coefficients, M_max: int, sigma_grid: np.ndarray) -> di
             "map_A_tilde": map_windows(c, M_max, sigma_grid, "tilde")}
 
 
+def equal_runs(keep: Sequence[bool], *labels: Sequence[Any]) -> list[tuple[int, int]]:
+    """Maximal index runs (first, last) where ``keep`` holds and every array in ``labels`` is
+    constant: the windows of a scan (period, impacts), the stable parts of a branch."""
+    keep = np.asarray(keep, dtype=bool)
+    labels = tuple(np.asarray(a) for a in labels)
+    out: list[tuple[int, int]] = []
+    k, n = 0, len(keep)
+    while k < n:
+        if not keep[k]:
+            k += 1
+            continue
+        j = k
+        while j + 1 < n and keep[j + 1] and all(a[j + 1] == a[k] for a in labels):
+            j += 1
+        out.append((k, j))
+        k = j + 1
+    return out
+
+
 def sweep_windows(values: np.ndarray, period: np.ndarray, impacts: np.ndarray) -> dict[int, tuple[float, float]]:
     """Windows of maximal period-M orbits (period M, one impact per period) seen in a scan.
 
@@ -216,18 +235,10 @@ def sweep_windows(values: np.ndarray, period: np.ndarray, impacts: np.ndarray) -
     values = np.asarray(values, dtype=float)
     keep = (np.asarray(period) > 0) & (np.asarray(impacts) == 1)
     best: dict[int, tuple[int, float, float]] = {}
-    k = 0
-    while k < len(values):
-        if not keep[k]:
-            k += 1
-            continue
-        j = k
-        while j + 1 < len(values) and keep[j + 1] and period[j + 1] == period[k]:
-            j += 1
+    for k, j in equal_runs(keep, period):
         M = int(period[k])
         if M not in best or j - k + 1 > best[M][0]:
             best[M] = (j - k + 1, float(values[k]), float(values[j]))
-        k = j + 1
     return {M: (lo, hi) for M, (_, lo, hi) in sorted(best.items())}
 
 

@@ -18,6 +18,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from mapcheck.compare import equal_runs
+
 __all__ = ["EVENT_KINDS", "Event", "Branch", "branches_dataset"]
 
 EVENT_KINDS = ("flip", "fold", "ns", "graze", "stick", "end")
@@ -124,19 +126,8 @@ class Branch:
 
     def stable_intervals(self) -> list[tuple[float, float, int]]:
         """Maximal runs of stable points as (first value, last value, impacts per period)."""
-        out = []
-        st, imp = self.stable, self.impacts
-        i = 0
-        while i < len(self):
-            if not st[i]:
-                i += 1
-                continue
-            j = i
-            while j + 1 < len(self) and st[j + 1] and imp[j + 1] == imp[i]:
-                j += 1
-            out.append((float(self.values[i]), float(self.values[j]), int(imp[i])))
-            i = j + 1
-        return out
+        imp = self.impacts
+        return [(float(self.values[i]), float(self.values[j]), int(imp[i])) for i, j in equal_runs(self.stable, imp)]
 
     def to_dataset(self, attrs: Mapping[str, Any] | None = None) -> Any:
         """The branch as an xarray Dataset (dims point, k, mu) with the events as JSON in the

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mapcheck.compare import equal_runs
+
 NOT_PERIODIC = 0
 
 
@@ -161,17 +163,9 @@ def windows(values: np.ndarray, period: np.ndarray, impacts: np.ndarray | None =
     if impacts is not None:
         keep &= np.asarray(impacts) == 1
     out: list[tuple[int, float, float]] = []
-    k = 0
-    while k < len(values):
-        if not keep[k]:
-            k += 1
-            continue
-        j = k
-        while j + 1 < len(values) and keep[j + 1] and period[j + 1] == period[k]:
-            j += 1
+    for k, j in equal_runs(keep, period):
         lo, hi = sorted((float(values[k]), float(values[j])))
         out.append((int(period[k]), lo, hi))
-        k = j + 1
     return out
 
 

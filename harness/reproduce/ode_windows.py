@@ -25,6 +25,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from mapcheck.compare import equal_runs
 from mapcheck.orbits import PeriodicOrbit
 
 __all__ = ["Family", "families_from_scans", "minimal_period", "orbit_edge_kind", "shoot_family",
@@ -90,19 +91,11 @@ def families_from_scans(grid: np.ndarray, ds: Any, M_max: int | None = None) -> 
         imp = np.asarray(sel["orbit_impacts"].values)
         u, v = np.asarray(sel["u"].values), np.asarray(sel["v"].values)
         keep = (per > 0) & (imp >= 1) & ((per <= M_max) if M_max else True)
-        k = 0
-        while k < len(grid):
-            if not keep[k]:
-                k += 1
-                continue
-            j = k
-            while j + 1 < len(grid) and keep[j + 1] and per[j + 1] == per[k] and imp[j + 1] == imp[k]:
-                j += 1
+        for k, j in equal_runs(keep, per, imp):
             mid = (k + j) // 2
             runs.append(Family(int(per[k]), int(imp[k]), float(grid[k]), float(grid[j]), float(grid[mid]),
                                np.array([u[mid, 0], v[mid, 0]], dtype=float), [d],
                                [(float(grid[i]), np.array([u[i, 0], v[i, 0]], dtype=float)) for i in range(k, j + 1)]))
-            k = j + 1
     merged: list[Family] = []
     for f in sorted(runs, key=lambda f: (f.M, f.impacts, f.lo)):
         last = merged[-1] if merged else None
