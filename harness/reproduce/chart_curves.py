@@ -1,0 +1,167 @@
+"""The windows' edges continued in two parameters, and where each window closes.
+
+At the first value of the second parameter, the stable maximal period-M orbits (one impact per
+period) are found by the ODE alone (:func:`harness.dynamics.attractors.find_attractors` over the
+sigma grid), each is continued in sigma both ways (:func:`harness.dynamics.continuation.continue_orbit`)
+and its first event on each side is the window's edge (flip, fold, NS, graze or stick; none when
+the branch leaves the range stable).  Each edge is then continued in (sigma, p2): flip, fold and NS
+on their extended system (:func:`harness.dynamics.event_curves.continue_event`), grazes by natural
+continuation (:func:`harness.dynamics.graze_curves.continue_graze`).
+
+A window closes where its edges meet, the first of (in p2):
+
+* a turning point (maximum in p2) of an edge curve: the lower and upper edges are one curve that
+  turns back (e.g. two flips joining: the smallest |multiplier| along sigma reaches 1 there);
+* a smooth edge curve ending on the orbit's graze (flip meets graze, a codimension-two point);
+* the grazing orbit on a graze edge losing its stability (the graze edge meets a flip or fold);
+* the lower edge leaving the charted sigma range upward (the window runs to sigma -> infinity; the
+  report says so: it is an asymptote, not a meeting of two edges).
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+__all__ = ["windows_at", "continue_window", "window_closing", "chart_curves"]
+
+EDGE_KINDS = ("flip", "fold", "ns", "graze", "stick")
+
+
+def _edge(branch: Any) -> dict[str, Any] | None:
+    """The first event of a branch that ends the stable one-impact window, as a dict."""
+    for e in branch.events:
+        if e.kind in EDGE_KINDS:
+            return {"kind": e.kind, "sigma": float(e.value), "point": [float(x) for x in e.point],
+                    "bracket": float(e.bracket), "multipliers": [[float(m.real), float(m.imag)] for m in e.multipliers],
+                    "note": e.note}
+        if e.kind == "end":
+            return None
+    return None
+
+
+def windows_at(sim: Any, params: Mapping[str, Any], grid: np.ndarray, M_max: int, theta: float = 0.5,
+               transient: int = 200) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+    """The stable maximal windows (M <= M_max, one impact per period) at one parameter set.
+
+    Returns (windows, search): each window ``{"M", "seed_sigma", "seed", "lower", "upper"}`` with
+    the edges as dicts (None: the branch left the range stable); ``search`` what was scanned.
+    """
+    from ..dynamics.attractors import families, find_attractors
+    from ..dynamics.continuation import continue_orbit
+
+    scan = find_attractors(sim, params, grid, "sigma", M_max=M_max, theta=theta, transient=transient)
+    lo, hi = float(grid[0]), float(grid[-1])
+    windows: list[dict[str, Any]] = []
+    for fam in families([a for a in scan.attractors if a.impacts == 1]):
+        a = fam[len(fam) // 2]
+        if any(w["M"] == a.period and _inside(a.value, w) for w in windows):
+            continue  # the same window, reached again from another run of the grid
+        edges = []
+        for d in (-1.0, 1.0):
+            br = continue_orbit(sim, params, a.period, a.value, a.points[0], "sigma", (lo, hi), d,
+                                ds_max=max(0.05, 0.1 * a.value), max_points=600, theta=theta)
+            edges.append(_edge(br))
+        windows.append({"M": a.period, "seed_sigma": a.value, "seed": a.points[0].tolist(),
+                        "lower": edges[0], "upper": edges[1], "found_by": a.found_by})
+    search = {"sigma": [lo, hi], "values": len(grid), "scans": scan.scans, "transient": scan.transient,
+              "M_max": M_max, "periods_run": scan.periods_run}
+    return sorted(windows, key=lambda w: (w["M"], w["seed_sigma"])), search
+
+
+def _inside(sigma: float, w: Mapping[str, Any]) -> bool:
+    lo = w["lower"]["sigma"] if w["lower"] else -math.inf
+    hi = w["upper"]["sigma"] if w["upper"] else math.inf
+    return lo <= sigma <= hi
+
+
+def continue_window(sim: Any, params: Mapping[str, Any], window: Mapping[str, Any], param2: str,
+                    p2_range: tuple[float, float], log2: bool, sigma_range: tuple[float, float],
+                    theta: float = 0.5, max_points: int = 300) -> dict[str, Any]:
+    """Both edges of a window continued in (sigma, p2) from ``params[param2]`` upward."""
+    from ..dynamics.event_curves import continue_event
+    from ..dynamics.graze_curves import continue_graze
+
+    out: dict[str, Any] = {}
+    for side, sign in (("lower", -1.0), ("upper", 1.0)):
+        e = window[side]
+        if e is None:
+            out[side] = None
+            continue
+        try:
+            if e["kind"] in ("graze", "stick"):
+                s_out = e["sigma"] + sign * max(2.0 * e["bracket"], 1e-9 * e["sigma"])
+                curve = continue_graze(sim, params, window["M"], e["sigma"], e["point"], s_out, param2, p2_range,
+                                       log2, 1.0, max_points=max_points, sigma_range=sigma_range, theta=theta)
+            else:
+                curve = continue_event(sim, params, e["kind"], window["M"], e["sigma"], e["point"], param2,
+                                       p2_range, log2, 1.0, sigma_range=sigma_range, max_points=max_points,
+                                       theta=theta)
+            out[side] = curve.as_dict()
+        except (ValueError, ArithmeticError) as exc:
+            out[side] = {"kind": e["kind"], "failed": str(exc)}
+        except Exception as exc:  # an HarnessInputError from the start: the edge could not be continued
+            out[side] = {"kind": e["kind"], "failed": f"{type(exc).__name__}: {exc}"}
+    return out
+
+
+def window_closing(curves: Mapping[str, Any], p2_range: Sequence[float], sigma_range: Sequence[float]) -> dict[str, Any]:
+    """Where (in p2) and how a window with the continued edge ``curves`` closes."""
+    cands: list[tuple[float, float, str]] = []
+    for side in ("lower", "upper"):
+        c = curves.get(side)
+        if not c or "failed" in c:
+            continue
+        for t in c["turns"]:
+            if t["side"] == "max":
+                cands.append((t["p2"], t["sigma"], f"the {side} {c['kind']} edge turns back in p2 at its maximum: "
+                              f"the window's two {c['kind']} edges meet (smallest |multiplier| along sigma reaches 1)"))
+            elif t["side"] == "loses":
+                cands.append((t["p2"], t["sigma"], f"the grazing orbit on the {side} graze edge loses stability "
+                              "(multipliers in `multipliers`): the graze edge meets a flip/fold edge"))
+        end = c["end"]
+        if end.get("reason") == "graze":
+            cands.append((end["p2"], end["sigma"], f"the {side} {c['kind']} edge ends on the orbit's graze curve (flip meets graze; {end['note'].split('(', 1)[-1].rstrip(')')})"))
+        turned = any(t["side"] == "max" for t in c["turns"])  # after a turn the curve is the upper edge
+        if side == "lower" and not turned and end.get("reason") == "range" and end["sigma"] >= 0.99 * sigma_range[1]:
+            cands.append((end["p2"], end["sigma"], f"the lower {c['kind']} edge leaves the charted sigma range "
+                          f"upward (sigma = {end['sigma']:.4g}): the window runs off to large sigma (an "
+                          "asymptote in p2, not two edges meeting)"))
+    if not cands:
+        reasons = {s: (curves[s] or {}).get("end", {}).get("note", "no edge") if curves.get(s) and "failed" not in curves[s]
+                   else (curves[s] or {}).get("failed", "no edge (unbounded in the sigma range)") for s in ("lower", "upper")}
+        return {"closes": None, "sigma": None, "how": None, "searched": list(p2_range), "edges_end": reasons}
+    p2, sigma, how = min(cands)
+    return {"closes": p2, "sigma": sigma, "how": how, "searched": list(p2_range),
+            "other_candidates": [{"p2": a, "sigma": b, "how": c} for a, b, c in sorted(cands)[1:]]}
+
+
+def chart_curves(source: Any, params: Mapping[str, Any], param2: str, p2_range: tuple[float, float], log2: bool,
+                 grid: np.ndarray, M_max: int, theta: float = 0.5) -> dict[str, Any]:
+    """Windows at the start of the range, their edges continued, and where each closes."""
+    from ..fmu.simulator import FmuSimulator
+
+    sim = FmuSimulator(source, instance_name="chart-curves")
+    p0 = {**params, param2: float(p2_range[0])}
+    windows, search = windows_at(sim, p0, grid, M_max, theta)
+    sigma_range = (float(grid[0]) * 0.1, float(grid[-1]) * 10.0)
+    for w in windows:
+        w["curves"] = continue_window(sim, p0, w, param2, p2_range, log2, sigma_range, theta)
+        w["closing"] = window_closing(w["curves"], p2_range, sigma_range)
+    closes: dict[str, Any] = {}
+    for M in range(1, M_max + 1):
+        mine = [w for w in windows if w["M"] == M]
+        if mine:  # the window nearest grazing (lowest), the near-grazing maps' subject
+            closes[str(M)] = {**mine[0]["closing"], "window_at_start": [_sig(mine[0]["lower"]), _sig(mine[0]["upper"])]}
+        else:
+            closes[str(M)] = {"closes": None, "sigma": None, "how": None, "searched": list(p2_range),
+                              "note": f"no stable period-{M} orbit with one impact per period found at {param2} = "
+                              f"{p2_range[0]:g} by the scans over sigma in [{grid[0]:g}, {grid[-1]:g}] "
+                              f"({len(grid)} values, up/down/fresh)"}
+    return {"windows": windows, "closes": closes, "search": search, "sigma_range": list(sigma_range),
+            "start": float(p2_range[0])}
+
+
+def _sig(edge: Mapping[str, Any] | None) -> Any:
+    return None if edge is None else {"kind": edge["kind"], "sigma": edge["sigma"]}
