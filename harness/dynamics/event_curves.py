@@ -85,6 +85,8 @@ class EventCurve:
     param2 : str
     sigma, p2 : ndarray
         The curve, in continuation order.
+    points : ndarray (N, 2)
+        A stroboscopic point (u, v) at t = theta of the orbit at each point of the curve.
     multipliers : ndarray complex (N, 2)
     gaps : ndarray (N,)
         Smallest distance to the wall of the orbit's free passages (inf: none).
@@ -103,6 +105,7 @@ class EventCurve:
     param2: str
     sigma: np.ndarray
     p2: np.ndarray
+    points: np.ndarray
     multipliers: np.ndarray
     gaps: np.ndarray
     turns: list[dict[str, Any]] = field(default_factory=list)
@@ -112,7 +115,7 @@ class EventCurve:
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready."""
         return {"kind": self.kind, "M": self.M, "impacts": self.impacts, "param2": self.param2,
-                "sigma": self.sigma.tolist(), "p2": self.p2.tolist(),
+                "sigma": self.sigma.tolist(), "p2": self.p2.tolist(), "points": self.points.tolist(),
                 "multipliers": [[[float(m.real), float(m.imag)] for m in row] for row in self.multipliers],
                 "gaps": [None if not math.isfinite(g) else float(g) for g in self.gaps],
                 "turns": self.turns, "end": self.end, "periods_run": self.periods_run}
@@ -349,7 +352,8 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
     last = pts[-1]
     end.update({"sigma": last.sigma, "p2": last.p2})
     return EventCurve(kind, M, int(pattern.sum()), param2, np.array([p.sigma for p in pts]),
-                      np.array([p.p2 for p in pts]), np.array([p.multipliers for p in pts]),
+                      np.array([p.p2 for p in pts]), np.array([p.ev.points[0] for p in pts]),
+                      np.array([p.multipliers for p in pts]),
                       np.array([pmap.gap(p.ev.points, p.ev.contacts, p.sigma) for p in pts]), turns, end,
                       pmap.evaluations)
 

@@ -184,7 +184,7 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
     mult = np.array([np.linalg.eigvals(e.J).astype(complex) for e in evs])
     gaps = np.array([pmap.gap(e.points, e.contacts, s_) for e, s_ in zip(evs, ss)])
     return EventCurve("graze", M, int(pattern.sum()), param2, np.array(ss), np.array([of_q(x) for x in qs]),
-                      mult, gaps, turns, end, pmap.evaluations)
+                      np.array([e.points[0] for e in evs]), mult, gaps, turns, end, pmap.evaluations)
 
 
 def _stability_change(graze_at: Any, qa: float, qb: float, stable_a: bool, of_q: Any, tol: float,
