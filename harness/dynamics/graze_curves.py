@@ -2,21 +2,24 @@
 
 A graze (a free passage of the orbit reaching the wall) is not a smooth event of the FMU's flow:
 a passage that penetrates the wall by d changes the orbit by ~sqrt(d), so it is not continued on an
-extended system (:mod:`.event_curves` says why).  It is continued in p2 by natural continuation:
-at each value of p2 the orbit is followed in sigma towards the graze and the graze is located by
-bisection on "Newton converges to an orbit with the same contact pattern", to a relative width
-``locate_tol`` in sigma; the gap of the last orbit with the pattern (:meth:`PeriodMap.gap`, which
-vanishes at a graze) is kept as the check.  The step in ln p2 adapts to the change of ln sigma.
+extended system (:mod:`.event_curves` says why).  It is followed in the plane Y = (ln sigma, q)
+(q = ln p2 on a log axis) by steps along the curve's secant and a location across it: from the
+last graze point, a step of length h along the secant T of the last two points, then a bisection
+along the normal N on "Newton converges to an orbit with the same contact pattern", to a width
+``locate_tol``.  The gap of the last orbit with the pattern (:meth:`PeriodMap.gap`, which vanishes
+at a graze) must be below ``GAP_TOL``: a point where Newton merely failed is not a graze.  Being
+a step along the curve, not in p2, this passes turning points in p2 and follows a curve that runs
+off to large sigma.
 
 Along the curve the grazing orbit's multipliers are kept: where it loses stability, the graze
 curve crosses a flip or fold curve of the orbit; a window bounded by that edge and the graze closes
-there (located by bisection in p2).  A turning point of the graze curve in p2 cannot be passed by
-natural continuation: the curve then ends with the reason.
+there (located by bisection along the curve).  Turning points in p2 are recorded like those of
+:func:`harness.dynamics.event_curves.continue_event`.
 """
 from __future__ import annotations
 
 import math
-from typing import Any, Mapping
+from typing import Any, Callable, Mapping
 
 import numpy as np
 
@@ -24,51 +27,72 @@ from .event_curves import EventCurve
 from .periodic_map import MapEvaluation, PeriodMap, refine_orbit
 from ..fmu.simulator import Simulator
 
-__all__ = ["continue_graze", "locate_graze"]
-
-#: Relative offsets of sigma tried, from the predicted graze, for a point with the pattern.
-_PROBES = (1e-5, 1e-4, 1e-3, 1e-2, 4e-2)
-
+__all__ = ["continue_graze", "GAP_TOL"]
 
 #: Largest gap (relative to 1 + sigma) of a located graze: the bisection's end must be one.
 GAP_TOL = 1e-6
+
+#: Distances along the normal tried for a point with (inside) and without (outside) the pattern.
+_PROBES = (1e-5, 1e-4, 1e-3, 1e-2, 4e-2)
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
     return any(np.array_equal(np.roll(a, k), b) for k in range(len(a)))
 
 
-def _orbit(pmap: PeriodMap, w: np.ndarray, sigma: float, M: int,
-           pattern: np.ndarray) -> tuple[np.ndarray, MapEvaluation] | None:
-    """The orbit with ``pattern`` at sigma by Newton from ``w``, or None."""
-    w1, ev, ok, _ = refine_orbit(pmap, w, sigma, M)
-    if ok and _same(ev.contacts, pattern):
-        return w1, ev
-    return None
+class _Plane:
+    """The orbit with a fixed contact pattern at points Y = (ln sigma, q) of the plane."""
 
+    def __init__(self, pmap: PeriodMap, param2: str, of_q: Callable[[float], float], M: int,
+                 pattern: np.ndarray) -> None:
+        self.pmap, self.param2, self.of_q, self.M, self.pattern = pmap, param2, of_q, M, pattern
+        self.base = dict(pmap.params)
 
-def locate_graze(pmap: PeriodMap, M: int, w_in: np.ndarray, s_in: float, s_out: float, pattern: np.ndarray,
-                 locate_tol: float = 1e-9) -> tuple[float, np.ndarray, MapEvaluation, float]:
-    """Bisection in ln sigma between ``s_in`` (the orbit with ``pattern`` exists, at ``w_in``) and
-    ``s_out`` (it does not); returns (sigma, w, evaluation, bracket) at the last orbit with it."""
-    found = _orbit(pmap, w_in, s_in, M, pattern)
-    if found is None:
-        raise ValueError(f"no orbit with the contact pattern at sigma = {s_in:g}")
-    w, ev = found
-    lo, hi = math.log(s_in), math.log(s_out)
-    while abs(hi - lo) > locate_tol:
-        mid = 0.5 * (lo + hi)
-        found = _orbit(pmap, w, math.exp(mid), M, pattern)
-        if found is not None:
-            lo, (w, ev) = mid, found
-        else:
-            hi = mid
-    return math.exp(lo), w, ev, abs(math.exp(hi) - math.exp(lo))
+    def orbit(self, Y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, MapEvaluation] | None:
+        self.pmap.params = {**self.base, self.param2: self.of_q(float(Y[1]))}
+        w1, ev, ok, _ = refine_orbit(self.pmap, w, math.exp(float(Y[0])), self.M)
+        return (w1, ev) if ok and _same(ev.contacts, self.pattern) else None
+
+    def gap(self, Y: np.ndarray, ev: MapEvaluation) -> float:
+        self.pmap.params = {**self.base, self.param2: self.of_q(float(Y[1]))}
+        return self.pmap.gap(ev.points, ev.contacts, math.exp(float(Y[0])))
+
+    def locate(self, P: np.ndarray, N: np.ndarray, w_guess: np.ndarray,
+               tol: float) -> tuple[np.ndarray, np.ndarray, MapEvaluation] | None:
+        """The graze on the line P + t N (N points inside): an inside and an outside point, then
+        bisection in t; None if either is missing or the end is not a graze."""
+        inside = None
+        for d in _PROBES:
+            found = self.orbit(P + d * N, w_guess)
+            if found is not None:
+                inside = (d, found)
+                break
+        if inside is None:
+            return None
+        t_in, (w, ev) = inside
+        t_out = None
+        for d in _PROBES:
+            if self.orbit(P - d * N, w) is None:
+                t_out = -d
+                break
+        if t_out is None:
+            return None
+        while t_in - t_out > tol:
+            mid = 0.5 * (t_in + t_out)
+            found = self.orbit(P + mid * N, w)
+            if found is not None:
+                t_in, (w, ev) = mid, found
+            else:
+                t_out = mid
+        Y = P + t_in * N
+        if self.gap(Y, ev) > GAP_TOL * (1.0 + math.exp(float(Y[0]))):
+            return None  # Newton failed beyond for another reason than a graze
+        return Y, w, ev
 
 
 def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: float, z_in: Any, sigma_out: float,
                    param2: str, p2_range: tuple[float, float], log2: bool = True, direction: float = 1.0,
-                   dq: float = 0.05, dq_min: float = 1e-4, dq_max: float = 0.3, max_points: int = 200,
+                   h: float = 0.05, h_min: float = 1e-4, h_max: float = 0.3, max_points: int = 200,
                    locate_tol: float = 1e-9, sigma_range: tuple[float, float] = (1e-3, 1e4),
                    theta: float = 0.5) -> EventCurve:
     """The graze curve of a period-M orbit in (sigma, ``param2``).
@@ -85,118 +109,117 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
         A sigma beyond the graze (the pattern lost), e.g. ``Event.value + Event.bracket``.
     param2, p2_range, log2, direction
         As in :func:`harness.dynamics.event_curves.continue_event`.
-    dq, dq_min, dq_max : float
-        Steps in q (ln p2 on a log axis).
+    h, h_min, h_max : float
+        Steps along the curve in Y = (ln sigma, q).
     locate_tol : float
-        Relative width in sigma of each located graze.
+        Width of each location across the curve, in Y.
 
     Returns
     -------
     EventCurve
-        kind "graze"; ``turns`` holds where the grazing orbit loses (or gains) stability, located
-        in p2 (``side``: "loses" / "gains"), ``end`` why the curve stopped.
+        kind "graze"; ``turns`` holds the turning points in p2 ("max"/"min") and where the grazing
+        orbit loses or gains stability ("loses"/"gains"); ``end`` why the curve stopped.
     """
     pmap = PeriodMap(sim, params, "sigma", theta)
-    base = dict(pmap.params)
-    p2_0 = float(params[param2])
     to_q = (lambda p: math.log(p)) if log2 else float
     of_q = math.exp if log2 else float
-
-    def at(q: float) -> None:
-        pmap.params = {**base, param2: of_q(q)}
-
     w_in = np.asarray(z_in, dtype=float) - pmap.offset(sigma_in)
     w0, ev0, ok, _ = refine_orbit(pmap, w_in, sigma_in, M)
     if not ok:
         raise ValueError(f"no period-{M} orbit at sigma = {sigma_in:g} near the given point")
-    pattern = ev0.contacts.copy()
-    side = 1.0 if sigma_in > sigma_out else -1.0  # ln sigma increases into the orbit's region
-    s, w, ev, _ = locate_graze(pmap, M, w0, sigma_in, sigma_out, pattern, locate_tol)
-    if pmap.gap(ev.points, ev.contacts, s) > GAP_TOL * (1.0 + s):
-        raise ValueError(f"the period-{M} orbit's change at sigma = {s:.10g} is not a graze (gap "
-                         f"{pmap.gap(ev.points, ev.contacts, s):.3g})")
-    qs, ss, ws, evs = [to_q(p2_0)], [s], [w], [ev]
+    plane = _Plane(pmap, param2, of_q, M, ev0.contacts.copy())
+    q0 = to_q(float(params[param2]))
+    # the first point: bisection across the curve along ln sigma, between sigma_in and sigma_out
+    N = np.array([1.0 if sigma_in > sigma_out else -1.0, 0.0])
+    mid = np.array([0.5 * (math.log(sigma_in) + math.log(sigma_out)), q0])
+    t_in, t_out = abs(math.log(sigma_in / sigma_out)) / 2, -abs(math.log(sigma_in / sigma_out)) / 2
+    w, ev = w0, ev0
+    while t_in - t_out > locate_tol:
+        t = 0.5 * (t_in + t_out)
+        found = plane.orbit(mid + t * N, w)
+        if found is not None:
+            t_in, (w, ev) = t, found
+        else:
+            t_out = t
+    Y = mid + t_in * N
+    if not plane.gap(Y, ev) <= GAP_TOL * (1.0 + math.exp(Y[0])):
+        raise ValueError(f"the period-{M} orbit's change between sigma = {sigma_in:.10g} and {sigma_out:.10g} "
+                         f"is not a graze (gap {plane.gap(Y, ev):.3g} at its last point)")
+    first = (Y, w, ev)
+    Ys, ws, evs = [first[0]], [first[1]], [first[2]]
+    T = np.array([0.0, 1.0 if direction > 0 else -1.0])  # first step along p2
     turns: list[dict[str, Any]] = []
     end: dict[str, Any] = {"reason": "steps", "note": f"{max_points} steps done"}
     lo2, hi2 = min(p2_range), max(p2_range)
-    step = dq * (1.0 if direction > 0 else -1.0)
+    step = h
 
     def stable(e: MapEvaluation) -> bool:
         return bool(np.all(np.abs(np.linalg.eigvals(e.J)) < 1.0))
 
-    def graze_at(q: float) -> tuple[float, np.ndarray, MapEvaluation] | None:
-        at(q)
-        # predict ln sigma and w by the secant through the last two points
-        if len(qs) >= 2 and qs[-1] != qs[-2]:
-            f = (q - qs[-1]) / (qs[-1] - qs[-2])
-            ls = math.log(ss[-1]) + f * (math.log(ss[-1]) - math.log(ss[-2]))
-            wp = ws[-1] + f * (ws[-1] - ws[-2])
-        else:
-            ls, wp = math.log(ss[-1]), ws[-1]
-        for d in _PROBES:
-            s_try = math.exp(ls + side * d)
-            found = _orbit(pmap, wp, s_try, M, pattern) or _orbit(pmap, ws[-1], s_try, M, pattern)
-            if found is None:
-                continue
-            w_try = found[0]
-            for d_out in _PROBES:  # a point beyond, without the pattern
-                s_out = math.exp(ls - side * d_out)
-                if _orbit(pmap, w_try, s_out, M, pattern) is None:
-                    sg, wg, eg, _ = locate_graze(pmap, M, w_try, s_try, s_out, pattern, locate_tol)
-                    # Newton can fail beyond for other reasons than a graze: only a vanishing gap is one
-                    if pmap.gap(eg.points, eg.contacts, sg) > GAP_TOL * (1.0 + sg):
-                        return None
-                    return sg, wg, eg
-            return None
-        return None
+    def normal(T_: np.ndarray) -> np.ndarray:
+        n = np.array([-T_[1], T_[0]])
+        return n if n @ N >= 0 else -n
+
+    def next_point(s: float) -> tuple[np.ndarray, np.ndarray, MapEvaluation] | None:
+        f = s / max(float(np.linalg.norm(Ys[-1] - Ys[-2])), 1e-300) if len(Ys) >= 2 else 0.0
+        w_guess = ws[-1] + f * (ws[-1] - ws[-2]) if len(Ys) >= 2 else ws[-1]
+        return plane.locate(Ys[-1] + s * T, normal(T), w_guess, locate_tol)
 
     n = 0
     while n < max_points:
-        q = qs[-1] + step
-        if not lo2 <= of_q(q) <= hi2:
-            end = {"reason": "range", "note": f"left {param2} in [{lo2:g}, {hi2:g}]"}
-            break
-        res = graze_at(q)
-        if res is not None and abs(math.log(res[0] / ss[-1])) > 0.3 and abs(step) > dq_min:
-            res = None  # too large a jump for one step: retry shorter
+        res = next_point(step)
         if res is None:
             step *= 0.5
-            if abs(step) < dq_min:
-                end = {"reason": "lost", "note": "no orbit with the contact pattern next to the predicted graze "
-                       f"(step in ln {param2} down to {dq_min:g}): a turning point of the graze curve or the end "
-                       "of the orbit"}
+            if step < h_min:
+                end = {"reason": "lost", "note": f"no graze found across the curve (step down to {h_min:g}): the "
+                       "orbit with this contact pattern ends"}
                 break
             continue
-        sg, wg, eg = res
-        if stable(eg) != stable(evs[-1]):
-            turns.append(_stability_change(graze_at, qs[-1], q, stable(evs[-1]), of_q, locate_tol, stable))
-        qs.append(q)
-        ss.append(sg)
-        ws.append(wg)
-        evs.append(eg)
+        Y, w, ev = res
+        if stable(ev) != stable(evs[-1]):
+            turns.append(_stability_change(next_point, step, stable(evs[-1]), of_q, locate_tol, stable))
+        T_new = (Y - Ys[-1]) / np.linalg.norm(Y - Ys[-1])
+        if T_new[1] * T[1] < 0 and len(Ys) >= 2:
+            turns.append({"sigma": float(math.exp(Ys[-1][0])), "p2": float(of_q(Ys[-1][1])),
+                          "side": "max" if T[1] > 0 else "min", "multipliers": _mults(evs[-1])})
+        N = normal(T_new)
+        T = T_new
+        Ys.append(Y)
+        ws.append(w)
+        evs.append(ev)
         n += 1
-        if not sigma_range[0] <= sg <= sigma_range[1]:
-            end = {"reason": "range", "note": f"left sigma in [{sigma_range[0]:g}, {sigma_range[1]:g}]"}
+        p2, sg = of_q(float(Y[1])), math.exp(float(Y[0]))
+        if not (lo2 * (1 - 1e-9) <= p2 <= hi2 * (1 + 1e-9) and sigma_range[0] <= sg <= sigma_range[1]):
+            end = {"reason": "range", "note": f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
+                   f"[{sigma_range[0]:g}, {sigma_range[1]:g}]"}
             break
-        step = math.copysign(min(abs(step) * 1.5, dq_max), step)
-    at(qs[0])
-    end.update({"sigma": ss[-1], "p2": of_q(qs[-1])})
+        step = min(step * 1.5, h_max)
+    plane.pmap.params = {**plane.base, param2: of_q(q0)}
+    sig = np.exp(np.array([Y[0] for Y in Ys]))
+    p2s = np.array([of_q(float(Y[1])) for Y in Ys])
+    end.update({"sigma": float(sig[-1]), "p2": float(p2s[-1])})
     mult = np.array([np.linalg.eigvals(e.J).astype(complex) for e in evs])
-    gaps = np.array([pmap.gap(e.points, e.contacts, s_) for e, s_ in zip(evs, ss)])
-    return EventCurve("graze", M, int(pattern.sum()), param2, np.array(ss), np.array([of_q(x) for x in qs]),
-                      np.array([e.points[0] for e in evs]), mult, gaps, turns, end, pmap.evaluations)
+    gaps = np.array([plane.gap(Y, e) for Y, e in zip(Ys, evs)])
+    plane.pmap.params = {**plane.base, param2: of_q(q0)}
+    return EventCurve("graze", M, int(plane.pattern.sum()), param2, sig, p2s, np.array([e.points[0] for e in evs]),
+                      mult, gaps, turns, end, pmap.evaluations)
 
 
-def _stability_change(graze_at: Any, qa: float, qb: float, stable_a: bool, of_q: Any, tol: float,
-                      stable: Any) -> dict[str, Any]:
-    """Bisection in q for where the grazing orbit's stability changes."""
-    lo, hi = qa, qb
+def _mults(ev: MapEvaluation) -> list[list[float]]:
+    return [[float(m.real), float(m.imag)] for m in np.linalg.eigvals(ev.J)]
+
+
+def _stability_change(next_point: Callable[[float], Any], step: float, stable_a: bool, of_q: Callable[[float], float],
+                      tol: float, stable: Callable[[MapEvaluation], bool]) -> dict[str, Any]:
+    """Bisection along the curve (the step from the last point) for where the grazing orbit's
+    stability changes."""
+    lo, hi = 0.0, step
     best = None
-    for _ in range(40):
-        if abs(hi - lo) < max(tol, 1e-10):
+    for _ in range(50):
+        if hi - lo < max(tol, 1e-10):
             break
         mid = 0.5 * (lo + hi)
-        res = graze_at(mid)
+        res = next_point(mid)
         if res is None:
             break
         if stable(res[2]) == stable_a:
@@ -204,7 +227,8 @@ def _stability_change(graze_at: Any, qa: float, qb: float, stable_a: bool, of_q:
         else:
             hi = mid
         best = res
-    sg = best[0] if best is not None else float("nan")
-    mult = np.linalg.eigvals(best[2].J) if best is not None else []
-    return {"sigma": sg, "p2": of_q(0.5 * (lo + hi)), "side": "loses" if stable_a else "gains",
-            "multipliers": [[float(m.real), float(m.imag)] for m in mult]}
+    if best is None:
+        return {"sigma": math.nan, "p2": math.nan, "side": "loses" if stable_a else "gains", "multipliers": []}
+    Y, _, ev = best
+    return {"sigma": float(math.exp(Y[0])), "p2": float(of_q(float(Y[1]))), "side": "loses" if stable_a else "gains",
+            "multipliers": _mults(ev)}

@@ -108,7 +108,8 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
              "## Where each window closes (two-parameter continuation)", "",
              f"Method: at {problem.param2} = {problem.values[0]:g} the stable maximal orbits (one impact per period, "
              f"M <= {problem.M_max}) are found by the ODE alone (up/down/fresh scans over sigma in [{cs['sigma'][0]:.3g}, "
-             f"{cs['sigma'][1]:.3g}], {cs['values']} values, {cs['transient']} periods of transient), each continued in "
+             f"{cs['sigma'][1]:.3g}], {cs['values']} values, and {cs['refined_values']} more in the {cs['refined_intervals']} "
+             f"intervals where the attractors change or none is periodic; {cs['transient']} periods of transient), each continued in "
              "sigma to its edges; every edge is continued in (sigma, "
              f"{problem.param2}): flip/fold/NS on the extended system (orbit + test function, pseudo-arclength), "
              "grazes by natural continuation with each graze located by bisection. A window closes where its edges "

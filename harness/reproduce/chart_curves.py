@@ -42,8 +42,12 @@ def _edge(branch: Any) -> dict[str, Any] | None:
 
 
 def windows_at(sim: Any, params: Mapping[str, Any], grid: np.ndarray, M_max: int, theta: float = 0.5,
-               transient: int = 200) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+               transient: int = 200, refine: int = 16) -> tuple[list[dict[str, Any]], dict[str, Any]]:
     """The stable maximal windows (M <= M_max, one impact per period) at one parameter set.
+
+    The grid is scanned (up, down, fresh starts); between two neighbouring values whose attractors
+    differ or where either has no periodic attractor (period <= M_max), ``refine`` more values are
+    scanned: a window narrower than the grid's step, such as Figure 9's period 4, lies there.
 
     Returns (windows, search): each window ``{"M", "seed_sigma", "seed", "lower", "upper"}`` with
     the edges as dicts (None: the branch left the range stable); ``search`` what was scanned.
@@ -52,9 +56,18 @@ def windows_at(sim: Any, params: Mapping[str, Any], grid: np.ndarray, M_max: int
     from ..dynamics.continuation import continue_orbit
 
     scan = find_attractors(sim, params, grid, "sigma", M_max=M_max, theta=theta, transient=transient)
+    labels = [frozenset(a.label for a in scan.at(float(v))) for v in grid]
+    changes = [i for i in range(len(grid) - 1) if labels[i] != labels[i + 1] or not labels[i] or not labels[i + 1]]
+    found = list(scan.attractors)
+    extra = np.concatenate([np.geomspace(grid[i], grid[i + 1], refine + 2)[1:-1] for i in changes]) if changes \
+        else np.zeros(0)
+    if refine > 0 and extra.size:
+        fine = find_attractors(sim, params, extra, "sigma", M_max=M_max, theta=theta, transient=transient)
+        found += fine.attractors
     lo, hi = float(grid[0]), float(grid[-1])
     windows: list[dict[str, Any]] = []
-    for fam in families([a for a in scan.attractors if a.impacts == 1]):
+    # stable maximal orbits only (a period-2M sample near a flip can be refined onto the unstable M orbit)
+    for fam in families([a for a in found if a.impacts == 1 and a.stable]):
         a = fam[len(fam) // 2]
         if any(w["M"] == a.period and _inside(a.value, w) for w in windows):
             continue  # the same window, reached again from another run of the grid
@@ -65,8 +78,8 @@ def windows_at(sim: Any, params: Mapping[str, Any], grid: np.ndarray, M_max: int
             edges.append(_edge(br))
         windows.append({"M": a.period, "seed_sigma": a.value, "seed": a.points[0].tolist(),
                         "lower": edges[0], "upper": edges[1], "found_by": a.found_by})
-    search = {"sigma": [lo, hi], "values": len(grid), "scans": scan.scans, "transient": scan.transient,
-              "M_max": M_max, "periods_run": scan.periods_run}
+    search = {"sigma": [lo, hi], "values": len(grid), "refined_intervals": len(changes), "refined_values": int(extra.size),
+              "scans": scan.scans, "transient": scan.transient, "M_max": M_max}
     return sorted(windows, key=lambda w: (w["M"], w["seed_sigma"])), search
 
 
@@ -115,8 +128,10 @@ def window_closing(curves: Mapping[str, Any], p2_range: Sequence[float], sigma_r
             continue
         for t in c["turns"]:
             if t["side"] == "max":
+                why = ("smallest |multiplier| along sigma reaches 1" if c["kind"] != "graze" else
+                       "the orbit's free passage no longer reaches the wall at any sigma")
                 cands.append((t["p2"], t["sigma"], f"the {side} {c['kind']} edge turns back in p2 at its maximum: "
-                              f"the window's two {c['kind']} edges meet (smallest |multiplier| along sigma reaches 1)"))
+                              f"the window's two {c['kind']} edges meet ({why})"))
             elif t["side"] == "loses":
                 cands.append((t["p2"], t["sigma"], f"the grazing orbit on the {side} graze edge loses stability "
                               "(multipliers in `multipliers`): the graze edge meets a flip/fold edge"))
@@ -125,9 +140,10 @@ def window_closing(curves: Mapping[str, Any], p2_range: Sequence[float], sigma_r
             cands.append((end["p2"], end["sigma"], f"the {side} {c['kind']} edge ends on the orbit's graze curve (flip meets graze; {end['note'].split('(', 1)[-1].rstrip(')')})"))
         turned = any(t["side"] == "max" for t in c["turns"])  # after a turn the curve is the upper edge
         if side == "lower" and not turned and end.get("reason") == "range" and end["sigma"] >= 0.99 * sigma_range[1]:
-            cands.append((end["p2"], end["sigma"], f"the lower {c['kind']} edge leaves the charted sigma range "
-                          f"upward (sigma = {end['sigma']:.4g}): the window runs off to large sigma (an "
-                          "asymptote in p2, not two edges meeting)"))
+            g_inf = _asymptote(c["sigma"], c["p2"])
+            cands.append((g_inf, end["sigma"], f"the lower {c['kind']} edge runs off to large sigma: it leaves the "
+                          f"charted sigma range at p2 = {end['p2']:.8g} (sigma = {end['sigma']:.4g}); the value given is "
+                          "its asymptote, p2 = p* - c / sigma through the last two points (not two edges meeting)"))
     if not cands:
         reasons = {s: (curves[s] or {}).get("end", {}).get("note", "no edge") if curves.get(s) and "failed" not in curves[s]
                    else (curves[s] or {}).get("failed", "no edge (unbounded in the sigma range)") for s in ("lower", "upper")}
@@ -135,6 +151,17 @@ def window_closing(curves: Mapping[str, Any], p2_range: Sequence[float], sigma_r
     p2, sigma, how = min(cands)
     return {"closes": p2, "sigma": sigma, "how": how, "searched": list(p2_range),
             "other_candidates": [{"p2": a, "sigma": b, "how": c} for a, b, c in sorted(cands)[1:]]}
+
+
+def _asymptote(sigma: Sequence[float], p2: Sequence[float]) -> float:
+    """p* of p2 = p* - c / sigma through the last two points of a curve running off to large sigma
+    (the oscillator becomes scale-invariant as sigma -> infinity: the wall's offset 1 is negligible
+    beside the forcing amplitude 1 + sigma, so the edge tends to a fixed p2)."""
+    (s1, s2), (a, b) = sigma[-2:], p2[-2:]
+    if s1 == s2:
+        return float(b)
+    c = (b - a) / (1.0 / s1 - 1.0 / s2)
+    return float(b + c / s2)
 
 
 def chart_curves(source: Any, params: Mapping[str, Any], param2: str, p2_range: tuple[float, float], log2: bool,
@@ -158,7 +185,8 @@ def chart_curves(source: Any, params: Mapping[str, Any], param2: str, p2_range: 
             closes[str(M)] = {"closes": None, "sigma": None, "how": None, "searched": list(p2_range),
                               "note": f"no stable period-{M} orbit with one impact per period found at {param2} = "
                               f"{p2_range[0]:g} by the scans over sigma in [{grid[0]:g}, {grid[-1]:g}] "
-                              f"({len(grid)} values, up/down/fresh)"}
+                              f"({len(grid)} values and {search['refined_values']} more where the attractors change or none is periodic, "
+                              "up/down/fresh)"}
     return {"windows": windows, "closes": closes, "search": search, "sigma_range": list(sigma_range),
             "start": float(p2_range[0])}
 
