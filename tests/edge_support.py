@@ -54,7 +54,7 @@ class ExactFlow:
     def orbit(self, sigma: float, M: int, z0) -> PeriodicOrbit:
         return solve_periodic_orbit(self.step_of(sigma), np.asarray(z0, dtype=float), M, **NEWTON)
 
-    def settle(self, sigma: float, M: int, n: int = 300) -> PeriodicOrbit:
+    def settle(self, sigma: float, M: int, n: int = 100) -> PeriodicOrbit:
         """The period-M orbit the flow settles on from the wall-free orbit p(theta) (4): n periods
         of the exact map, then Newton."""
         w = 2.0 * math.pi * self.theta
@@ -95,7 +95,7 @@ def after_impact(orb: PeriodicOrbit) -> np.ndarray:
 
 
 def continue_orbit(flow: ExactFlow, M: int, orb: PeriodicOrbit, s_from: float, s_to: float,
-                   steps: int = 8, min_fraction: float = 1e-4) -> PeriodicOrbit:
+                   steps: int = 4, min_fraction: float = 1e-4) -> PeriodicOrbit:
     """March the stable maximal orbit from s_from to s_to (secant predictor, step halved when the
     orbit is not found) and return it at s_to.  Raises AssertionError if it is lost on the way:
     the exact flow's window then ends before s_to."""
