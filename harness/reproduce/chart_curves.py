@@ -12,8 +12,9 @@ A window closes where its edges meet, the first of (in p2):
 
 * a turning point (maximum in p2) of an edge curve: the lower and upper edges are one curve that
   turns back (e.g. two flips joining: the smallest |multiplier| along sigma reaches 1 there);
-* a smooth edge curve ending on the orbit's graze (flip meets graze, a codimension-two point);
-* the grazing orbit on a graze edge losing its stability (the graze edge meets a flip or fold);
+* the grazing orbit on a graze edge losing its stability (the graze edge meets a flip or fold, a
+  codimension-two point), or a smooth edge curve ending on the orbit's graze (the same point seen
+  from the flip's side, located less exactly: the first is preferred when both are found);
 * the lower edge leaving the charted sigma range upward (the window runs to sigma -> infinity; the
   report says so: it is an asymptote, not a meeting of two edges).
 """
@@ -137,7 +138,8 @@ def window_closing(curves: Mapping[str, Any], p2_range: Sequence[float], sigma_r
                               "(multipliers in `multipliers`): the graze edge meets a flip/fold edge"))
         end = c["end"]
         if end.get("reason") == "graze":
-            cands.append((end["p2"], end["sigma"], f"the {side} {c['kind']} edge ends on the orbit's graze curve (flip meets graze; {end['note'].split('(', 1)[-1].rstrip(')')})"))
+            cands.append((end["p2"], end["sigma"], f"the {side} {c['kind']} edge ends on the orbit's graze curve "
+                          f"(approximate: {end['note']})"))
         turned = any(t["side"] == "max" for t in c["turns"])  # after a turn the curve is the upper edge
         if side == "lower" and not turned and end.get("reason") == "range" and end["sigma"] >= 0.99 * sigma_range[1]:
             g_inf = _asymptote(c["sigma"], c["p2"])
@@ -148,9 +150,18 @@ def window_closing(curves: Mapping[str, Any], p2_range: Sequence[float], sigma_r
         reasons = {s: (curves[s] or {}).get("end", {}).get("note", "no edge") if curves.get(s) and "failed" not in curves[s]
                    else (curves[s] or {}).get("failed", "no edge (unbounded in the sigma range)") for s in ("lower", "upper")}
         return {"closes": None, "sigma": None, "how": None, "searched": list(p2_range), "edges_end": reasons}
-    p2, sigma, how = min(cands)
+    cands.sort()
+    # Where a flip/fold curve runs into the graze, its corrector stops once its difference steps
+    # straddle the graze (a gap ~1e-7 before the meeting point), which near a thin window's tip can
+    # be 0.3 % early in p2; the grazing orbit's loss of stability, located on the graze curve,
+    # is the same point located exactly.  Prefer it when the two are that close.
+    exact = [x for x in cands if "loses stability" in x[2] and x[0] <= cands[0][0] * 1.01]
+    if exact and "approximate" in cands[0][2]:
+        cands.remove(exact[0])
+        cands.insert(0, exact[0])
+    p2, sigma, how = cands[0]
     return {"closes": p2, "sigma": sigma, "how": how, "searched": list(p2_range),
-            "other_candidates": [{"p2": a, "sigma": b, "how": c} for a, b, c in sorted(cands)[1:]]}
+            "other_candidates": [{"p2": a, "sigma": b, "how": c} for a, b, c in cands[1:]]}
 
 
 def _asymptote(sigma: Sequence[float], p2: Sequence[float]) -> float:
