@@ -163,3 +163,26 @@ def test_period_1_flip_runs_off_to_large_sigma(sim, fig9) -> None:
                             ds_max=20.0 * (1.0 + sigma / 100.0))
         flips = [e.value for e in br.events if e.kind == "flip"]
         assert flips and flips[0] == pytest.approx(expected, rel=rel), sigma
+
+
+def test_period_4_closes_at_the_tip_of_its_thin_window(sim, fig9) -> None:
+    """Figure 9's period-4 window (0.0016 wide at Gamma = 10) closes where its graze edge meets its
+    flip edge; checked by one-parameter continuation in sigma at fixed Gamma on both sides."""
+    flip, graze = _edges(sim, fig9, 0.1235, 4)
+    assert (flip.kind, graze.kind) == ("flip", "graze")
+    assert flip.value == pytest.approx(0.12223, abs=1e-4) and graze.value == pytest.approx(0.12379, abs=1e-4)
+    gc = continue_graze(sim, fig9, 4, graze.value, graze.point, graze.value * (1 + 1e-6), "Gamma", (10.0, 1e3), True,
+                        1.0, max_points=60, sigma_range=(5e-3, 1.0))
+    (loss,) = [t for t in gc.turns if t["side"] == "loses"]
+    assert 100.0 < loss["p2"] < 130.0
+    i = int(np.argmin(np.abs(gc.p2 - loss["p2"])))
+    near = slice(max(0, i - 3), i + 4)
+    for factor, present in ((0.999, True), (1.001, False)):
+        p = {**fig9, "Gamma": loss["p2"] * factor}
+        # just below the graze edge at this Gamma (the window lies below it, ~1e-4 of sigma wide here)
+        s0 = float(np.interp(p["Gamma"], gc.p2[near], gc.sigma[near])) * (1 - 3e-6)
+        ok = []
+        for d in (-1.0, 1.0):
+            br = continue_orbit(sim, p, 4, s0, gc.points[i], "sigma", (0.1, 0.15), d, ds_max=0.002)
+            ok.append(bool(br.stable_intervals()))
+        assert any(ok) == present, factor
