@@ -154,6 +154,14 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
         b = [x for x in cv["beta"] if x is not None]
         br = "-" if not b else f"{min(b):.3g} to {max(b):.3g}"
         lines.append(f"| {M} | {pres} | {cl} | {kinds} | {br} |")
+    lines += ["", "Scans against the continued edges (at each scanned value, on the edge curves' first monotone "
+              "stretch; `scan_check` in chart.json):", ""]
+    for M, chk in res["scan_check"].items():
+        bad = chk["disagree"]
+        lines.append(f"- M = {M}: largest relative difference {chk['max_rel_diff']:.2g}; "
+                     + ("all within 1 %" if not bad else f"{len(bad)} edge(s) differ by more than 1 %: " + "; ".join(
+                         f"{problem.param2} = {b['p2']:.4g} {b['side']}: scan {b['scan']:.5g} ({b['scan_kind']}) vs "
+                         f"{b['continued']:.5g}" for b in bad[:6]) + (" ..." if len(bad) > 6 else "")))
     lines += ["", f"Other windows (more than one impact per period): {len(res['other_windows'])} found (chart.json).",
               "", f"Backend: {res['backend']}; scans {res['seconds']:.1f} s wall ({sum(res['task_seconds']):.1f} s in "
               f"tasks); continuation {res['continuation_seconds']:.1f} s.", "", f"Run: `impact-harness {command}`."]

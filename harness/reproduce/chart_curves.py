@@ -204,3 +204,44 @@ def chart_curves(source: Any, params: Mapping[str, Any], param2: str, p2_range: 
 
 def _sig(edge: Mapping[str, Any] | None) -> Any:
     return None if edge is None else {"kind": edge["kind"], "sigma": edge["sigma"]}
+
+
+def _edge_at(curve: Mapping[str, Any] | None, p2: float) -> float | None:
+    """The edge's sigma at ``p2`` on the curve's first monotone stretch in p2 (None outside it)."""
+    if not curve or "failed" in curve or len(curve["p2"]) < 2:
+        return None
+    x, y = np.asarray(curve["p2"], float), np.asarray(curve["sigma"], float)
+    d = np.sign(np.diff(x))
+    n = int(np.argmax(d != d[0])) + 1 if np.any(d != d[0]) else len(x)
+    x, y = x[:n], y[:n]
+    if d[0] < 0:
+        x, y = x[::-1], y[::-1]
+    if not x[0] <= p2 <= x[-1]:
+        return None
+    return float(np.exp(np.interp(np.log(p2), np.log(x), np.log(y))))
+
+
+def scan_check(windows: Sequence[Mapping[str, Any]], scans: Mapping[str, Any], rel: float = 1e-2) -> dict[str, Any]:
+    """Compare the per-value scans' window edges with the continued edges at the same p2.
+
+    Per M: the values compared, the largest relative difference, and every value where an edge
+    differs by more than ``rel`` (with the scan's edge kind: "lost" marks a march that failed)."""
+    out: dict[str, Any] = {}
+    for M, sc in scans.items():
+        mine = [w for w in windows if str(w["M"]) == M]
+        if not mine:
+            continue
+        cur = mine[0]["curves"]
+        rows, worst = [], 0.0
+        for i, v in enumerate(sc["value"]):
+            for side, key in (("lower", "lower"), ("upper", "upper")):
+                s_scan, s_cont = sc[key][i], _edge_at(cur.get(side), float(v))
+                if s_scan is None or s_cont is None:
+                    continue
+                d = abs(s_scan - s_cont) / s_cont
+                worst = max(worst, d)
+                if d > rel:
+                    rows.append({"p2": float(v), "side": side, "scan": s_scan, "continued": s_cont,
+                                 "scan_kind": sc[f"kind_{key}"][i]})
+        out[M] = {"compared": len(sc["value"]), "max_rel_diff": worst, "disagree": rows}
+    return out
