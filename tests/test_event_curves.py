@@ -186,3 +186,17 @@ def test_period_4_closes_at_the_tip_of_its_thin_window(sim, fig9) -> None:
             br = continue_orbit(sim, p, 4, s0, gc.points[i], "sigma", (0.1, 0.15), d, ds_max=0.002)
             ok.append(bool(br.stable_intervals()))
         assert any(ok) == present, factor
+
+
+def test_the_period_2_closing_is_the_same_with_cvode(m2, sim, fig9) -> None:
+    """The FMU's other solver (CVODE, located crossings and variational equations) continues the flip
+    from a point of the closed-form curve below the turn and finds the same turning point."""
+    fc, _ = m2
+    (turn,) = [t for t in fc.turns if t["side"] == "max"]
+    i = int(np.argmax(fc.p2 > 0.97 * turn["p2"]))
+    p = {**fig9, "solver": 0, "Gamma": float(fc.p2[i])}
+    cv = continue_event(sim, p, "flip", 2, float(fc.sigma[i]), fc.points[i], "Gamma", (10.0, 1e4), True, 1.0,
+                        sigma_range=(5e-3, 50.0), max_points=12)
+    (t_cv,) = [t for t in cv.turns if t["side"] == "max"]
+    assert t_cv["p2"] == pytest.approx(turn["p2"], rel=1e-7)
+    assert t_cv["sigma"] == pytest.approx(turn["sigma"], rel=1e-3)
