@@ -200,3 +200,16 @@ def test_the_period_2_closing_is_the_same_with_cvode(m2, sim, fig9) -> None:
     (t_cv,) = [t for t in cv.turns if t["side"] == "max"]
     assert t_cv["p2"] == pytest.approx(turn["p2"], rel=1e-7)
     assert t_cv["sigma"] == pytest.approx(turn["sigma"], rel=1e-3)
+
+
+def test_noise_turns_are_dropped_and_real_ones_kept() -> None:
+    """CVODE's tolerance makes p2 wiggle by ~1e-4 where a curve runs parallel to the sigma axis
+    (measured on period 2's graze near its asymptote at Gamma ~ 1100); those are not turns."""
+    from harness.dynamics.event_curves import significant_turns
+
+    t = lambda p2, side: {"p2": p2, "side": side, "sigma": 1.0}  # noqa: E731
+    wiggles = [t(1100.444, "max"), t(1100.431, "min"), t(1100.619, "max"), t(1100.496, "min"), t(1100.73, "max")]
+    assert significant_turns(wiggles, 1100.66) == []
+    real = [t(1652.58, "max"), t(1575.04, "min"), t(1575.0418, "max"), {"p2": 1600.0, "side": "loses", "sigma": 2.0}]
+    kept = significant_turns(real, 1574.93)
+    assert [x["side"] for x in kept] == ["max", "loses"] and kept[0]["p2"] == 1652.58

@@ -44,7 +44,7 @@ from .periodic_map import MapEvaluation, PeriodMap
 from ..errors import HarnessInputError
 from ..fmu.simulator import Simulator
 
-__all__ = ["CurvePoint", "EventCurve", "PlaneMap", "continue_event", "SMOOTH_KINDS"]
+__all__ = ["CurvePoint", "EventCurve", "PlaneMap", "continue_event", "significant_turns", "SMOOTH_KINDS"]
 
 SMOOTH_KINDS = ("flip", "fold", "ns")
 
@@ -202,6 +202,26 @@ class PlaneMap:
         return A
 
 
+def significant_turns(turns: list[dict[str, Any]], p2_end: float, rel: float = 1e-3) -> list[dict[str, Any]]:
+    """Drop turning points in p2 that are noise: a max and a min closer than ``rel`` (relative in
+    p2) to each other, or a last turn within ``rel`` of the curve's end.  Where a curve runs nearly
+    parallel to the sigma axis, the solver's tolerance (CVODE: ~1e-4 of p2 on a graze near an
+    asymptote) makes p2 wiggle; a real turn, where a window closes, moves p2 by far more."""
+    ext = [t for t in turns if t["side"] in ("max", "min")]
+    close = lambda a, b: abs(a - b) < rel * max(abs(a), 1e-300)  # noqa: E731
+    k = 0
+    while k < len(ext) - 1:
+        if close(ext[k]["p2"], ext[k + 1]["p2"]):
+            del ext[k:k + 2]
+            k = max(k - 1, 0)
+        else:
+            k += 1
+    if ext and close(ext[-1]["p2"], p2_end):
+        ext.pop()
+    keep = {id(t) for t in ext}
+    return [t for t in turns if t["side"] not in ("max", "min") or id(t) in keep]
+
+
 def _tangent(A: np.ndarray, prev: np.ndarray | None) -> np.ndarray:
     t = np.linalg.svd(A)[2][-1]
     if prev is not None and t @ prev < 0:
@@ -351,6 +371,7 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
         step = min(step * 1.5, ds_max)
     last = pts[-1]
     end.update({"sigma": last.sigma, "p2": last.p2})
+    turns = significant_turns(turns, last.p2)
     return EventCurve(kind, M, int(pattern.sum()), param2, np.array([p.sigma for p in pts]),
                       np.array([p.p2 for p in pts]), np.array([p.ev.points[0] for p in pts]),
                       np.array([p.multipliers for p in pts]),

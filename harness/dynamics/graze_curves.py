@@ -23,7 +23,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from .event_curves import EventCurve
+from .event_curves import EventCurve, significant_turns
 from .periodic_map import MapEvaluation, PeriodMap, refine_orbit
 from ..fmu.simulator import Simulator
 
@@ -198,6 +198,7 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
     sig = np.exp(np.array([Y[0] for Y in Ys]))
     p2s = np.array([of_q(float(Y[1])) for Y in Ys])
     end.update({"sigma": float(sig[-1]), "p2": float(p2s[-1])})
+    turns = significant_turns(turns, float(p2s[-1]))
     mult = np.array([np.linalg.eigvals(e.J).astype(complex) for e in evs])
     gaps = np.array([plane.gap(Y, e) for Y, e in zip(Ys, evs)])
     plane.pmap.params = {**plane.base, param2: of_q(q0)}
