@@ -29,7 +29,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ..errors import HarnessInputError
-from .chart_curves import chart_curves, scan_check
+from .chart_curves import chart_curves, edge_check, scan_check
 
 __all__ = ["ChartProblem", "run_chart", "chart_value_task", "curves_from_values", "closing"]
 
@@ -208,6 +208,7 @@ def run_chart(problem: ChartProblem, source: Any, backend: Any = None, workers: 
                         problem.log, problem.sigma_grid, problem.M_max, problem.theta)
     out["windows"], out["closes"], out["continuation_search"] = cont["windows"], cont["closes"], cont["search"]
     out["scan_check"] = scan_check(cont["windows"], out["scans"])
+    out["edge_check"] = edge_check(source, problem.params, problem.param2, cont["windows"], problem.theta)
     out["continuation_seconds"] = time.perf_counter() - t1
     out["maps"] = map_overlays(problem)
     out["backend"] = be.describe()
