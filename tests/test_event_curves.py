@@ -205,7 +205,7 @@ def test_the_period_2_closing_is_the_same_with_cvode(m2, sim, fig9) -> None:
 def test_noise_turns_are_dropped_and_real_ones_kept() -> None:
     """CVODE's tolerance makes p2 wiggle by ~1e-4 where a curve runs parallel to the sigma axis
     (measured on period 2's graze near its asymptote at Gamma ~ 1100); those are not turns."""
-    from harness.dynamics.event_curves import significant_turns
+    from harness.dynamics.curves import significant_turns
 
     t = lambda p2, side: {"p2": p2, "side": side, "sigma": 1.0}  # noqa: E731
     wiggles = [t(1100.444, "max"), t(1100.431, "min"), t(1100.619, "max"), t(1100.496, "min"), t(1100.73, "max")]

@@ -23,7 +23,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from .event_curves import EventCurve, significant_turns
+from .curves import EventCurve, significant_turns
 from .periodic_map import MapEvaluation, PeriodMap, refine_orbit
 from ..fmu.simulator import Simulator
 
