@@ -61,6 +61,7 @@ PHYS = "tests/test_fmu_physics.py"
 SENS = "tests/test_fmu_sensitivities.py tests/test_harness_sensitivities.py"
 CF = "tests/test_fmu_closed_form.py"
 TRUTH = "tests/test_fmu_inputs_truth.py"
+GUARD = "tests/test_fmu_grazing_guard.py"
 # mutants that survived the first run (issue 22): the independent-truth tests that now kill them run first
 ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28")}
 
@@ -131,9 +132,9 @@ MUTANTS: tuple[Mutant, ...] = (
        "certified crossing search splits where there is no turning point"),
     # -- fmu_src/solver_cvode.c: CVODE driver ----------------------------------------------------
     _m("M25", "fmu_src/solver_cvode.c", "return (g != 0.0 && fabs(g) < ROOT_FLOOR) ? copysign(ROOT_FLOOR, g) : g;",
-       "return g;", EVENTS, "root values not floored (SUNDIALS' glo*ghi underflow loses shallow crossings)"),
+       "return g;", f"{GUARD} {EVENTS}", "root values not floored (SUNDIALS' glo*ghi underflow loses shallow crossings)"),
     _m("M26", "fmu_src/solver_cvode.c", "return dir[0] > 0 ? g[0] > 0.0 : g[0] < 0.0;", "return 0;",
-       f"{EVENTS} {PHYS}", "a step ending on the wrong side of the wall is never rescued"),
+       f"{GUARD} {EVENTS} {PHYS}", "a step ending on the wrong side of the wall is never rescued"),
     _m("M27", "fmu_src/solver_cvode.c", "if (model_release_now(m, s->tau)) s->events++;",
        "if (0) s->events++;", f"{EVENTS} {FMU_PORTS}", "a sticking mass is not released at a restart"),
     # -- fmu_src/fmu_core.c: bookkeeping ---------------------------------------------------------
@@ -207,6 +208,8 @@ MUTANTS: tuple[Mutant, ...] = (
     _m("M50", "fmu_src/sens.c", "        return; /* a leaving mass placed back beside the wall (model_event_update): no jump */",
        "        ; /* a leaving mass placed back beside the wall (model_event_update): no jump */", f"{TRUTH} {SENS}",
        "a placement without impact treated as a rigid impact in the saltation matrix"),
+    _m("M51", "fmu_src/solver_cvode.c", "if (locate_crossing(s, m, last_good_before(s, t), t) != 0) {",
+       "if (0) {", f"{GUARD} {EVENTS}", "a stepped-over crossing counted by the rescue but never located"),
 )
 
 
