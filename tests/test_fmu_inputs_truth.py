@@ -200,3 +200,46 @@ def test_a_wall_jumping_onto_a_mass_it_outruns_is_no_impact(fmu, solver):
     fmu.step_to(1e-9)
     assert fmu.impacts() == 0
     assert fmu.state()[0] <= u - 0.01 + 1e-9 * 0.5 and fmu.state()[1] == pytest.approx(v, abs=1e-6)
+
+
+@SOLVERS
+@pytest.mark.parametrize("dw2", [-0.05, 0.0, 0.15])
+@pytest.mark.parametrize("jump", [0.002, 0.02])
+def test_a_wall_jumping_away_from_a_sticking_mass_leaves_it_with_its_velocity(fmu, jump, dw2,
+                                                                               solver):
+    """A rigid wall moving at dw1 = 0.05 carries a sticking mass (r = 0); between two steps it
+    jumps away by ``jump`` and moves on at dw2.  Only the constraint went away, no impulse acted:
+    the mass flies on with its velocity, the wall's before the jump (dw1), until the net force
+    brings it back to the wall (an impact, r = 0: it sticks again or leaves with the wall).  The
+    reference applies exactly that (velocity continuity) and then its own flight and jump laws;
+    at rest (the former rule) or at the wall's new velocity dw2 is off by |dw1 - dw2| or dw1 in
+    velocity at once."""
+    lin, sigma, w0, y0, dw1, h = UNDERDAMPED, 10.0, 0.02, (-0.03, 0.0), 0.05, 0.0125
+    _start(fmu, "rigid", solver, sigma, 0.0, 10.0, 0.0, w0, y0, **lin)
+    ref = InputsReference(sigma=sigma, r=0.0, wall="rigid", **lin)
+    st = RefState(0.0, *y0)
+    t = 0.0
+
+    def step(w: float, dw: float) -> None:
+        nonlocal t
+        fmu.set(u_wall=w)
+        fmu.slave.setRealInputDerivatives([fmu.vr["u_wall"]], [1], [dw])
+        fmu.step_to(t + h)
+        ref.run(st, Piece(t, t + h, 0.0, 0.0, w, dw))
+        t += h
+        assert np.max(np.abs(fmu.state() - [st.u, st.v])) < 1e-7, (t, fmu.state(), st)
+        assert fmu.impacts() == st.impacts, t
+        # a small jump is closed again within the step: the return's time and speed tell
+        assert fmu.get("t_impact") == pytest.approx(st.t_impact, abs=1e-8)
+        assert fmu.get("v_impact") == pytest.approx(st.v_impact, rel=1e-6, abs=1e-9)
+
+    while st.mode != "stick":  # ride the wall moving at dw1 until the mass sticks on it
+        step(w0 + dw1 * t, dw1)
+        assert t < 0.5, "meant to stick"
+    step(w0 + dw1 * t, dw1)  # one step stuck: the mass moves at dw1 with the wall
+    assert fmu.in_contact() and st.mode == "stick" and fmu.state()[1] == pytest.approx(dw1)
+    t_jump, w_jump = t, w0 + dw1 * t + jump
+    st.mode = "free"  # the wall is gone from under the mass: u and v = dw1 are kept
+    for _ in range(24):
+        step(w_jump + dw2 * (t - t_jump), dw2)
+    assert [k for _, k in st.log].count("impact") >= 2  # it came back to the wall
