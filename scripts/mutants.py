@@ -63,7 +63,8 @@ CF = "tests/test_fmu_closed_form.py"
 TRUTH = "tests/test_fmu_inputs_truth.py"
 GUARD = "tests/test_fmu_grazing_guard.py"
 # mutants that survived the first run (issue 22): the independent-truth tests that now kill them run first
-ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28")}
+ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28",
+                                "M52")}
 
 MUTANTS: tuple[Mutant, ...] = (
     # -- fmu_src/model.c: the physics ------------------------------------------------------------
@@ -94,9 +95,12 @@ MUTANTS: tuple[Mutant, ...] = (
        f"{PHYS} {EVENTS}", "rigid impacts counted twice"),
     _m("M10", "fmu_src/model.c", "m->v_impact = y[1] - dw;", "m->v_impact = y[1];", FMU_PORTS,
        "v_impact absolute instead of relative to the wall"),
-    _m("M11", "fmu_src/model.c", "y[1] = 0.0; /* the wall went away: the mass is left at rest */",
-       "y[1] = dw; /* the wall went away: the mass is left at rest */", FMU_PORTS,
-       "a sticking mass keeps the receding wall's velocity"),
+    _m("M11", "fmu_src/model.c", "m->mode = MODE_FREE; /* the wall went away: y[1] is kept */",
+       "y[1] = dw; m->mode = MODE_FREE; /* the wall went away: y[1] is kept */", FMU_PORTS,
+       "a sticking mass left by a wall that jumps away takes the wall's new velocity"),
+    _m("M52", "fmu_src/model.c", "m->mode = MODE_FREE; /* the wall went away: y[1] is kept */",
+       "y[1] = 0.0; m->mode = MODE_FREE; /* the wall went away: y[1] is kept */", FMU_PORTS,
+       "a sticking mass left by a wall that jumps away is left at rest (the rule before issue 22)"),
     _m("M12", "fmu_src/model.c", "if (y[1] - dw > 0.0) model_event_update(m, tau, y, 0); /* an impact */",
        "if (y[1] > 0.0) model_event_update(m, tau, y, 0); /* an impact */", FMU_PORTS,
        "wall jumping into the mass: impact decided on the absolute velocity"),
