@@ -19,6 +19,7 @@ import pytest
 from mapcheck.exact import forcing_amplitude_phase
 from mapcheck.inputs_reference import InputsReference, Piece, RefState
 from tests.fmu_support import WALLS, LoggedSlave
+from tests.test_fmu_grazing_guard import EVENTS_LOG
 
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)
 SOLVERS = pytest.mark.parametrize("solver", [0, 1], ids=["cvode", "closed-form"])
@@ -243,3 +244,61 @@ def test_a_wall_jumping_away_from_a_sticking_mass_leaves_it_with_its_velocity(fm
     for _ in range(24):
         step(w_jump + dw2 * (t - t_jump), dw2)
     assert [k for _, k in st.log].count("impact") >= 2  # it came back to the wall
+
+
+@SOLVERS
+@pytest.mark.parametrize("margin", [1e-6, 0.05, 0.5])
+@pytest.mark.parametrize("dw", [0.05, 0.0])
+def test_a_sigma_change_that_ends_the_holding_force_releases_at_once(fmu, margin, dw, solver):
+    """A mass sticking on the rigid wall (r = 0, the wall still or moving at dw); between two
+    steps the master lowers sigma (tunable) so that the net force at that instant pulls away,
+    by ``margin`` of the drive (1e-6: the holding force has only just vanished).  No wall event
+    is crossed: the restart itself must release the mass (with the wall's velocity), or it would
+    stay stuck with a negative holding force until the force next rises and falls.  Against the
+    reference, released at the switch."""
+    lin, sigma, w0, y0, h = UNDERDAMPED, 10.0, 0.02, (-0.03, 0.0), 0.0125
+    F_g, phi = forcing_amplitude_phase(**lin)
+    Om2 = lin["Omega"] ** 2
+    _start(fmu, "rigid", solver, sigma, 0.0, 10.0, 0.0, w0, y0, **lin)
+    ref = InputsReference(sigma=sigma, r=0.0, wall="rigid", **lin)
+    st = RefState(0.0, *y0)
+    t, stuck = 0.0, 0
+    while stuck < 3:  # three steps on the wall
+        w = w0 + dw * t
+        fmu.set(u_wall=w)
+        fmu.slave.setRealInputDerivatives([fmu.vr["u_wall"]], [1], [dw])
+        fmu.step_to(t + h)
+        ref.run(st, Piece(t, t + h, 0.0, 0.0, w, dw))
+        t += h
+        stuck += st.mode == "stick"
+        assert t < 0.5, "meant to stick"
+    assert fmu.in_contact() and fmu.get("F_contact") > 0.0
+    w = w0 + dw * t
+    # the drive that makes the net force on the wall -margin (1 + sigma) F_g cos(...) at t
+    c = math.cos(2 * math.pi * t + phi)
+    assert c > 0.1
+    new_sigma = (Om2 * (w + 1.0) + lin["nu"] * dw) / (F_g * c) * (1.0 - margin) - 1.0
+    fmu.set(sigma=new_sigma)
+    t_switch = t
+    ref = InputsReference(sigma=new_sigma, r=0.0, wall="rigid", **lin)
+    assert ref.push(t, Piece(t, t + h, 0.0, 0.0, w, dw)) < 0.0
+    fmu.slave.setDebugLogging(True, ["logEvents"])
+    for k in range(8):
+        w = w0 + dw * t
+        fmu.set(u_wall=w)
+        fmu.slave.setRealInputDerivatives([fmu.vr["u_wall"]], [1], [dw])
+        fmu.messages.clear()
+        fmu.step_to(t + h)
+        ref.run(st, Piece(t, t + h, 0.0, 0.0, w, dw))
+        t += h
+        assert np.max(np.abs(fmu.state() - [st.u, st.v])) < 1e-7, (t, fmu.state(), st)
+        assert fmu.impacts() == st.impacts
+        if k == 0 and solver == 0 and dw == 0.0:
+            # Nothing but sigma changed (with dw != 0 the new slope is an input change, and the
+            # input-jump rule releases the mass).  The release is the restart's, not a crossing
+            # stepped over: were it left to the side check (solver_cvode.c, mutant M27), the
+            # rescue would release the mass 4e-16 later, the same state, but the log would call
+            # it found by the grazing guard.
+            found = [EVENTS_LOG.search(m) for _, _, m in fmu.messages]
+            assert [(int(f.group(1)), int(f.group(2))) for f in found if f][:1] == [(1, 0)]
+    assert (t_switch, "release") in st.log  # the reference released at the switch
