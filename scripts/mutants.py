@@ -261,9 +261,10 @@ def run_one(m: Mutant, timeout: float) -> tuple[str, str, float]:
                                                            capture_output=True, text=True)
             if mk.returncode:
                 return "stillborn", (mk.stderr or mk.stdout).strip().splitlines()[-1:][0], time.monotonic() - t0
-            # the rest of build/ (the twin, the controller) is not rebuilt: link it
+            # the rest of build/ (the twin, the controller) is not rebuilt: link it (not the
+            # tests-only build without the root floor, which its test builds from the copy)
             for item in (ROOT / "build").iterdir():
-                if item.name != "fmu" and not (copy / "build" / item.name).exists():
+                if item.name not in ("fmu", "nofloor") and not (copy / "build" / item.name).exists():
                     (copy / "build" / item.name).symlink_to(item)
         else:
             (copy / "build").symlink_to(ROOT / "build")
