@@ -35,7 +35,7 @@ def test_chart_edges_at_gamma_10_match_the_exact_flow(chart) -> None:
     for name in ("chart.json", "chart.png", "report.md"):
         assert (out / name).stat().st_size > 0
     for M, (lo, hi) in EXACT_GAMMA_10.items():
-        cv = res["curves"][M]
+        cv = res["scans"][M]
         assert cv["value"][0] == pytest.approx(10.0)
         if hi is None:
             # Known limitation (docs/theory.md section 11): at Gamma = 10 the period-1 orbit's
@@ -53,10 +53,30 @@ def test_chart_edges_at_gamma_10_match_the_exact_flow(chart) -> None:
         assert all(len(cv[k]) == n for k in ("lower", "upper", "kind_lower", "kind_upper", "beta"))
 
 
+def test_continued_windows_at_gamma_10_are_the_exact_flows_and_closing_says_what_was_searched(chart) -> None:
+    """The windows the continuation starts from (found by the ODE alone, edges located by the
+    one-parameter continuation) are the exact flow's, period 1 included; none of them closes below
+    Gamma = 1000 (they close near 1600, tests/test_event_curves.py), and null comes with the range."""
+    out, res = chart
+    for M, (lo, hi) in EXACT_GAMMA_10.items():
+        cl = res["closes"][M]
+        low, up = cl["window_at_start"]
+        assert low["kind"] == "flip" and low["sigma"] == pytest.approx(lo, rel=2e-4), M
+        if hi is not None:
+            assert up["kind"] == "graze" and up["sigma"] == pytest.approx(hi, rel=2e-4), M
+        assert cl["closes"] is None and cl["searched"] == [10.0, 1000.0], M
+    (w2,) = [w for w in res["windows"] if w["M"] == 2]
+    flip = w2["curves"]["lower"]
+    assert flip["kind"] == "flip" and flip["p2"][0] == pytest.approx(10.0) and flip["end"]["reason"] == "range"
+    assert all(len(flip[k]) == len(flip["sigma"]) for k in ("p2", "points", "multipliers", "gaps"))
+    report = (out / "report.md").read_text()
+    assert "null (searched 10 to 1000)" in report and "| 2 | flip 0.2899707" in report
+
+
 def test_beta_grows_like_kappa_and_closes_says_what_was_searched(chart) -> None:
     _, res = chart
     for M in ("1", "2", "3"):
-        cv = res["curves"][M]
+        cv = res["scans"][M]
         if len(cv["value"]) == 2:
             b10, b1000 = cv["beta"]
             assert b10 < 1.0  # Figure 9 (Gamma = 10) is the soft, low-velocity regime of (48)

@@ -109,3 +109,46 @@ def test_periodicity_threshold_scales_with_the_orbit_on_both_sides(size: float, 
     assert (c.period == 2) is periodic
     if not periodic:
         assert c.period == NOT_PERIODIC and c.residual == pytest.approx(factor * threshold, rel=1e-6)
+
+
+SIZES = [1e-3, 1e-1, 10.0, 1e3]  # orbit sizes over six decades
+
+
+@pytest.mark.parametrize("size", SIZES)
+@pytest.mark.parametrize("factor,periodic", [(0.1, True), (5.0, False)], ids=["below", "above"])
+def test_noise_a_few_times_below_or_above_the_scaled_threshold(size: float, factor: float, periodic: bool) -> None:
+    """Random noise of standard deviation ``factor`` times the threshold tol (1 + size) on every
+    sample of a period-3 orbit of size ``size``: at 1/10 of it (the largest of the 2 x 37
+    differences is below 1/2 of the threshold but for a 7-sigma event) the orbit is periodic, at 5
+    times it (every difference is a 7-sigma spread, so some exceed the threshold for every shift)
+    it is not, at every size.  A threshold without the orbit's size fails the periodic side at
+    sizes 10 and 1e3, one with the size squared the other side at 1e3."""
+    tol = 1e-5
+    pts = [(size / 2, 0.0), (-size / 2, size / 4), (0.0, -size / 4)]
+    threshold = tol * (1.0 + size)
+    u, v, imp = _cycle(pts, [1, 0, 0], 40, noise=factor * threshold, seed=int(np.log10(size)) + 10)
+    c = classify_orbit(u, v, imp, tol=tol)
+    assert (c.period == 3) is periodic, (c, threshold)
+    if not periodic:
+        assert c.period == NOT_PERIODIC and c.residual > threshold
+
+
+@pytest.mark.parametrize("size", SIZES)
+@pytest.mark.parametrize("factor,settling", [(0.3, False), (3.0, True)], ids=["below", "above"])
+def test_settling_threshold_scales_with_the_orbit_on_both_sides(size: float, factor: float, settling: bool) -> None:
+    """A period-2 orbit of size ``size`` approached through a decaying period-4 modulation (the
+    samples look like period 4): still settling while the modulation's 2-shift differences start
+    above the threshold tol (1 + size) (3 times it), converged when they start below it (0.3
+    times): the transient is over once it is within the periodicity tolerance, at every size."""
+    from harness.dynamics.classify import still_settling
+
+    tol = 1e-5
+    k = np.arange(40)
+    threshold = tol * (1.0 + size)
+    # m_k = eps 0.99^k (+1, +1, -1, -1, ...): |m_{k+2} - m_k| = eps 0.99^k (1 + 0.99^2) ~ 2 eps at first
+    eps = factor * threshold / 2.0
+    u = 0.5 * size * (-1.0) ** k + eps * 0.99 ** k * (-1.0) ** (k // 2)
+    v = 0.25 * size * (-1.0) ** k
+    early = np.abs(u[2:] - u[:-2])[:9].mean()
+    assert bool(early > threshold) is settling  # the construction is on the intended side
+    assert bool(still_settling(u, v, period=4, tol=tol)) is settling

@@ -29,6 +29,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ..errors import HarnessInputError
+from .chart_curves import chart_curves, edge_check, scan_check
 
 __all__ = ["ChartProblem", "run_chart", "chart_value_task", "curves_from_values", "closing"]
 
@@ -152,7 +153,7 @@ def curves_from_values(problem: ChartProblem, per_value: Sequence[Mapping[str, A
         curves[str(M)] = {**rows, **closing(problem.values, present, problem.log)}
     for res in per_value:
         others += [{**e, "param2": res["value"]} for e in res["all"] if e["impacts"] != 1 and e["resolved"]]
-    return {"curves": curves, "other_windows": others}
+    return {"scans": curves, "other_windows": others}
 
 
 def map_overlays(problem: ChartProblem) -> dict[str, Any]:
@@ -202,6 +203,13 @@ def run_chart(problem: ChartProblem, source: Any, backend: Any = None, workers: 
     wall_s = time.perf_counter() - t0
     per_value = [results[i] for i in sorted(results)]
     out = curves_from_values(problem, per_value)
+    t1 = time.perf_counter()
+    cont = chart_curves(source, problem.params, problem.param2, (float(problem.values[0]), float(problem.values[-1])),
+                        problem.log, problem.sigma_grid, problem.M_max, problem.theta)
+    out["windows"], out["closes"], out["continuation_search"] = cont["windows"], cont["closes"], cont["search"]
+    out["scan_check"] = scan_check(cont["windows"], out["scans"])
+    out["edge_check"] = edge_check(source, problem.params, problem.param2, cont["windows"], problem.theta)
+    out["continuation_seconds"] = time.perf_counter() - t1
     out["maps"] = map_overlays(problem)
     out["backend"] = be.describe()
     out["seconds"] = wall_s

@@ -31,41 +31,57 @@ def _model_from_config(path: str | None) -> dict[str, Any]:
     return dict(data.get("model", {}))
 
 
+LINESTYLES = {"flip": "-", "fold": "-.", "ns": ":", "graze": "--", "stick": "--"}
+
+
 def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: str) -> None:
-    """sigma against the second parameter: ODE windows as bands, map (48) and (39) windows as
-    lines, and beta along the orbits in a second panel."""
+    """sigma against the second parameter: the windows' edges continued in two parameters (lines,
+    by kind; where each window closes starred), the per-value scans' windows beneath as bands (the
+    brute-force check), the windows of maps (48) and (39) as thin lines, and beta in a second panel."""
     from ..io import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
 
-    fig, (ax, bx) = plt.subplots(2, 1, figsize=(8.5, 9), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
+    fig, (ax, bx) = plt.subplots(2, 1, figsize=(9, 9.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.2]})
     cmap = plt.get_cmap("tab10")
-    for M, cv in res["curves"].items():
+    top = problem.sigma_grid[-1] * 4.0
+    for M, cv in res["scans"].items():
         col = cmap((int(M) - 1) % 10)
         if cv["value"]:
             v = np.array(cv["value"])
             lo = np.array([np.nan if x is None else x for x in cv["lower"]], float)
             hi = np.array([np.nan if x is None else x for x in cv["upper"]], float)
-            hi_plot = np.where(np.isfinite(hi), hi, problem.sigma_grid[-1] * 4.0)
-            ax.fill_between(v, lo, hi_plot, color=col, alpha=0.35, lw=0, label=f"ODE M = {M}")
-            ax.plot(v, lo, "-", color=col, lw=1.2)
-            ax.plot(v, hi, "-", color=col, lw=1.2)
+            ax.fill_between(v, lo, np.where(np.isfinite(hi), hi, top), color=col, alpha=0.15, lw=0,
+                            label=f"scans, M = {M}")
             beta = np.array([np.nan if b is None else b for b in cv["beta"]], float)
             if np.any(np.isfinite(beta)):
                 bx.plot(v, beta, "o-", color=col, ms=3, label=f"M = {M}")
-        if cv["closes"] is not None:
-            ax.axvline(cv["closes"], color=col, ls=":", lw=1)
-        for key, ls, lab in (("map_48", "--", "map (48), A~"), ("map_39", "-.", "map (39), A~")):
+        for key, ls in (("map_48", (0, (1, 1))), ("map_39", (0, (3, 1, 1, 1)))):
             mw = res["maps"][key][M]
-            if mw["value"]:
-                for edge in ("lower", "upper"):
-                    y = np.array([np.nan if x is None else x for x in mw[edge]], float)
-                    ax.plot(mw["value"], y, ls, color=col, lw=0.9,
-                            label=f"{lab} M = {M}" if edge == "lower" and M == "1" else None)
+            for edge in ("lower", "upper") if mw["value"] else ():
+                y = np.array([np.nan if x is None else x for x in mw[edge]], float)
+                ax.plot(mw["value"], y, ls=ls, color=col, lw=0.7, alpha=0.8,
+                        label=f"map ({key[-2:]}), A~" if edge == "lower" and M == "1" else None)
+    seen: set[str] = set()
+    for w in res["windows"]:
+        col = cmap((w["M"] - 1) % 10)
+        for side in ("lower", "upper"):
+            c = w["curves"].get(side)
+            if not c or "failed" in c:
+                continue
+            lab = f"{c['kind']} edge (continued)" if c["kind"] not in seen else None
+            seen.add(c["kind"])
+            ax.plot(c["p2"], c["sigma"], LINESTYLES.get(c["kind"], "-"), color=col, lw=2.0, label=lab)
+        cl = w["closing"]
+        if cl["closes"] is not None:
+            ax.plot([cl["closes"]], [min(cl["sigma"], top)], "*", color=col, ms=13, mec="k", zorder=5)
+            ax.annotate(f"M = {w['M']} closes\n{problem.param2} = {cl['closes']:.5g}", (cl["closes"], min(cl["sigma"], top)),
+                        textcoords="offset points", xytext=(-70, 8 + 14 * w["M"]), fontsize=7, color=col,
+                        arrowprops={"arrowstyle": "-", "color": col, "lw": 0.6})
     ax.set_yscale("log")
-    ax.set_ylim(problem.sigma_grid[0], problem.sigma_grid[-1] * 4.0)
+    ax.set_ylim(problem.sigma_grid[0], top)
     ax.set_ylabel("forcing above grazing, sigma")
     ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=7, ncol=3, loc="upper left")
+    ax.legend(fontsize=7, ncol=3, loc="lower right")
     bx.axhline(1.0, color="k", lw=0.8, ls=":")
     bx.set_ylabel("beta = r v_c kappa / |A~|\n(at each window's seed)", fontsize=8)
     bx.set_yscale("log")
@@ -79,44 +95,86 @@ def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: st
     plt.close(fig)
 
 
+def _edge_text(e: Any) -> str:
+    return "none in the range" if e is None else f"{e['kind']} {e['sigma']:.7g}"
+
+
 def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> str:
     g = problem.sigma_grid
+    cs = res["continuation_search"]
     lines = [f"# Chart: windows of the ODE over (sigma, {problem.param2})", "",
              f"Parameters: {', '.join(f'{k} = {v:g}' if isinstance(v, float) else f'{k} = {v}' for k, v in problem.params.items())}; "
-             f"{problem.param2} over {len(problem.values)} values from {problem.values[0]:g} to {problem.values[-1]:g}"
-             f"{' (log)' if problem.log else ''}.", "",
-             "Method: for each value, up/down scans of the FMU over sigma in "
-             f"[{g[0]:.3g}, {g[-1]:.3g}] ({len(g)} points, geometric), every attractor seen shot by Newton to its "
-             f"edges (bisected to {problem.xtol_rel:g} x sigma); the edges of the stable maximal period-M windows are "
-             "joined across values into curves. This is a 1-D continuation per value of the second parameter "
-             "joined into curves (not a two-parameter continuation of the events): where a window disappears is "
-             "bracketed between two neighbouring values.", "",
-             "| M | present at | closes (bracket) | opens (bracket) | edge kinds at the last value | beta range |",
-             "|---|---|---|---|---|---|"]
-    for M, cv in res["curves"].items():
+             f"{problem.param2} from {problem.values[0]:g} to {problem.values[-1]:g}{' (log)' if problem.log else ''}.", "",
+             "## Where each window closes (two-parameter continuation)", "",
+             f"Method: at {problem.param2} = {problem.values[0]:g} the stable maximal orbits (one impact per period, "
+             f"M <= {problem.M_max}) are found by the ODE alone (up/down/fresh scans over sigma in [{cs['sigma'][0]:.3g}, "
+             f"{cs['sigma'][1]:.3g}], {cs['values']} values, and {cs['refined_values']} more in the {cs['refined_intervals']} "
+             f"intervals where the attractors change or none is periodic; {cs['transient']} periods of transient), each continued in "
+             "sigma to its edges; every edge is continued in (sigma, "
+             f"{problem.param2}): flip/fold/NS on the extended system (orbit + test function, pseudo-arclength), "
+             "grazes by natural continuation with each graze located by bisection. A window closes where its edges "
+             "meet (a turning point of an edge curve, a flip meeting the graze) or where its lower edge leaves the "
+             "sigma range upward.", "",
+             f"| M | window at {problem.param2} = {problem.values[0]:g} | closes at {problem.param2} | sigma there | how |",
+             "|---|---|---|---|---|"]
+    for M, cl in res["closes"].items():
+        win = cl.get("window_at_start")
+        wtxt = "none found" if win is None else f"{_edge_text(win[0])} .. {_edge_text(win[1])}"
+        if cl["closes"] is None:
+            why = cl.get("note") or "; ".join(f"{k}: {v}" for k, v in (cl.get("edges_end") or {}).items())
+            lines.append(f"| {M} | {wtxt} | null (searched {cl['searched'][0]:g} to {cl['searched'][1]:g}) | - | {why} |")
+        else:
+            lines.append(f"| {M} | {wtxt} | {cl['closes']:.6g} | {cl['sigma']:.5g} | {cl['how']} |")
+    lines += ["", "Every edge curve (chart.json, `windows[*].curves`): its end and turning points:", ""]
+    for w in res["windows"]:
+        for side in ("lower", "upper"):
+            c = w["curves"].get(side)
+            if c is None:
+                continue
+            if "failed" in c:
+                lines.append(f"- M = {w['M']} {side} ({c['kind']}): not continued: {c['failed']}")
+                continue
+            turns = "; ".join(f"{t['side']} at ({problem.param2} = {t['p2']:.6g}, sigma = {t['sigma']:.5g})"
+                              for t in c["turns"]) or "none"
+            lines.append(f"- M = {w['M']} {side} {c['kind']} edge: {len(c['sigma'])} points, turning points / "
+                         f"stability changes: {turns}; ends at ({problem.param2} = {c['end']['p2']:.6g}, sigma = "
+                         f"{c['end']['sigma']:.5g}): {c['end']['note']}")
+    lines += ["", "Each continued edge checked across itself at every point of its curve up to the window's closing "
+              "(Newton at sigma (1 +- 1e-5) at the same "
+              f"{problem.param2}: a flip has a stable orbit on one side and an unstable one on the other, a graze a "
+              "stable orbit on one side and none with its contacts on the other; `edge_check` in chart.json):", ""]
+    for M, chk in res["edge_check"].items():
+        bad = chk["failed"]
+        lines.append(f"- M = {M}: {chk['confirmed']} of {chk['checked']} confirmed"
+                     + ("" if not bad else "; not confirmed: " + "; ".join(
+                         f"{b['side']} {b['kind']} at {problem.param2} = {b['p2']:.4g}, sigma = {b['sigma']:.5g} "
+                         f"(above: {b['above']}, below: {b['below']})" for b in bad[:6])))
+    lines += ["", "## Brute-force check: windows measured per value", "",
+              f"For {len(problem.values)} values, up/down scans of the FMU over sigma in [{g[0]:.3g}, {g[-1]:.3g}] "
+              f"({len(g)} points, geometric), every attractor seen shot by Newton to its edges (bisected to "
+              f"{problem.xtol_rel:g} x sigma). Where a window disappears is bracketed between neighbouring values.", "",
+              "| M | present at | disappears (bracket) | edge kinds at the last value | beta range |",
+              "|---|---|---|---|---|"]
+    for M, cv in res["scans"].items():
         pres = f"{len(cv['present_at'])} of {len(problem.values)}"
-        cl = ("null (present up to the end of the range searched, "
-              f"{cv['searched'][0]:g} to {cv['searched'][1]:g})" if cv["closes"] is None and cv["value"] else
-              "never present in the range searched" if cv["closes"] is None else
+        cl = ("present to the end" if cv["closes"] is None and cv["value"] else
+              "never present" if cv["closes"] is None else
               f"{cv['closes']:.4g} ([{cv['bracket'][0]:.4g}, {cv['bracket'][1]:.4g}])")
-        op = "-" if cv["opens"] is None else f"{cv['opens']:.4g} ([{cv['opens_bracket'][0]:.4g}, {cv['opens_bracket'][1]:.4g}])"
         kinds = "-" if not cv["value"] else f"{cv['kind_lower'][-1]}/{cv['kind_upper'][-1]}"
         b = [x for x in cv["beta"] if x is not None]
         br = "-" if not b else f"{min(b):.3g} to {max(b):.3g}"
-        lines.append(f"| {M} | {pres} | {cl} | {op} | {kinds} | {br} |")
-    lines += ["", "How each window closes: its lower and upper edges (kinds in the table) approach each other as "
-              f"{problem.param2} grows; the last value with the window and the width there:", ""]
-    for M, cv in res["curves"].items():
-        if cv["value"] and cv["closes"] is not None:
-            lo, hi = cv["lower"][-1], cv["upper"][-1]
-            width = "unbounded" if lo is None or hi is None else f"{hi - lo:.3g} ({(hi - lo) / lo:.2%} of sigma)"
-            lines.append(f"- M = {M}: at {problem.param2} = {cv['value'][-1]:g} the window is "
-                         f"[{lo if lo is None else format(lo, '.5g')}, {hi if hi is None else format(hi, '.5g')}] "
-                         f"({cv['kind_lower'][-1]}/{cv['kind_upper'][-1]}), width {width}; none at "
-                         f"{cv['bracket'][1]:g}.")
+        lines.append(f"| {M} | {pres} | {cl} | {kinds} | {br} |")
+    lines += ["", "Scans against the continued edges (at each scanned value, on the edge curves' first monotone "
+              "stretch; `scan_check` in chart.json):", ""]
+    for M, chk in res["scan_check"].items():
+        bad = chk["disagree"]
+        lines.append(f"- M = {M}: largest relative difference {chk['max_rel_diff']:.2g}; "
+                     + ("all within 1 %" if not bad else f"{len(bad)} edge(s) differ by more than 1 %: " + "; ".join(
+                         f"{problem.param2} = {b['p2']:.4g} {b['side']}: scan {b['scan']:.5g} ({b['scan_kind']}) vs "
+                         f"{b['continued']:.5g}" for b in bad[:6]) + (" ..." if len(bad) > 6 else "")))
     lines += ["", f"Other windows (more than one impact per period): {len(res['other_windows'])} found (chart.json).",
-              "", f"Backend: {res['backend']}; {res['seconds']:.1f} s wall, {sum(res['task_seconds']):.1f} s in tasks.",
-              "", f"Run: `impact-harness {command}`."]
+              "", f"Backend: {res['backend']}; scans {res['seconds']:.1f} s wall ({sum(res['task_seconds']):.1f} s in "
+              f"tasks); continuation {res['continuation_seconds']:.1f} s.", "", f"Run: `impact-harness {command}`."]
     return "\n".join(lines)
 
 
@@ -138,8 +196,9 @@ def chart(problem: ChartProblem, out: str | Path, fmu_path: str | None = None, b
                          "M_max": problem.M_max, "sigma_grid": [float(problem.sigma_grid[0]),
                                                                  float(problem.sigma_grid[-1]), len(problem.sigma_grid)]}
     (out / "chart.json").write_text(json.dumps(to_jsonable(res), indent=1) + "\n")
-    title = (f"Windows of the ODE (bands) and of maps (48)/(39) (lines) over (sigma, {problem.param2})\n"
-             + ", ".join(f"{k} = {v:.4g}" for k, v in problem.params.items() if isinstance(v, float)))
+    title = (f"Edges of the ODE's windows continued in (sigma, {problem.param2}) (thick), per-value scans (bands), "
+             f"maps (48)/(39) (thin)\n" + ", ".join(f"{k} = {v:.4g}" for k, v in problem.params.items()
+                                                     if isinstance(v, float) and k != problem.param2))
     plot_chart(res, problem, out / "chart.png", title)
     (out / "report.md").write_text(chart_report(res, problem, command) + "\n")
     return res
@@ -211,8 +270,8 @@ def cmd_chart(args: argparse.Namespace) -> int:
                     f"--range {args.range_}", f"--num {args.num}", *(["--log"] if args.log else []),
                     f"--M-max {args.M_max}", f"--solver {args.solver}", f"--out {args.out}"])
     res = chart(problem, args.out, args.fmu, args.backend, args.workers, args.scheduler, cmd)
-    for M, cv in res["curves"].items():
-        c = "null" if cv["closes"] is None else f"{cv['closes']:.4g}"
-        print(f"M = {M}: present at {len(cv['present_at'])}/{len(values)} values; closes at {c}")
+    for M, cl in res["closes"].items():
+        c = "null" if cl["closes"] is None else f"{cl['closes']:.6g} (sigma {cl['sigma']:.4g}): {cl['how']}"
+        print(f"M = {M}: closes at {c}")
     print(f"wrote {Path(args.out) / 'chart.json'}, chart.png, report.md ({time.perf_counter() - t0:.1f} s)")
     return 0

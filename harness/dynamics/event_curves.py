@@ -1,0 +1,429 @@
+"""Two-parameter continuation of the bifurcations of a periodic orbit: flip, fold and
+Neimark-Sacker curves in the plane of sigma and a second FMU parameter, graze curves beside them.
+
+A located event of a branch (:func:`harness.dynamics.continuation.continue_orbit`) is a point of a
+curve in the plane (sigma, p2).  Smooth events (flip, fold, NS) are continued on the extended
+system in the unknowns X = (w1, w2, s, q) / (1 + sigma, 1 + sigma, 1, 1), with s = ln sigma and
+q = p2 (ln p2 on a log axis):
+
+    F^M(w; sigma, p2) - w = 0            the period-M orbit (w: coordinates of .periodic_map)
+    phi(w; sigma, p2)     = 0            its test function: det(D + I) (flip), det(D - I) (fold),
+                                         det D - 1 with a complex pair (NS: |mu|^2 = det D)
+
+(the minimally augmented system of MatCont and BifurcationKit.jl, with the determinants as test
+functions since D(F^M) is 2 x 2), by pseudo-arclength: the tangent is the null vector of the
+3 x 4 Jacobian (SVD), the corrector Newton's method on the system bordered by the tangent.  The
+orbit's block of the Jacobian is exact (the FMU's variational equations: D(F^M), d/dsigma); the
+columns in p2 and the gradient of phi are central differences.
+
+Along a smooth-event curve, between accepted points:
+
+* a **turning point** in p2 (the tangent's p2 component changes sign) is located; when both edges
+  of a window lie on the curve, the window closes there (its two edges meet);
+* a change of the orbit's **contact pattern** ends the curve: a free passage of the orbit on the
+  curve reaches the wall, the event meets the orbit's graze curve (a codimension-two point);
+  beyond it the orbit with this pattern is virtual.  Located by bisection on the arclength, with
+  the gap (:meth:`PeriodMap.gap`) at the last good point as the check that it is a graze.
+
+A graze is not a smooth event of the FMU's flow: a free passage that penetrates the wall by d
+changes the orbit by ~sqrt(d) (the square-root singularity this project is about), so an
+extended system through the graze would be solved on a nonsmooth function.  Graze curves are
+therefore continued in p2 by natural continuation: at each value of p2 the graze is located on the
+branch in sigma (:func:`harness.dynamics.continuation.continue_orbit` from the previous graze's
+orbit, bisection on the contact pattern to ``locate_tol``), the step in p2 adapted to the change.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+
+from .periodic_map import MapEvaluation, PeriodMap
+from ..errors import HarnessInputError
+from ..fmu.simulator import Simulator
+
+__all__ = ["CurvePoint", "EventCurve", "PlaneMap", "continue_event", "significant_turns", "SMOOTH_KINDS"]
+
+SMOOTH_KINDS = ("flip", "fold", "ns")
+
+#: Residual of the corrector on the orbit (max |F^M(w) - w|) and on the test function.
+ORBIT_TOL = 1e-10
+TEST_TOL = 1e-9
+
+#: A gap (relative to 1 + sigma) below this where the corrector fails: the event meets a graze.
+GRAZE_GAP = 1e-5
+
+
+@dataclass
+class CurvePoint:
+    """A point of an event curve: X = (w / (1 + sigma), ln sigma, q), sigma, p2, the map's
+    evaluation there and the unit tangent in X."""
+
+    X: np.ndarray
+    sigma: float
+    p2: float
+    ev: MapEvaluation
+    tangent: np.ndarray
+
+    @property
+    def multipliers(self) -> np.ndarray:
+        return np.linalg.eigvals(self.ev.J).astype(complex)
+
+
+@dataclass
+class EventCurve:
+    """An event of a period-M orbit continued in (sigma, p2).
+
+    Attributes
+    ----------
+    kind : str
+        flip, fold, ns or graze.
+    M, impacts : int
+        Period and wall entries per period of the orbit.
+    param2 : str
+    sigma, p2 : ndarray
+        The curve, in continuation order.
+    points : ndarray (N, 2)
+        A stroboscopic point (u, v) at t = theta of the orbit at each point of the curve.
+    multipliers : ndarray complex (N, 2)
+    gaps : ndarray (N,)
+        Smallest distance to the wall of the orbit's free passages (inf: none).
+    turns : list of dict
+        Located turning points in p2: ``{"sigma", "p2", "side"}`` (side: "max" or "min").
+    end : dict
+        Why the curve stopped: ``{"reason", "sigma", "p2", "note"}``; reason "graze" (the orbit's
+        contact pattern changes: the event meets its graze curve), "range", "steps", "lost".
+    periods_run : int
+        FMU periods integrated.
+    """
+
+    kind: str
+    M: int
+    impacts: int
+    param2: str
+    sigma: np.ndarray
+    p2: np.ndarray
+    points: np.ndarray
+    multipliers: np.ndarray
+    gaps: np.ndarray
+    turns: list[dict[str, Any]] = field(default_factory=list)
+    end: dict[str, Any] = field(default_factory=dict)
+    periods_run: int = 0
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return {"kind": self.kind, "M": self.M, "impacts": self.impacts, "param2": self.param2,
+                "sigma": self.sigma.tolist(), "p2": self.p2.tolist(), "points": self.points.tolist(),
+                "multipliers": [[[float(m.real), float(m.imag)] for m in row] for row in self.multipliers],
+                "gaps": [None if not math.isfinite(g) else float(g) for g in self.gaps],
+                "turns": self.turns, "end": self.end, "periods_run": self.periods_run}
+
+
+class PlaneMap:
+    """F^M of the FMU over X = (w, ln sigma, q), with the test functions and their derivatives.
+
+    Parameters
+    ----------
+    pmap : PeriodMap
+        The period map in sigma (its ``params`` are updated with p2 at each evaluation).
+    param2 : str
+        The second parameter.
+    log2 : bool
+        q = ln p2 (True) or p2.
+    M : int
+    """
+
+    def __init__(self, pmap: PeriodMap, param2: str, log2: bool, M: int) -> None:
+        if pmap.param != "sigma":
+            raise HarnessInputError("--param", "event curves are continued in sigma and a second parameter")
+        if param2 in ("sigma", "u0", "v0", "wall", "solver", "contact", "sensitivities"):
+            raise HarnessInputError("--param2", f"{param2!r} cannot be the second parameter")
+        self.pmap, self.param2, self.log2, self.M = pmap, param2, log2, M
+        self.base = dict(pmap.params)
+
+    def p2(self, q: float) -> float:
+        return math.exp(q) if self.log2 else float(q)
+
+    def q(self, p2: float) -> float:
+        return math.log(p2) if self.log2 else float(p2)
+
+    @staticmethod
+    def scale(X: np.ndarray) -> float:
+        """c = 1 + sigma: the orbit's w is stored as w / c, since the orbit grows like the forcing
+        (so that steps in ln sigma are not throttled by the orbit's size at large sigma)."""
+        return 1.0 + math.exp(float(X[2]))
+
+    def w(self, X: np.ndarray) -> np.ndarray:
+        return np.asarray(X[:2]) * self.scale(X)
+
+    def evaluate(self, X: np.ndarray, derivatives: bool = True) -> MapEvaluation:
+        """F^M at X (in w coordinates), with D(F^M) and d/dsigma when ``derivatives``."""
+        self.pmap.params = {**self.base, self.param2: self.p2(float(X[3]))}
+        return self.pmap.evaluate(self.w(X), math.exp(float(X[2])), self.M, derivatives)
+
+    def test(self, kind: str, ev: MapEvaluation, X: np.ndarray) -> float:
+        """The event's test function at an evaluation."""
+        J = ev.J
+        if kind == "flip":
+            return float(np.linalg.det(J + np.eye(2)))
+        if kind == "fold":
+            return float(np.linalg.det(J - np.eye(2)))
+        if kind == "ns":
+            return float(np.linalg.det(J)) - 1.0
+        raise HarnessInputError("--kind", f"unknown event {kind!r} (flip, fold, ns)")
+
+    def residual(self, kind: str, X: np.ndarray) -> tuple[np.ndarray, MapEvaluation]:
+        ev = self.evaluate(X)
+        return np.append((ev.image - self.w(X)) / self.scale(X), self.test(kind, ev, X)), ev
+
+    def jacobian(self, kind: str, X: np.ndarray, ev: MapEvaluation) -> np.ndarray:
+        """3 x 4: the orbit's rows (exact in w and sigma, a central difference in q) and the test
+        function's gradient (central differences).  With c = 1 + sigma and w = c X[:2], the orbit's
+        residual (F^M(w) - w) / c has d/dX[:2] = D - I and d/d ln sigma = (sigma / c) ((D - I) X[:2] +
+        dF^M/dsigma - residual)."""
+        sigma = math.exp(float(X[2]))
+        c = 1.0 + sigma
+        A = np.zeros((3, 4))
+        A[:2, :2] = ev.J - np.eye(2)
+        res = (ev.image - self.w(X)) / c
+        A[:2, 2] = (sigma / c) * ((ev.J - np.eye(2)) @ X[:2] + ev.dp - res)
+        hq = 1e-6 * max(1.0, abs(float(X[3])))
+        e = np.zeros(4)
+        e[3] = hq
+        A[:2, 3] = (self.evaluate(X + e, False).image - self.evaluate(X - e, False).image) / (2.0 * hq * c)
+        for j, h in enumerate((1e-7, 1e-7, 1e-7, hq)):
+            e = np.zeros(4)
+            e[j] = h
+            fp = self.test(kind, self.evaluate(X + e), X + e)
+            fm = self.test(kind, self.evaluate(X - e), X - e)
+            A[2, j] = (fp - fm) / (2.0 * h)
+        return A
+
+
+def significant_turns(turns: list[dict[str, Any]], p2_end: float, rel: float = 1e-3) -> list[dict[str, Any]]:
+    """Drop turning points in p2 that are noise: a max and a min closer than ``rel`` (relative in
+    p2) to each other, or a last turn within ``rel`` of the curve's end.  Where a curve runs nearly
+    parallel to the sigma axis, the solver's tolerance (CVODE: ~1e-4 of p2 on a graze near an
+    asymptote) makes p2 wiggle; a real turn, where a window closes, moves p2 by far more."""
+    ext = [t for t in turns if t["side"] in ("max", "min")]
+    close = lambda a, b: abs(a - b) < rel * max(abs(a), 1e-300)  # noqa: E731
+    k = 0
+    while k < len(ext) - 1:
+        if close(ext[k]["p2"], ext[k + 1]["p2"]):
+            del ext[k:k + 2]
+            k = max(k - 1, 0)
+        else:
+            k += 1
+    if ext and close(ext[-1]["p2"], p2_end):
+        ext.pop()
+    keep = {id(t) for t in ext}
+    return [t for t in turns if t["side"] not in ("max", "min") or id(t) in keep]
+
+
+def _tangent(A: np.ndarray, prev: np.ndarray | None) -> np.ndarray:
+    t = np.linalg.svd(A)[2][-1]
+    if prev is not None and t @ prev < 0:
+        t = -t
+    return t
+
+
+def _same_pattern(a: np.ndarray, b: np.ndarray) -> bool:
+    return any(np.array_equal(np.roll(a, k), b) for k in range(len(a)))
+
+
+class _Corrector:
+    def __init__(self, plane: PlaneMap, kind: str) -> None:
+        self.plane, self.kind = plane, kind
+
+    def correct(self, X_pred: np.ndarray, t: np.ndarray, max_iter: int = 10) -> CurvePoint | None:
+        """Newton on the extended system bordered by the tangent; None when it fails."""
+        X = X_pred.copy()
+        for _ in range(max_iter):
+            H, ev = self.plane.residual(self.kind, X)
+            if not np.all(np.isfinite(H)) or ev.J is None:
+                return None
+            A = self.plane.jacobian(self.kind, X, ev)
+            B = np.vstack([A, t])
+            rhs = -np.append(H, t @ (X - X_pred))
+            try:
+                dX = np.linalg.solve(B, rhs)
+            except np.linalg.LinAlgError:
+                return None
+            if not np.all(np.isfinite(dX)):
+                return None
+            big = float(np.max(np.abs(dX)))
+            if big > 0.2:
+                dX *= 0.2 / big
+            X = X + dX
+            if (float(np.max(np.abs(H[:2]))) < ORBIT_TOL and abs(H[2]) < TEST_TOL and big < 1e-9):
+                ev = self.plane.evaluate(X)
+                return CurvePoint(X, math.exp(float(X[2])), self.plane.p2(float(X[3])), ev,
+                                  _tangent(self.plane.jacobian(self.kind, X, ev), t))
+        return None
+
+    def along(self, a: CurvePoint, ds: float) -> CurvePoint | None:
+        return self.correct(a.X + ds * a.tangent, a.tangent)
+
+
+def _start(corr: _Corrector, w0: np.ndarray, sigma0: float, p2_0: float, direction: float) -> CurvePoint:
+    plane = corr.plane
+    X0 = np.array([w0[0] / (1.0 + sigma0), w0[1] / (1.0 + sigma0), math.log(sigma0), plane.q(p2_0)])
+    H, ev = plane.residual(corr.kind, X0)
+    if not np.all(np.isfinite(H)):
+        raise HarnessInputError("--start", f"the FMU's map is not finite at sigma = {sigma0:g}")
+    t = _tangent(plane.jacobian(corr.kind, X0, ev), None)
+    if t[3] * direction < 0:
+        t = -t
+    pt = corr.correct(X0, t)
+    if pt is None:
+        raise HarnessInputError("--start", f"no {corr.kind} point of a period-{plane.M} orbit near sigma = "
+                                f"{sigma0:.10g}, {plane.param2} = {p2_0:g} (Newton on the extended system failed)")
+    if pt.tangent[3] * direction < 0:
+        pt.tangent = -pt.tangent
+    return pt
+
+
+def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int, sigma0: float, z0: Any,
+                   param2: str, p2_range: tuple[float, float], log2: bool = True, direction: float = 1.0,
+                   sigma_range: tuple[float, float] = (1e-3, 1e4), ds: float = 0.02, ds_min: float = 1e-7,
+                   ds_max: float = 0.25, max_points: int = 200, locate_tol: float = 1e-8, theta: float = 0.5,
+                   pmap: PeriodMap | None = None) -> EventCurve:
+    """Continue a flip, fold or NS point of a period-M orbit in (sigma, ``param2``).
+
+    Parameters
+    ----------
+    sim : Simulator
+        The FMU (``solver`` = 1 in ``params``: the closed form).
+    params : mapping
+        FMU parameters including the starting value of ``param2``.
+    kind : {"flip", "fold", "ns"}
+    M : int
+    sigma0 : float
+        The event's sigma (e.g. ``Event.value`` of a branch).
+    z0 : (u, v)
+        A stroboscopic point of the orbit there (``Event.point``).
+    param2 : str
+        The second parameter; ``p2_range`` its interval (the curve stops when it leaves it).
+    log2 : bool
+        Continue in ln p2 (the natural scale of Gamma).
+    direction : float
+        Sign of the first step in p2.
+    sigma_range : (float, float)
+        The curve stops when sigma leaves it.
+    ds, ds_min, ds_max : float
+        Arclength steps in X = (w, ln sigma, q).
+    max_points : int
+    locate_tol : float
+        Turning points and the end at a graze are located to this width in the arclength.
+    """
+    if kind not in SMOOTH_KINDS:
+        raise HarnessInputError("--kind", f"{kind!r} is not continued on the extended system (flip, fold, ns)")
+    p2_0 = float(params[param2])
+    lo2, hi2 = min(p2_range), max(p2_range)
+    if not lo2 <= p2_0 <= hi2:
+        raise HarnessInputError("--range", f"{param2} = {p2_0:g} lies outside [{lo2:g}, {hi2:g}]")
+    pmap = pmap or PeriodMap(sim, params, "sigma", theta)
+    plane = PlaneMap(pmap, param2, log2, M)
+    corr = _Corrector(plane, kind)
+    w0 = np.asarray(z0, dtype=float) - pmap.offset(sigma0)
+    a = _start(corr, w0, sigma0, p2_0, direction)
+    pattern = a.ev.contacts.copy()
+    pts = [a]
+    turns: list[dict[str, Any]] = []
+    end: dict[str, Any] = {"reason": "steps", "note": f"{max_points} steps done"}
+    step = abs(ds)
+    n = 0
+    while n < max_points:
+        if not (lo2 * (1 - 1e-9) <= a.p2 <= hi2 * (1 + 1e-9) and sigma_range[0] <= a.sigma <= sigma_range[1]):
+            end = {"reason": "range", "note": f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
+                   f"[{sigma_range[0]:g}, {sigma_range[1]:g}]"}
+            break
+        b = corr.along(a, step)
+        if b is not None and not _same_pattern(b.ev.contacts, pattern):
+            good, bad = _bisect_pattern(corr, a, step, pattern, locate_tol)
+            gap = pmap.gap(good.ev.points, good.ev.contacts, good.sigma)
+            pts.append(good)
+            end = {"reason": "graze", "note": f"the orbit's contacts per period change "
+                   f"({int(pattern.sum())} -> {'?' if bad is None else int(bad.ev.contacts.sum())}): the {kind} "
+                   f"meets the orbit's graze; gap at the last point {gap:.2e}"}
+            break
+        if b is None or float(b.tangent @ a.tangent) < 0.9:
+            step *= 0.5
+            if step < ds_min:
+                gap = pmap.gap(a.ev.points, a.ev.contacts, a.sigma)
+                if gap < GRAZE_GAP * (1.0 + a.sigma):
+                    # the corrector fails at the corner where the event meets the graze (the map is
+                    # nonsmooth there): the last point's free passage touches the wall
+                    end = {"reason": "graze", "note": f"the {kind} meets the orbit's graze (the corrector "
+                           f"stops at the corner; gap at the last point {gap:.2e})"}
+                else:
+                    end = {"reason": "lost", "note": f"corrector failed down to the step {ds_min:g} "
+                           f"(gap at the last point {gap:.2e}: not a graze)"}
+                break
+            continue
+        if a.tangent[3] * b.tangent[3] < 0:
+            turns.append(_locate_turn(corr, a, step, locate_tol))
+        pts.append(b)
+        a = b
+        n += 1
+        step = min(step * 1.5, ds_max)
+    last = pts[-1]
+    end.update({"sigma": last.sigma, "p2": last.p2})
+    turns = significant_turns(turns, last.p2)
+    return EventCurve(kind, M, int(pattern.sum()), param2, np.array([p.sigma for p in pts]),
+                      np.array([p.p2 for p in pts]), np.array([p.ev.points[0] for p in pts]),
+                      np.array([p.multipliers for p in pts]),
+                      np.array([pmap.gap(p.ev.points, p.ev.contacts, p.sigma) for p in pts]), turns, end,
+                      pmap.evaluations)
+
+
+def _bisect_pattern(corr: _Corrector, a: CurvePoint, step: float, pattern: np.ndarray,
+                    tol: float) -> tuple[CurvePoint, CurvePoint | None]:
+    """The last point with ``pattern`` before arclength ``step`` from ``a`` (bisection)."""
+    lo, hi, good, bad = 0.0, step, a, None
+    while hi - lo > tol:
+        mid = 0.5 * (lo + hi)
+        pt = corr.along(a, mid)
+        if pt is not None and _same_pattern(pt.ev.contacts, pattern):
+            lo, good = mid, pt
+        else:
+            hi, bad = mid, pt
+    return good, bad
+
+
+def _locate_turn(corr: _Corrector, a: CurvePoint, step: float, tol: float) -> dict[str, Any]:
+    """The turning point in p2 between ``a`` and arclength ``step``: the root of the tangent's
+    p2 component (Illinois method), oriented like ``a``'s tangent."""
+    def f(pt: CurvePoint) -> float:
+        t = pt.tangent if pt.tangent @ a.tangent >= 0 else -pt.tangent
+        return float(t[3])
+
+    lo, hi, flo = 0.0, step, float(a.tangent[3])
+    b = corr.along(a, step)
+    fhi = f(b) if b is not None else -flo
+    best, side = a, 0
+    for _ in range(60):
+        s = (lo * fhi - hi * flo) / (fhi - flo)
+        if not lo < s < hi:
+            s = 0.5 * (lo + hi)
+        pt = corr.along(a, s)
+        if pt is None:
+            break
+        fs = f(pt)
+        best = pt
+        if (fs > 0) == (flo > 0):
+            lo, flo = s, fs
+            if side == -1:
+                fhi *= 0.5
+            side = -1
+        else:
+            hi, fhi = s, fs
+            if side == 1:
+                flo *= 0.5
+            side = 1
+        if hi - lo < tol or abs(fs) < 1e-12:
+            break
+    return {"sigma": best.sigma, "p2": best.p2, "side": "max" if a.tangent[3] > 0 else "min",
+            "multipliers": [[float(m.real), float(m.imag)] for m in best.multipliers]}

@@ -1,0 +1,260 @@
+"""Graze curves of a periodic orbit in the plane of sigma and a second parameter.
+
+A graze (a free passage of the orbit reaching the wall) is not a smooth event of the FMU's flow:
+a passage that penetrates the wall by d changes the orbit by ~sqrt(d), so it is not continued on an
+extended system (:mod:`.event_curves` says why).  It is followed in the plane Y = (ln sigma, q)
+(q = ln p2 on a log axis) by steps along the curve's secant and a location across it: from the
+last graze point, a step of length h along the secant T of the last two points, then a bisection
+along the normal N on "Newton converges to an orbit with the same contact pattern", to a width
+``locate_tol``.  The gap of the last orbit with the pattern (:meth:`PeriodMap.gap`, which vanishes
+at a graze) must be below ``GAP_TOL``: a point where Newton merely failed is not a graze.  Being
+a step along the curve, not in p2, this passes turning points in p2 and follows a curve that runs
+off to large sigma.
+
+Along the curve the grazing orbit's multipliers are kept: where it loses stability, the graze
+curve crosses a flip or fold curve of the orbit; a window bounded by that edge and the graze closes
+there (located by bisection along the curve).  Turning points in p2 are recorded like those of
+:func:`harness.dynamics.event_curves.continue_event`.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from .event_curves import EventCurve, significant_turns
+from .periodic_map import MapEvaluation, PeriodMap, refine_orbit
+from ..fmu.simulator import Simulator
+
+__all__ = ["continue_graze", "GAP_TOL"]
+
+#: Largest gap (relative to 1 + sigma) of a located graze (after the secant steps on the gap, a
+#: graze has ~1e-12; Newton failing before it leaves ~1e-6, measured on period 2 at Gamma = 73).
+GAP_TOL = 1e-8
+
+#: Distances along the normal tried for a point with (inside) and without (outside) the pattern.
+_PROBES = (1e-5, 1e-4, 1e-3, 1e-2, 4e-2)
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    return any(np.array_equal(np.roll(a, k), b) for k in range(len(a)))
+
+
+class _Plane:
+    """The orbit with a fixed contact pattern at points Y = (ln sigma, q) of the plane."""
+
+    def __init__(self, pmap: PeriodMap, param2: str, of_q: Callable[[float], float], M: int,
+                 pattern: np.ndarray) -> None:
+        self.pmap, self.param2, self.of_q, self.M, self.pattern = pmap, param2, of_q, M, pattern
+        self.base = dict(pmap.params)
+
+    def orbit(self, Y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, MapEvaluation] | None:
+        self.pmap.params = {**self.base, self.param2: self.of_q(float(Y[1]))}
+        w1, ev, ok, _ = refine_orbit(self.pmap, w, math.exp(float(Y[0])), self.M)
+        return (w1, ev) if ok and _same(ev.contacts, self.pattern) else None
+
+    def gap(self, Y: np.ndarray, ev: MapEvaluation) -> float:
+        self.pmap.params = {**self.base, self.param2: self.of_q(float(Y[1]))}
+        return self.pmap.gap(ev.points, ev.contacts, math.exp(float(Y[0])))
+
+    def locate(self, P: np.ndarray, N: np.ndarray, w_guess: np.ndarray,
+               tol: float) -> tuple[np.ndarray, np.ndarray, MapEvaluation] | None:
+        """The graze on the line P + t N (N points inside): an inside and an outside point, then
+        bisection in t; None if either is missing or the end is not a graze."""
+        inside = None
+        for d in _PROBES:
+            found = self.orbit(P + d * N, w_guess)
+            if found is not None:
+                inside = (d, found)
+                break
+        if inside is None:
+            return None
+        t_in, (w, ev) = inside
+        t_out = None
+        for d in _PROBES:
+            if self.orbit(P - d * N, w) is None:
+                t_out = -d
+                break
+        if t_out is None:
+            return None
+        while t_in - t_out > tol:
+            mid = 0.5 * (t_in + t_out)
+            found = self.orbit(P + mid * N, w)
+            if found is not None:
+                t_in, (w, ev) = mid, found
+            else:
+                t_out = mid
+        return self.polish(P, N, t_in, w, ev, tol)
+
+    def polish(self, P: np.ndarray, N: np.ndarray, t_in: float, w: np.ndarray, ev: MapEvaluation,
+               tol: float) -> tuple[np.ndarray, np.ndarray, MapEvaluation] | None:
+        """Secant steps on the gap along P + t N from the bisection's inside end: the bisection
+        stops where Newton first fails, which near a graze can be a little before it (the map is
+        nonsmooth there); the gap, smooth on the inside, goes to 0 at the graze itself."""
+        g = self.gap(P + t_in * N, ev)
+        t_prev, g_prev = t_in + max(100.0 * tol, 1e-7), None
+        found = self.orbit(P + t_prev * N, w)
+        if found is not None:
+            g_prev = self.gap(P + t_prev * N, found[1])
+        for _ in range(8):
+            if g_prev is None or g <= 1e-12 * (1.0 + math.exp(float(P[0]))) or g_prev == g:
+                break
+            t_new = t_in - g * (t_in - t_prev) / (g - g_prev)
+            found = self.orbit(P + t_new * N, w)
+            if found is None:  # past the graze: stay inside
+                t_new = 0.5 * (t_in + t_new)
+                found = self.orbit(P + t_new * N, w)
+                if found is None:
+                    break
+            t_prev, g_prev = t_in, g
+            t_in, (w, ev) = t_new, found
+            g = self.gap(P + t_in * N, ev)
+        Y = P + t_in * N
+        if self.gap(Y, ev) > GAP_TOL * (1.0 + math.exp(float(Y[0]))):
+            return None  # Newton failed for another reason than a graze
+        return Y, w, ev
+
+
+def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: float, z_in: Any, sigma_out: float,
+                   param2: str, p2_range: tuple[float, float], log2: bool = True, direction: float = 1.0,
+                   h: float = 0.05, h_min: float = 1e-4, h_max: float = 0.3, max_points: int = 200,
+                   locate_tol: float = 1e-9, sigma_range: tuple[float, float] = (1e-3, 1e4),
+                   theta: float = 0.5) -> EventCurve:
+    """The graze curve of a period-M orbit in (sigma, ``param2``).
+
+    Parameters
+    ----------
+    sim, params
+        The FMU and its parameters (including the starting value of ``param2``).
+    M : int
+    sigma_in, z_in
+        A sigma where the orbit exists with its contact pattern, and a point of it (e.g. the last
+        point of a branch before its graze event, ``Event.value`` and ``Event.point``).
+    sigma_out : float
+        A sigma beyond the graze (the pattern lost), e.g. ``Event.value + Event.bracket``.
+    param2, p2_range, log2, direction
+        As in :func:`harness.dynamics.event_curves.continue_event`.
+    h, h_min, h_max : float
+        Steps along the curve in Y = (ln sigma, q).
+    locate_tol : float
+        Width of each location across the curve, in Y.
+
+    Returns
+    -------
+    EventCurve
+        kind "graze"; ``turns`` holds the turning points in p2 ("max"/"min") and where the grazing
+        orbit loses or gains stability ("loses"/"gains"); ``end`` why the curve stopped.
+    """
+    pmap = PeriodMap(sim, params, "sigma", theta)
+    to_q = (lambda p: math.log(p)) if log2 else float
+    of_q = math.exp if log2 else float
+    w_in = np.asarray(z_in, dtype=float) - pmap.offset(sigma_in)
+    w0, ev0, ok, _ = refine_orbit(pmap, w_in, sigma_in, M)
+    if not ok:
+        raise ValueError(f"no period-{M} orbit at sigma = {sigma_in:g} near the given point")
+    plane = _Plane(pmap, param2, of_q, M, ev0.contacts.copy())
+    q0 = to_q(float(params[param2]))
+    # the first point: bisection across the curve along ln sigma, between sigma_in and sigma_out
+    N = np.array([1.0 if sigma_in > sigma_out else -1.0, 0.0])
+    mid = np.array([0.5 * (math.log(sigma_in) + math.log(sigma_out)), q0])
+    t_in, t_out = abs(math.log(sigma_in / sigma_out)) / 2, -abs(math.log(sigma_in / sigma_out)) / 2
+    w, ev = w0, ev0
+    while t_in - t_out > locate_tol:
+        t = 0.5 * (t_in + t_out)
+        found = plane.orbit(mid + t * N, w)
+        if found is not None:
+            t_in, (w, ev) = t, found
+        else:
+            t_out = t
+    first = plane.polish(mid, N, t_in, w, ev, locate_tol)
+    if first is None:
+        raise ValueError(f"the period-{M} orbit's change between sigma = {sigma_in:.10g} and {sigma_out:.10g} "
+                         f"is not a graze (gap {plane.gap(mid + t_in * N, ev):.3g} at its last point)")
+    Ys, ws, evs = [first[0]], [first[1]], [first[2]]
+    T = np.array([0.0, 1.0 if direction > 0 else -1.0])  # first step along p2
+    turns: list[dict[str, Any]] = []
+    end: dict[str, Any] = {"reason": "steps", "note": f"{max_points} steps done"}
+    lo2, hi2 = min(p2_range), max(p2_range)
+    step = h
+
+    def stable(e: MapEvaluation) -> bool:
+        return bool(np.all(np.abs(np.linalg.eigvals(e.J)) < 1.0))
+
+    def normal(T_: np.ndarray) -> np.ndarray:
+        n = np.array([-T_[1], T_[0]])
+        return n if n @ N >= 0 else -n
+
+    def next_point(s: float) -> tuple[np.ndarray, np.ndarray, MapEvaluation] | None:
+        f = s / max(float(np.linalg.norm(Ys[-1] - Ys[-2])), 1e-300) if len(Ys) >= 2 else 0.0
+        w_guess = ws[-1] + f * (ws[-1] - ws[-2]) if len(Ys) >= 2 else ws[-1]
+        return plane.locate(Ys[-1] + s * T, normal(T), w_guess, locate_tol)
+
+    n = 0
+    while n < max_points:
+        res = next_point(step)
+        if res is None:
+            step *= 0.5
+            if step < h_min:
+                end = {"reason": "lost", "note": f"no graze found across the curve (step down to {h_min:g}): the "
+                       "orbit with this contact pattern ends"}
+                break
+            continue
+        Y, w, ev = res
+        if stable(ev) != stable(evs[-1]):
+            turns.append(_stability_change(next_point, step, stable(evs[-1]), of_q, locate_tol, stable))
+        T_new = (Y - Ys[-1]) / np.linalg.norm(Y - Ys[-1])
+        if T_new[1] * T[1] < 0 and len(Ys) >= 2:
+            turns.append({"sigma": float(math.exp(Ys[-1][0])), "p2": float(of_q(Ys[-1][1])),
+                          "side": "max" if T[1] > 0 else "min", "multipliers": _mults(evs[-1])})
+        N = normal(T_new)
+        T = T_new
+        Ys.append(Y)
+        ws.append(w)
+        evs.append(ev)
+        n += 1
+        p2, sg = of_q(float(Y[1])), math.exp(float(Y[0]))
+        if not (lo2 * (1 - 1e-9) <= p2 <= hi2 * (1 + 1e-9) and sigma_range[0] <= sg <= sigma_range[1]):
+            end = {"reason": "range", "note": f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
+                   f"[{sigma_range[0]:g}, {sigma_range[1]:g}]"}
+            break
+        step = min(step * 1.5, h_max)
+    plane.pmap.params = {**plane.base, param2: of_q(q0)}
+    sig = np.exp(np.array([Y[0] for Y in Ys]))
+    p2s = np.array([of_q(float(Y[1])) for Y in Ys])
+    end.update({"sigma": float(sig[-1]), "p2": float(p2s[-1])})
+    turns = significant_turns(turns, float(p2s[-1]))
+    mult = np.array([np.linalg.eigvals(e.J).astype(complex) for e in evs])
+    gaps = np.array([plane.gap(Y, e) for Y, e in zip(Ys, evs)])
+    plane.pmap.params = {**plane.base, param2: of_q(q0)}
+    return EventCurve("graze", M, int(plane.pattern.sum()), param2, sig, p2s, np.array([e.points[0] for e in evs]),
+                      mult, gaps, turns, end, pmap.evaluations)
+
+
+def _mults(ev: MapEvaluation) -> list[list[float]]:
+    return [[float(m.real), float(m.imag)] for m in np.linalg.eigvals(ev.J)]
+
+
+def _stability_change(next_point: Callable[[float], Any], step: float, stable_a: bool, of_q: Callable[[float], float],
+                      tol: float, stable: Callable[[MapEvaluation], bool]) -> dict[str, Any]:
+    """Bisection along the curve (the step from the last point) for where the grazing orbit's
+    stability changes."""
+    lo, hi = 0.0, step
+    best = None
+    for _ in range(50):
+        if hi - lo < max(tol, 1e-10):
+            break
+        mid = 0.5 * (lo + hi)
+        res = next_point(mid)
+        if res is None:
+            break
+        if stable(res[2]) == stable_a:
+            lo = mid
+        else:
+            hi = mid
+        best = res
+    if best is None:
+        return {"sigma": math.nan, "p2": math.nan, "side": "loses" if stable_a else "gains", "multipliers": []}
+    Y, _, ev = best
+    return {"sigma": float(math.exp(Y[0])), "p2": float(of_q(float(Y[1]))), "side": "loses" if stable_a else "gains",
+            "multipliers": _mults(ev)}
