@@ -29,7 +29,6 @@ run): both must agree with the closed form.
 from __future__ import annotations
 
 import math
-import re
 import shutil
 import subprocess
 
@@ -37,13 +36,12 @@ import numpy as np
 import pytest
 
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import FMU_PATH, ROOT, LoggedSlave, on_orbit
+from tests.fmu_support import EVENTS_LOG, FMU_PATH, ROOT, LoggedSlave, on_orbit
 from tests.test_fmu_events_total import BUDGET, allowance
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)
 NOFLOOR = ROOT / "build" / "nofloor"
-EVENTS_LOG = re.compile(r"(\d+) wall events in .*, (\d+) of them found by the grazing guard")
 
 # compliant, r = 0: every entry is at zero relative velocity (linear part, Gamma, sigma, phase)
 COMPLIANT = [(lin, Gamma, sigma, t0) for lin, Gamma in ((FIG9, 10.0), (UNDERDAMPED, 1000.0))

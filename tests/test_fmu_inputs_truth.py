@@ -18,8 +18,7 @@ import pytest
 
 from mapcheck.exact import forcing_amplitude_phase
 from mapcheck.inputs_reference import InputsReference, Piece, RefState
-from tests.fmu_support import WALLS, LoggedSlave
-from tests.test_fmu_grazing_guard import EVENTS_LOG
+from tests.fmu_support import EVENTS_LOG, WALLS, LoggedSlave
 
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)
 SOLVERS = pytest.mark.parametrize("solver", [0, 1], ids=["cvode", "closed-form"])
