@@ -787,6 +787,24 @@ static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char
         !finite_within(m->in_tau, 2 * CORE_MAX_TIME) || !isfinite(m->v_impact) ||
         !finite_within(m->t_impact, 2 * CORE_MAX_TIME))
         return "input derivatives or impact record not finite or out of range";
+    if (m->dF_ext != 0.0 || m->du_wall != 0.0) {
+        /* Ramps: only Co-Simulation takes input derivatives, and the inputs they give at the
+         * state's own time must lie in the inputs' ranges, as a value set there would (each
+         * field within its bound still allows a slope of 1e6 from a reference time 2e9 away) */
+        if (c->is_me) return "input derivatives in a Model Exchange state";
+        const unsigned vrs[2] = {VR_F_EXT, VR_U_WALL};
+        for (int i = 0; i < 2; ++i) {
+            const VarDef *d = find_var(c, vrs[i]);
+            const double x = i == 0 ? model_external_force(m, s->tau) : model_wall_position(m, s->tau);
+            const char *why = check_value(d, x, buf, n);
+            if (why) {
+                char tmp[200];
+                snprintf(tmp, sizeof tmp, "ramped input %s = %g at the state's time %s", d->name, x, why);
+                snprintf(buf, n, "%s", tmp);
+                return buf;
+            }
+        }
+    }
     if (!finite_within(s->start_time, CORE_MAX_TIME) ||
         !finite_within(s->me_time, 2 * CORE_MAX_TIME))
         return "start or Model Exchange time not finite or beyond 1e9";

@@ -321,8 +321,10 @@ EventResult model_event_update(ModelData *m, double tau, double y[2], int which)
  * - rigid, mass beyond the new wall position: it is placed on the wall and, if it moves towards
  *   the wall, the impact rule applies to its velocity relative to the wall (an impact, counted,
  *   with v_impact and t_impact); if it already moves away, it is placed without a rebound;
- * - rigid, sticking: the mass stays with the wall if the wall moved into it, and is released
- *   (at rest, in flight) if the wall moved away; then the holding force is checked again.
+ * - rigid, sticking: the mass stays with the wall if the wall moved into it (then the holding
+ *   force is checked again), and is released into free flight if the wall moved away, keeping
+ *   its velocity, the wall's velocity before the jump (velocity is continuous: the constraint
+ *   vanished, no impulse acted).
  * Never a silent penetration of the rigid wall, never a crossing the solver cannot locate. */
 int model_input_jump(ModelData *m, double tau, double y[2]) {
     if (m->wall == WALL_NONE) return 0;
@@ -343,8 +345,10 @@ int model_input_jump(ModelData *m, double tau, double y[2]) {
                 m->mode = MODE_FREE;
             }
         } else {
-            y[1] = 0.0; /* the wall went away: the mass is left at rest */
-            m->mode = MODE_FREE;
+            /* The wall went away. Only the constraint is gone, no force acted: the velocity is
+             * continuous, and the mass keeps the velocity it had riding the wall (y[1], the wall's
+             * velocity before the jump), whatever the wall's new velocity (issue 22). */
+            m->mode = MODE_FREE; /* the wall went away: y[1] is kept */
         }
     } else if (y[0] > w || (y[0] == w && y[1] > dw)) {
         if (y[1] - dw > 0.0) model_event_update(m, tau, y, 0); /* an impact */

@@ -47,7 +47,11 @@ static const double MAX_STEP = 0.05;
  * (model.c) that crosses by 1e-24 was not seen (r = 0 and chatter failures; LLNL/sundials#57).
  * Root values are therefore floored to this magnitude, keeping their sign: the products stay
  * >= 1e-300 and the located times are unchanged (the search works on signs). */
+#ifndef IMPACT_NO_ROOT_FLOOR
 static const double ROOT_FLOOR = 1e-150;
+#else /* tests only (CMake IMPACT_NO_ROOT_FLOOR): the second defence, rescue(), must then act */
+static const double ROOT_FLOOR = 0.0;
+#endif
 
 _Static_assert(SENS_NEQ <= 8, "Solver.y_next and y_stop hold SENS_NEQ components");
 

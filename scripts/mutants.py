@@ -61,8 +61,10 @@ PHYS = "tests/test_fmu_physics.py"
 SENS = "tests/test_fmu_sensitivities.py tests/test_harness_sensitivities.py"
 CF = "tests/test_fmu_closed_form.py"
 TRUTH = "tests/test_fmu_inputs_truth.py"
+GUARD = "tests/test_fmu_grazing_guard.py"
 # mutants that survived the first run (issue 22): the independent-truth tests that now kill them run first
-ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28")}
+ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28",
+                                "M52")}
 
 MUTANTS: tuple[Mutant, ...] = (
     # -- fmu_src/model.c: the physics ------------------------------------------------------------
@@ -93,9 +95,12 @@ MUTANTS: tuple[Mutant, ...] = (
        f"{PHYS} {EVENTS}", "rigid impacts counted twice"),
     _m("M10", "fmu_src/model.c", "m->v_impact = y[1] - dw;", "m->v_impact = y[1];", FMU_PORTS,
        "v_impact absolute instead of relative to the wall"),
-    _m("M11", "fmu_src/model.c", "y[1] = 0.0; /* the wall went away: the mass is left at rest */",
-       "y[1] = dw; /* the wall went away: the mass is left at rest */", FMU_PORTS,
-       "a sticking mass keeps the receding wall's velocity"),
+    _m("M11", "fmu_src/model.c", "m->mode = MODE_FREE; /* the wall went away: y[1] is kept */",
+       "y[1] = dw; m->mode = MODE_FREE; /* the wall went away: y[1] is kept */", FMU_PORTS,
+       "a sticking mass left by a wall that jumps away takes the wall's new velocity"),
+    _m("M52", "fmu_src/model.c", "m->mode = MODE_FREE; /* the wall went away: y[1] is kept */",
+       "y[1] = 0.0; m->mode = MODE_FREE; /* the wall went away: y[1] is kept */", FMU_PORTS,
+       "a sticking mass left by a wall that jumps away is left at rest (the rule before issue 22)"),
     _m("M12", "fmu_src/model.c", "if (y[1] - dw > 0.0) model_event_update(m, tau, y, 0); /* an impact */",
        "if (y[1] > 0.0) model_event_update(m, tau, y, 0); /* an impact */", FMU_PORTS,
        "wall jumping into the mass: impact decided on the absolute velocity"),
@@ -131,9 +136,9 @@ MUTANTS: tuple[Mutant, ...] = (
        "certified crossing search splits where there is no turning point"),
     # -- fmu_src/solver_cvode.c: CVODE driver ----------------------------------------------------
     _m("M25", "fmu_src/solver_cvode.c", "return (g != 0.0 && fabs(g) < ROOT_FLOOR) ? copysign(ROOT_FLOOR, g) : g;",
-       "return g;", EVENTS, "root values not floored (SUNDIALS' glo*ghi underflow loses shallow crossings)"),
+       "return g;", f"{GUARD} {EVENTS}", "root values not floored (SUNDIALS' glo*ghi underflow loses shallow crossings)"),
     _m("M26", "fmu_src/solver_cvode.c", "return dir[0] > 0 ? g[0] > 0.0 : g[0] < 0.0;", "return 0;",
-       f"{EVENTS} {PHYS}", "a step ending on the wrong side of the wall is never rescued"),
+       f"{GUARD} {EVENTS} {PHYS}", "a step ending on the wrong side of the wall is never rescued"),
     _m("M27", "fmu_src/solver_cvode.c", "if (model_release_now(m, s->tau)) s->events++;",
        "if (0) s->events++;", f"{EVENTS} {FMU_PORTS}", "a sticking mass is not released at a restart"),
     # -- fmu_src/fmu_core.c: bookkeeping ---------------------------------------------------------
@@ -207,6 +212,8 @@ MUTANTS: tuple[Mutant, ...] = (
     _m("M50", "fmu_src/sens.c", "        return; /* a leaving mass placed back beside the wall (model_event_update): no jump */",
        "        ; /* a leaving mass placed back beside the wall (model_event_update): no jump */", f"{TRUTH} {SENS}",
        "a placement without impact treated as a rigid impact in the saltation matrix"),
+    _m("M51", "fmu_src/solver_cvode.c", "if (locate_crossing(s, m, last_good_before(s, t), t) != 0) {",
+       "if (0) {", f"{GUARD} {EVENTS}", "a stepped-over crossing counted by the rescue but never located"),
 )
 
 
@@ -254,9 +261,10 @@ def run_one(m: Mutant, timeout: float) -> tuple[str, str, float]:
                                                            capture_output=True, text=True)
             if mk.returncode:
                 return "stillborn", (mk.stderr or mk.stdout).strip().splitlines()[-1:][0], time.monotonic() - t0
-            # the rest of build/ (the twin, the controller) is not rebuilt: link it
+            # the rest of build/ (the twin, the controller) is not rebuilt: link it (not the
+            # tests-only build without the root floor, which its test builds from the copy)
             for item in (ROOT / "build").iterdir():
-                if item.name != "fmu" and not (copy / "build" / item.name).exists():
+                if item.name not in ("fmu", "nofloor") and not (copy / "build" / item.name).exists():
                     (copy / "build" / item.name).symlink_to(item)
         else:
             (copy / "build").symlink_to(ROOT / "build")

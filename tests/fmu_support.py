@@ -5,6 +5,7 @@ in the harness cannot hide one in the FMU, and they capture the FMU's log messag
 """
 from __future__ import annotations
 
+import re
 import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,6 +21,8 @@ ROOT = Path(__file__).resolve().parents[1]
 FMU_PATH = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
 
 WALLS = {"none": 0, "compliant": 1, "rigid": 2}
+# the per-doStep line the FMU logs under logEvents (fmu_core.c, core_do_step)
+EVENTS_LOG = re.compile(r"(\d+) wall events in .*, (\d+) of them found by the grazing guard")
 
 
 @dataclass

@@ -91,12 +91,17 @@ def test_every_period_matches_the_closed_form(fmu, case, r):
         if err > BUDGET:  # only then is the (4 oracle runs) allowance worth computing
             assert err <= allowance(osc, x, t), (n, err, states[n + 1], exact[0])
         got = int(impacts[n + 1] - impacts[n])
-        if wall == "rigid" and 0.0 < r < 1.0:
-            # A Zeno sequence is truncated by sticking below 1e-9: its last impacts are set by
-            # the threshold and round-off, not the physics; allow one decade of velocity.
+        if got != int(count[0]):
+            # Exact everywhere but in a period where the closed form itself chatters: a Zeno
+            # sequence of rigid impacts (0 < r < 1) accumulating into sticking.  Its last impacts,
+            # below the sticking threshold's velocity (1e-9) by a decade or so, are set by the
+            # threshold and round-off (the FMU's and the closed form's truncations see the
+            # rebound velocity through different rounding), not by the physics: one decade of
+            # velocity, ln 10 / ln(1/r) impacts, is allowed there and nowhere else (one impact per
+            # period, a compliant wall, r = 0 or 1 cannot accumulate).
+            kinds = [k for _, k in osc.crossings(x[0], x[1], t, t + 1.0)]
+            assert wall == "rigid" and 0.0 < r < 1.0 and "stick" in kinds, (n, got, count, kinds)
             assert abs(got - int(count[0])) <= math.log(10) / math.log(1 / r), (n, got, count)
-        else:
-            assert got == int(count[0]), (n, got, count)
         total_exact += int(count[0])
     if case != "damped-rigid" or r > 0.0:
         assert total_exact > 0, "the case was meant to hit the wall"

@@ -224,3 +224,110 @@ def test_own_states_always_round_trip_after_reset():
         s.step_to(4.0)
     finally:
         s.close()
+
+
+# -- the input ramps (issue 22): F_ext, u_wall with their derivatives and reference time --------
+DF, DW = 0.3725, -0.0193  # distinct doubles, so that their place in the state is found
+
+
+@pytest.fixture
+def ramped():
+    """A CS instance between two steps with both ramps set (fmi2SetRealInputDerivatives), and
+    its serialised state; the offset of dF_ext in it.  ModelData holds F_ext, u_wall, dF_ext,
+    du_wall, in_tau in this order (model.h), so in_tau is 16 bytes after dF_ext."""
+    s = LoggedSlave(name="ramps")
+    s.start(wall=2, sigma=0.1, r=0.8, u0=-0.5, v0=1.0, F_ext=0.5, u_wall=0.1, **UNDERDAMPED)
+    s.step_to(2.37)
+    s.slave.setRealInputDerivatives([s.vr["F_ext"], s.vr["u_wall"]], [1, 1], [DF, DW])
+    st = s.slave.getFMUstate()
+    blob = s.slave.serializeFMUstate(st)
+    s.slave.freeFMUstate(st)
+    at = bytes(blob).find(struct.pack("<d", DF))
+    assert at > 0 and struct.unpack_from("<d", blob, at + 8)[0] == DW
+    yield s, blob, at
+    s.close()
+
+
+def _with(blob: bytes, offset: int, value: float) -> bytes:
+    b = bytearray(blob)
+    b[offset:offset + 8] = struct.pack("<d", value)
+    return reseal(b)
+
+
+def test_a_ramped_state_round_trips_and_runs_the_ramps(ramped):
+    """The state with ramps restores and the ramps act after it: the run from the restored state
+    equals the run that went on (the same instance's computation)."""
+    s, blob, _ = ramped
+    s.step_to(3.0)
+    want = (s.state().tolist(), s.get("F_ext"), s.get("u_wall"))
+    assert want[1] == pytest.approx(0.5 + DF * 0.63, rel=1e-12)  # the ramp ran over the step
+    st = s.slave.deSerializeFMUstate(blob)
+    s.slave.setFMUstate(st)
+    s.slave.freeFMUstate(st)
+    s.t = 2.37
+    s.step_to(3.0)
+    assert (s.state().tolist(), s.get("F_ext"), s.get("u_wall")) == want
+
+
+@pytest.mark.parametrize("field,delta,values", [
+    ("dF_ext", 0, [float("nan"), float("inf"), -float("inf"), 1.01e12, -2e12]),
+    ("du_wall", 8, [float("nan"), float("inf"), 1.01e6, -3e6]),
+    ("in_tau", 16, [float("nan"), -float("inf"), 2.1e9, -5e9]),
+])
+def test_each_ramp_field_out_of_range_is_refused(ramped, field, delta, values):
+    """Each ramp field set non-finite or beyond its bound (the input derivatives' bounds of
+    fmi2SetRealInputDerivatives, the time range for in_tau), the checksum resealed: refused,
+    the instance unchanged."""
+    s, blob, at = ramped
+    for x in values:
+        _refused(s, _with(blob, at + delta, x), "input derivatives or impact record")
+
+
+@pytest.mark.parametrize("delta,value", [(8, 1e6), (8, -1e6), (16, -1.9e9), (16, 1.9e9),
+                                         (0, 1e12)])
+def test_ramps_that_put_the_inputs_out_of_range_are_refused(ramped, delta, value):
+    """Each field within its own bound, but together they put u_wall (or F_ext) at the state's
+    time far outside its range (a slope of 1e6 from a reference time 2e9 away): refused, as
+    setting that value would be."""
+    s, blob, at = ramped
+    b = bytearray(blob)
+    b[at + delta:at + delta + 8] = struct.pack("<d", value)
+    if delta != 16:  # a slope alone: move the reference time far away too
+        b[at + 16:at + 24] = struct.pack("<d", -1.9e9)
+    _refused(s, reseal(b), "at the state's time")
+
+
+def test_a_model_exchange_state_with_ramps_is_refused():
+    """Model Exchange has no input derivatives: its own state with a ramp written in (resealed)
+    is refused, and the instance goes on from a good state."""
+    md = read_model_description(str(FMU_PATH))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    me = FMU2Model(guid=md.guid, unzipDirectory=extract(str(FMU_PATH)),
+                   modelIdentifier=md.modelExchange.modelIdentifier, instanceName="me-ramp")
+    msgs = []
+    from harness.fmu.fmi2_logging import Fmi2Callbacks
+
+    cb = Fmi2Callbacks(lambda _name, _status, _category, text: msgs.append(text))
+    me.instantiate(callbacks=cb.functions)
+    try:
+        me.setupExperiment(startTime=0.0)
+        me.enterInitializationMode()
+        me.setReal([vr["F_ext"]], [0.4321])
+        me.exitInitializationMode()
+        own = me.getFMUstate()
+        blob = me.serializeFMUstate(own)
+        at = bytes(blob).find(struct.pack("<d", 0.4321))
+        for delta in (16, 24):  # dF_ext, du_wall (ModelData: F_ext, u_wall, dF_ext, du_wall)
+            b = bytearray(blob)
+            b[at + delta:at + delta + 8] = struct.pack("<d", 0.01)
+            with pytest.raises(Exception):
+                me.deSerializeFMUstate(reseal(b))
+            assert "input derivatives in a Model Exchange state" in msgs[-1], msgs[-1]
+            me.setFMUstate(own)  # out of Error (FMI 2.0.4 2.1.3)
+        assert me.getReal([vr["F_ext"]]) == [0.4321]
+        me.freeFMUstate(own)
+        me.enterContinuousTimeMode()
+    finally:
+        me.terminate()
+        me.freeInstance()
+        cb.release()
