@@ -1009,7 +1009,7 @@ int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_a
     }
     if (c->s.events != events_before)
         core_log(c, CORE_OK, "logEvents", "%s: %ld wall events in (%.17g, %.17g], %ld of them "
-                 "found by the grazing guard", fn, c->s.events - events_before, t,
+                 "recovered by the rescue of a stepped-over crossing", fn, c->s.events - events_before, t,
                  solver_time(&c->s), c->s.guard_hits - guard_before);
     return CORE_OK;
 }

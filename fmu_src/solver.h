@@ -41,7 +41,7 @@ typedef struct {
     double t_next, y_next[8]; /* 8: room for SENS_NEQ (sens.h) */
     /* Counters since the start, for statistics and tests. */
     long events;
-    long guard_hits;  /* crossings the grazing guard (or the side check) recovered */
+    long guard_hits;  /* crossings stepped over and recovered by the rescue (the side check) */
     /* A wall event located by solver_advance_ex(stop_at_event) whose jump is not applied yet:
      * tau is the event time and the model holds the state at the crossing, before the jump. */
     int pending;

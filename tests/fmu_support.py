@@ -22,7 +22,7 @@ FMU_PATH = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
 
 WALLS = {"none": 0, "compliant": 1, "rigid": 2}
 # the per-doStep line the FMU logs under logEvents (fmu_core.c, core_do_step)
-EVENTS_LOG = re.compile(r"(\d+) wall events in .*, (\d+) of them found by the grazing guard")
+EVENTS_LOG = re.compile(r"(\d+) wall events in .*, (\d+) of them recovered by the rescue of a stepped-over crossing")
 
 
 @dataclass

@@ -5,7 +5,7 @@ The CVODE driver has two defences against a lost crossing: the root values are f
 mass restarted ON_WALL = 1e-300 off the wall that crosses by less than 1e-24), and every step end,
 communication point and turning point is checked for the wall side, a state on the wrong side being
 sent to ``rescue``, which locates the crossing and counts it in ``guard_hits`` (logged under
-logEvents as "... N of them found by the grazing guard").
+logEvents as "... N of them recovered by the rescue of a stepped-over crossing").
 
 With the floor in place the rescue is a backstop that no resolvable contact reaches: a search
 over 1e-12 .. 1e-4 deep grazing contacts at 25 phases, rtol 1e-12 .. 1e-4, both walls and both

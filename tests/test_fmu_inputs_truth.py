@@ -297,7 +297,7 @@ def test_a_sigma_change_that_ends_the_holding_force_releases_at_once(fmu, margin
             # input-jump rule releases the mass).  The release is the restart's, not a crossing
             # stepped over: were it left to the side check (solver_cvode.c, mutant M27), the
             # rescue would release the mass 4e-16 later, the same state, but the log would call
-            # it found by the grazing guard.
+            # it a rescued crossing.
             found = [EVENTS_LOG.search(m) for _, _, m in fmu.messages]
             assert [(int(f.group(1)), int(f.group(2))) for f in found if f][:1] == [(1, 0)]
     assert (t_switch, "release") in st.log  # the reference released at the switch
