@@ -1,23 +1,25 @@
 """``impact-harness chart``: the ODE's windows in the plane of sigma and a second parameter.
 
-For each value of the second parameter (``--param2``: Gamma, r, nu, Omega or any FMU parameter)
-the windows of the ODE are measured as ``windows`` does (:mod:`.ode_windows`: up/down scans over
-the whole sigma range, every attractor seen shot to its edges by Newton on the FMU); the edges of
-the stable maximal period-M windows (one impact per period) are joined across the values into
-curves, one per edge, labelled by their kind (flip, fold, torus, graze, ...).  This is a 1-D
-continuation per value of the second parameter joined into curves, not a continuation of the
-events in two parameters: a window's closing is bracketed between two neighbouring values, not
-located on the extended system.
+Two measurements, the second checking the first:
+
+1. **Continuation** (:mod:`.chart_curves`): at the first value of the second parameter (``--param2``:
+   Gamma, r, nu, Omega or any FMU parameter) the stable maximal windows (one impact per period,
+   M <= M_max) are found from the ODE, each continued in sigma to its edges, and every edge is
+   continued in (sigma, p2): flip/fold/NS on the extended system, grazes located across the curve.
+   Where each window closes (``closes`` per M, with how) is where its edges meet; every point of
+   every edge curve is then checked across itself (``edge_check``).
+2. **Scans per value** (the brute-force check): for each value of p2 the windows are measured
+   from scratch as ``windows`` does (:mod:`.ode_windows`: up/down scans over sigma, every attractor
+   seen shot to its edges); ``scans`` per M, joined across the values, and ``scan_check``: where
+   they differ from the continued edges by more than 1 %.
 
 Beside the ODE: the windows of the low-velocity compliant map (48) and of the hard-wall map (39)
-(both with A~(sigma)), and beta = r v_c kappa / |A~| of (43) along the orbits (kappa^2 = Gamma
-Omega^2; v_c the impact velocity of the ODE's orbit at the window's seed), so that the chart
-shows where each map holds (beta << 1: (48); beta >> 1: (39)).
+(both with A~(sigma)), and beta = r v_c kappa / |A~| of (43) along the scanned orbits
+(kappa^2 = Gamma Omega^2; v_c the impact velocity of the ODE's orbit at the window's seed), so that
+the chart shows where each map holds (beta << 1: (48); beta >> 1: (39)).
 
-Output in DIR: ``chart.json`` (per M: the curves as arrays over the second parameter, and
-``closes``: the value where the window disappears, bracketed, or null with the range searched),
-``chart.png``, ``report.md``.  The values run in parallel on the harness's backends (processes,
-or Dask with ``--scheduler``).
+Output in DIR: ``chart.json``, ``chart.png``, ``report.md``.  The scans run in parallel on the
+harness's backends (processes, or Dask with ``--scheduler``); the continuation in the main process.
 """
 from __future__ import annotations
 

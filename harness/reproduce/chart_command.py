@@ -206,9 +206,11 @@ def chart(problem: ChartProblem, out: str | Path, fmu_path: str | None = None, b
 
 def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     """Add the ``chart`` subcommand."""
-    p = sub.add_parser("chart", help="windows of the ODE over (sigma, a second parameter), maps (48)/(39) beside them",
-                       description="For each value of --param2, the ODE's windows (scans over sigma, every attractor "
-                       "shot to its edges); the edges joined into curves per period M; chart.json, chart.png, report.md.")
+    p = sub.add_parser("chart", help="where the ODE's windows close over (sigma, a second parameter): edges continued, maps (48)/(39) beside",
+                       description="The stable maximal windows found at the start of --range, their edges continued "
+                       "in (sigma, --param2) and where each window closes, and how; every edge point checked across "
+                       "itself; the windows measured again from scratch at --num values (the brute-force check); "
+                       "chart.json, chart.png, report.md.")
     p.add_argument("--config", help="TOML with a [model] table (nu, Omega, r, Gamma, wall), e.g. "
                    "harness/experiments/fig9.toml")
     for k in ("nu", "Omega", "r", "Gamma"):
