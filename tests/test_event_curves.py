@@ -213,3 +213,19 @@ def test_noise_turns_are_dropped_and_real_ones_kept() -> None:
     real = [t(1652.58, "max"), t(1575.04, "min"), t(1575.0418, "max"), {"p2": 1600.0, "side": "loses", "sigma": 2.0}]
     kept = significant_turns(real, 1574.93)
     assert [x["side"] for x in kept] == ["max", "loses"] and kept[0]["p2"] == 1652.58
+
+
+def test_a_flip_curve_in_r_on_a_linear_axis(sim, fig9) -> None:
+    """Any FMU parameter as the second one, on a linear axis: Figure 9's period-2 flip continued in
+    the restitution coefficient r; its points are flips of the exact flow at their r."""
+    flip, _ = _edges(sim, fig9, 0.5, 2)
+    fc = continue_event(sim, fig9, "flip", 2, flip.value, flip.point, "r", (0.5, 0.95), False, -1.0,
+                        sigma_range=(5e-3, 50.0), max_points=15, ds_max=0.05)
+    # the flip moves fast in sigma as r drops (rho of (48) goes like 1 / (1 - r)^2)
+    assert fc.p2[0] == pytest.approx(0.9) and np.all(np.diff(fc.p2) < 0) and fc.p2[-1] < 0.89
+    assert fc.sigma[-1] > 1.5 * fc.sigma[0]
+    for i in (len(fc.p2) // 2, len(fc.p2) - 1):
+        p = {**fig9, "r": float(fc.p2[i])}
+        _, orb = exact_orbit(p, float(fc.sigma[i]), fig9["Gamma"], fc.points[i], 2)
+        assert orb.converged and int(np.sum(orb.contacts)) == 1
+        assert np.min(np.abs(orb.multipliers + 1.0)) < 2e-4, (fc.p2[i], fc.sigma[i], orb.multipliers)
