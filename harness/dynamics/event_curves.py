@@ -28,9 +28,9 @@ Along a smooth-event curve, between accepted points:
 A graze is not a smooth event of the FMU's flow: a free passage that penetrates the wall by d
 changes the orbit by ~sqrt(d) (the square-root singularity this project is about), so an
 extended system through the graze would be solved on a nonsmooth function.  Graze curves are
-therefore continued in p2 by natural continuation: at each value of p2 the graze is located on the
-branch in sigma (:func:`harness.dynamics.continuation.continue_orbit` from the previous graze's
-orbit, bisection on the contact pattern to ``locate_tol``), the step in p2 adapted to the change.
+followed by :func:`harness.dynamics.graze_curves.continue_graze` instead: a step along the curve,
+then the graze located across it on the smooth side (bisection on the contact pattern, then secant
+steps on the gap).
 """
 from __future__ import annotations
 

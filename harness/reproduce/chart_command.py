@@ -112,7 +112,8 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
              f"intervals where the attractors change or none is periodic; {cs['transient']} periods of transient), each continued in "
              "sigma to its edges; every edge is continued in (sigma, "
              f"{problem.param2}): flip/fold/NS on the extended system (orbit + test function, pseudo-arclength), "
-             "grazes by natural continuation with each graze located by bisection. A window closes where its edges "
+             "grazes stepped along the curve and located across it (bisection, then secant steps on the gap). "
+             "A window closes where its edges "
              "meet (a turning point of an edge curve, a flip meeting the graze) or where its lower edge leaves the "
              "sigma range upward.", "",
              f"| M | window at {problem.param2} = {problem.values[0]:g} | closes at {problem.param2} | sigma there | how |",
