@@ -5,8 +5,8 @@ period) are found by the ODE alone (:func:`harness.dynamics.attractors.find_attr
 sigma grid), each is continued in sigma both ways (:func:`harness.dynamics.continuation.continue_orbit`)
 and its first event on each side is the window's edge (flip, fold, NS, graze or stick; none when
 the branch leaves the range stable).  Each edge is then continued in (sigma, p2): flip, fold and NS
-on their extended system (:func:`harness.dynamics.event_curves.continue_event`), grazes by natural
-continuation (:func:`harness.dynamics.graze_curves.continue_graze`).
+on their extended system (:func:`harness.dynamics.event_curves.continue_event`), grazes stepped along
+the curve and located across it (:func:`harness.dynamics.graze_curves.continue_graze`).
 
 A window closes where its edges meet, the first of (in p2):
 
