@@ -31,6 +31,12 @@ def _run(args: list[str]) -> tuple[float, dict]:
     return wall, json.loads((out / "chart.json").read_text())
 
 
+def _checked(res: dict) -> str:
+    n = sum(c["checked"] for c in res["edge_check"].values())
+    ok = sum(c["confirmed"] for c in res["edge_check"].values())
+    return f"{ok} of {n} confirmed"
+
+
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--num", type=int, default=30)
@@ -51,6 +57,11 @@ def main() -> int:
     per_cf = sum(cf["task_seconds"]) / len(cf["task_seconds"])
     per_cv = sum(cv["task_seconds"]) / len(cv["task_seconds"])
     closes = cf["closes"]
+
+    def fmt(c: dict) -> str:
+        return "null" if c["closes"] is None else f"{c['closes']:.10g}"
+
+    cv_closes = ", ".join(f"M = {M}: {fmt(c)} (closed form {fmt(cf['closes'][M])})" for M, c in cv["closes"].items())
     text = f"""<!-- chart:begin -->
 ## Soft-to-hard chart (issue 18): `impact-harness chart`
 
@@ -69,6 +80,9 @@ CVODE / closed form per scanned value: {per_cv / per_cf:.1f}x. Goal: the {a.num}
 (two-parameter continuation of its edges; null: not closing in the range, see chart.json):
 
 {chr(10).join(f'- M = {M}: ' + ('null, ' + (c.get('note') or 'searched to the end of the range') if c['closes'] is None else f"Gamma = {c['closes']:.6g} at sigma = {c['sigma']:.5g}: {c['how']}") for M, c in closes.items())}
+
+The same with CVODE (M <= 2): {cv_closes}.
+Every point of every edge curve checked across itself (`edge_check`): closed form {_checked(cf)}; CVODE {_checked(cv)}.
 Picture: docs/img/soft_to_hard.png.
 <!-- chart:end -->"""
     write_section(ROOT / "BENCHMARKS.md", text)

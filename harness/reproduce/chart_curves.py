@@ -277,7 +277,9 @@ def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Seq
                 sides = []
                 for sgn in (1.0, -1.0):
                     s = s_e * (1.0 + sgn * d)
-                    _, ev, ok, _ = refine_orbit(pmap, np.asarray(z, float) - pmap.offset(s), s, M)
+                    # the residual relative to the orbit's size (1 + sigma), as on the curve itself:
+                    # an absolute 1e-10 is below CVODE's accuracy on an orbit of size 1e3
+                    _, ev, ok, _ = refine_orbit(pmap, np.asarray(z, float) - pmap.offset(s), s, M, tol=1e-10 * (1.0 + s))
                     same = ok and int(ev.contacts.sum()) == c["impacts"]
                     sides.append((same, same and bool(np.all(np.abs(np.linalg.eigvals(ev.J)) < 1.0))))
                 (a_same, a_stable), (b_same, b_stable) = sides
