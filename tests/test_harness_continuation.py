@@ -246,3 +246,22 @@ def test_fold_flip_ns_on_maps_with_known_bifurcations() -> None:
     ns = continue_orbit(_mapping(rot, drot), {}, 1, 0.0, o({"sigma": 0.0}), p_range=(-0.4, 1.0), direction=1)
     found = [e for e in ns.events if e.kind == "ns"]
     assert found and abs(found[0].value - 0.5) < 1e-8 and abs(abs(found[0].multipliers[0]) - 1.0) < 1e-8
+
+
+def test_newton_steps_into_a_rigid_wall_are_failed_steps_not_errors(sim, model) -> None:
+    """A Newton iterate inside a rigid wall is not a state (the FMU refuses it at initialization).
+    It used to end find_attractors with an error (nu = 0.5, Omega = 1, r = 0.5, rigid: u0 = 0.077
+    inside the wall); now it is a failed evaluation and the search goes on."""
+    from harness.dynamics.periodic_map import PeriodMap, refine_orbit
+
+    p = {**model.defaults(), "nu": 0.5, "Omega": 1.0, "r": 0.5, "wall": 2, "solver": 1}
+    pmap = PeriodMap(sim, p, "sigma", THETA)
+    inside = np.array([0.077, -0.8]) - pmap.offset(1.0)
+    ev = pmap.evaluate(inside, 1.0, 1)
+    assert not np.any(np.isfinite(ev.image)) and not np.any(np.isfinite(ev.J))
+    assert not refine_orbit(pmap, inside, 1.0, 1)[2]
+    scan = find_attractors(sim, p, np.geomspace(0.05, 20.0, 9), M_max=3, transient=300)
+    assert "P3/1" in {a.label for a in scan.attractors}
+    for a in scan.attractors:  # what it finds is the exact flow's orbit
+        orb = closed_form_orbit(p, a.value, a.points[0], a.period)
+        assert orb.converged and _rotations_match(a.points, orb.z, 1e-7)
