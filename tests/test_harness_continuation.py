@@ -265,3 +265,24 @@ def test_newton_steps_into_a_rigid_wall_are_failed_steps_not_errors(sim, model) 
     for a in scan.attractors:  # what it finds is the exact flow's orbit
         orb = closed_form_orbit(p, a.value, a.points[0], a.period)
         assert orb.converged and _rotations_match(a.points, orb.z, 1e-7)
+
+
+def test_an_impact_added_to_a_chatter_is_located_not_lost(sim, model) -> None:
+    """On a rigid wall a flight between two impacts of one period can reach the wall again (an
+    impact added to the chatter); the gap of the free periods does not see it and the corrector
+    just fails there.  It used to end the branch as 'orbit lost'; the flow beyond now says the
+    contacts changed, and the event is located.  Truth: the exact flow on both sides."""
+    p = {**model.defaults(), "nu": 1.0, "Omega": 10.0, "r": 0.3, "wall": 2, "solver": 1}
+    a = _seed(sim, p, 2.0, 1)
+    assert a.label == "P1/3"
+    br = continue_orbit(sim, p, 1, 2.0, a.points[0], "sigma", (1.0, 3.0), 1.0, ds_max=0.1)
+    (e,) = [e for e in br.events if e.kind == "graze"]
+    assert 2.2 < e.value < 2.3 and e.bracket < 1e-7
+    below = closed_form_orbit(p, e.value * (1 - 1e-7), e.point, 1)
+    assert below.converged and int(np.sum(below.contacts)) == 3
+    ex = ExactOscillator(p["nu"], p["Omega"], e.value * (1 + 1e-4), p["r"], 10.0, "rigid")
+    z = np.asarray(e.point, dtype=float)
+    for _ in range(60):  # the exact flow just beyond settles with one more impact per period
+        u, v, c = ex.state_at(z[0], z[1], THETA, THETA + 1.0)
+        z = np.array([u, v])
+    assert c == 4

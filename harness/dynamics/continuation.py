@@ -130,14 +130,15 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
         labels.append(kind)
         events.append(Event(kind, pt.p, len(pts) - 1, pt.mult, pt.ev.points[0], bracket, note))
 
-    def _graze(good: BranchPoint, bracket: float, bad: BranchPoint | None) -> bool:
+    def _graze(good: BranchPoint, bracket: float, bad: BranchPoint | None, n_beyond: int | None = None) -> bool:
         """Record a graze at ``good``; switch to the orbit with the new contact count if it
         exists (True: the branch ends here)."""
         nonlocal a, end_note, steps
         n_old = int(a.ev.contacts.sum())
         rigid = int(pmap.params.get("wall", 0)) == 2
         kind = "graze"
-        if bad is not None and rigid and int(bad.ev.contacts.sum()) >= STICK_IMPACTS:
+        n_new = int(bad.ev.contacts.sum()) if bad is not None else n_beyond
+        if rigid and n_new is not None and n_new >= STICK_IMPACTS:
             kind = "stick"
         nxt = _new_contact_orbit(cont, good, bad) if follow_grazing else None
         if nxt is not None and any(np.array_equal(np.roll(nxt.ev.contacts, k), good.ev.contacts) for k in range(M)):
@@ -172,12 +173,16 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
             good, bracket, bad = cont.locate_contact_change(a, ds)
             # a vanishing gap of a free passage, or a contact becoming grazing (its multipliers
             # diverge like 1/sqrt(depth): the square-root singularity)
+            # or, on a rigid wall, the chatter of one contact completing into sticking (the
+            # contacts jump to >= STICK_IMPACTS: the sticking onset, where the map is nonsmooth too)
+            n_beyond = _contacts_beyond(pmap, good, bracket, M) if good is not a else None
+            changed = n_beyond is not None and n_beyond != int(good.ev.contacts.sum())
             if good is not a and (pmap.gap(good.ev.points, good.ev.contacts, good.p) < GRAZE_GAP
-                                  or float(np.abs(good.mult).max()) > GRAZE_MULTIPLIER):
+                                  or float(np.abs(good.mult).max()) > GRAZE_MULTIPLIER or changed):
                 trial = good
                 if trial.tangent @ a.tangent < 0:
                     trial.tangent = -trial.tangent
-                stop = _graze(good, bracket, bad)
+                stop = _graze(good, bracket, bad, n_beyond)
                 if stop:
                     break
                 continue
@@ -237,6 +242,18 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
     last = pts[-1]
     events.append(Event("end", last.p, len(pts) - 1, last.mult, last.ev.points[0], 0.0, end_note))
     return _branch(pmap, M, pts, labels, events)
+
+
+def _contacts_beyond(pmap: PeriodMap, good: BranchPoint, bracket: float, M: int) -> int | None:
+    """Contacts per M periods of the flow started on the last good orbit just beyond it (in the
+    direction of continuation), after one M-period transient.  Where the corrector fails at a
+    contact change that the gap does not see (a flight between two impacts of one period reaching
+    the wall again: an impact added to a chatter; or the chatter completing into sticking), the
+    flow itself says the contacts changed.  None when the run is not finite."""
+    step = 2.0 * max(bracket, 1e-9 * max(1.0, abs(good.p)))
+    p = good.p + math.copysign(step, float(good.tangent[2]))
+    pts, cont = pmap.run(p, good.ev.points[0], 2 * M)
+    return int(cont[-M:].sum()) if np.all(np.isfinite(pts)) else None
 
 
 def _flip_of_half(cont: ArclengthCorrector, a: BranchPoint, b: BranchPoint, m: int) -> tuple[BranchPoint, float]:

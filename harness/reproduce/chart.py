@@ -210,7 +210,7 @@ def run_chart(problem: ChartProblem, source: Any, backend: Any = None, workers: 
                         problem.log, problem.sigma_grid, problem.M_max, problem.theta)
     out["windows"], out["closes"], out["continuation_search"] = cont["windows"], cont["closes"], cont["search"]
     out["scan_check"] = scan_check(cont["windows"], out["scans"])
-    out["edge_check"] = edge_check(source, problem.params, problem.param2, cont["windows"], problem.theta)
+    out["edge_check"] = edge_check(source, problem.params, problem.param2, cont["windows"], problem.log, problem.theta)
     out["continuation_seconds"] = time.perf_counter() - t1
     out["maps"] = map_overlays(problem)
     out["backend"] = be.describe()

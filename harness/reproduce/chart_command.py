@@ -141,15 +141,15 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
                          f"stability changes: {turns}; ends at ({problem.param2} = {c['end']['p2']:.6g}, sigma = "
                          f"{c['end']['sigma']:.5g}): {c['end']['note']}")
     lines += ["", "Each continued edge checked across itself at every point of its curve up to the window's closing "
-              "(Newton at sigma (1 +- 1e-5) at the same "
-              f"{problem.param2}: a flip has a stable orbit on one side and an unstable one on the other, a graze a "
+              "(Newton 1e-5 away on either side, across the curve "
+              f"in (ln sigma, {'ln ' if problem.log else ''}{problem.param2}): a flip has a stable orbit on one side and an unstable one on the other, a graze a "
               "stable orbit on one side and none with its contacts on the other; `edge_check` in chart.json):", ""]
     for M, chk in res["edge_check"].items():
         bad = chk["failed"]
         lines.append(f"- M = {M}: {chk['confirmed']} of {chk['checked']} confirmed"
                      + ("" if not bad else "; not confirmed: " + "; ".join(
                          f"{b['side']} {b['kind']} at {problem.param2} = {b['p2']:.4g}, sigma = {b['sigma']:.5g} "
-                         f"(above: {b['above']}, below: {b['below']})" for b in bad[:6])))
+                         f"(one side: {b['one_side']}, other: {b['other_side']})" for b in bad[:6])))
     lines += ["", "## Brute-force check: windows measured per value", "",
               f"For {len(problem.values)} values, up/down scans of the FMU over sigma in [{g[0]:.3g}, {g[-1]:.3g}] "
               f"({len(g)} points, geometric), every attractor seen shot by Newton to its edges (bisected to "

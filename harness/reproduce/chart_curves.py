@@ -248,35 +248,41 @@ def scan_check(windows: Sequence[Mapping[str, Any]], scans: Mapping[str, Any], r
 
 
 def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Sequence[Mapping[str, Any]],
-               theta: float = 0.5, d: float = 1e-5) -> dict[str, Any]:
+               log2: bool = True, theta: float = 0.5, d: float = 1e-5) -> dict[str, Any]:
     """Check the continued edges across themselves, at every point of every edge curve.
 
-    At a point (sigma_e, p2) of a curve, the orbit is solved by Newton (from the curve's own point)
-    at sigma_e (1 +- d), at the same p2: a flip/fold/NS point must have a stable orbit on one side
-    and an unstable one with the same contacts on the other; a graze point a stable orbit on one
-    side and no orbit with its contacts on the other.  Points beyond the window's closing (where
-    the edge no longer bounds a window) are not checked.  Returns per M:
+    At a point of a curve, the orbit is solved by Newton (from the curve's own point) at the two
+    points d away across the curve (along its normal in the plane (ln sigma, q), q = ln p2 on a
+    log axis; the tangent from the neighbouring points): a flip/fold/NS point must have a stable
+    orbit on one side and an unstable one with the same contacts on the other; a graze point a
+    stable orbit on one side and no orbit with its contacts on the other.  Points beyond the
+    window's closing (where the edge no longer bounds a window) are not checked.  Returns per M:
     ``{"checked", "confirmed", "failed": [...]}``.
     """
     from ..dynamics.periodic_map import PeriodMap, refine_orbit
     from ..fmu.simulator import FmuSimulator
 
     sim = FmuSimulator(source, instance_name="chart-edge-check")
+    to_q, of_q = (np.log, np.exp) if log2 else (np.asarray, np.asarray)
     out: dict[str, Any] = {}
     for w in windows:
         M, closes = w["M"], w["closing"]["closes"]
         rep = out.setdefault(str(M), {"checked": 0, "confirmed": 0, "failed": []})
         for side in ("lower", "upper"):
             c = w["curves"].get(side)
-            if not c or "failed" in c:
+            if not c or "failed" in c or len(c["sigma"]) < 2:
                 continue
-            for s_e, v, z in zip(c["sigma"], c["p2"], c["points"]):
-                if closes is not None and v > closes * (1.0 - 1e-3):
+            Y = np.column_stack([np.log(np.asarray(c["sigma"], float)), to_q(np.asarray(c["p2"], float))])
+            for i, z in enumerate(c["points"]):
+                if closes is not None and c["p2"][i] > closes * (1.0 - 1e-3):
                     continue
-                pmap = PeriodMap(sim, {**params, param2: float(v)}, "sigma", theta)
+                t = Y[min(i + 1, len(Y) - 1)] - Y[max(i - 1, 0)]
+                n = np.array([-t[1], t[0]]) / np.linalg.norm(t)
                 sides = []
                 for sgn in (1.0, -1.0):
-                    s = s_e * (1.0 + sgn * d)
+                    ls, q = Y[i] + sgn * d * n
+                    s, v = float(np.exp(ls)), float(of_q(q))
+                    pmap = PeriodMap(sim, {**params, param2: v}, "sigma", theta)
                     # the residual relative to the orbit's size (1 + sigma), as on the curve itself:
                     # an absolute 1e-10 is below CVODE's accuracy on an orbit of size 1e3
                     _, ev, ok, _ = refine_orbit(pmap, np.asarray(z, float) - pmap.offset(s), s, M, tol=1e-10 * (1.0 + s))
@@ -290,7 +296,7 @@ def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Seq
                 rep["checked"] += 1
                 rep["confirmed"] += int(good)
                 if not good:
-                    rep["failed"].append({"p2": float(v), "side": side, "kind": c["kind"], "sigma": float(s_e),
-                                          "above": {"orbit": a_same, "stable": a_stable},
-                                          "below": {"orbit": b_same, "stable": b_stable}})
+                    rep["failed"].append({"p2": float(c["p2"][i]), "side": side, "kind": c["kind"],
+                                          "sigma": float(c["sigma"][i]), "one_side": {"orbit": a_same, "stable": a_stable},
+                                          "other_side": {"orbit": b_same, "stable": b_stable}})
     return out
