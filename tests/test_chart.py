@@ -69,6 +69,9 @@ def test_continued_windows_at_gamma_10_are_the_exact_flows_and_closing_says_what
     flip = w2["curves"]["lower"]
     assert flip["kind"] == "flip" and flip["p2"][0] == pytest.approx(10.0) and flip["end"]["reason"] == "range"
     assert all(len(flip[k]) == len(flip["sigma"]) for k in ("p2", "points", "multipliers", "gaps"))
+    # every point of every edge curve is an edge: checked across the curve by Newton on both sides
+    assert all(c["checked"] > 0 and c["confirmed"] == c["checked"] for c in res["edge_check"].values())
+    assert set(res["scan_check"]) <= set(res["scans"])
     report = (out / "report.md").read_text()
     assert "null (searched 10 to 1000)" in report and "| 2 | flip 0.2899707" in report
 
