@@ -228,7 +228,7 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
     sigma_range : (float, float)
         The curve stops when sigma leaves it.
     ds, ds_min, ds_max : float
-        Arclength steps in X = (w, ln sigma, q).
+        Arclength steps in X = (w / (1 + sigma), ln sigma, q).
     max_points : int
     locate_tol : float
         Turning points and the end at a graze are located to this width in the arclength.
@@ -239,6 +239,7 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
     lo2, hi2 = min(p2_range), max(p2_range)
     if not lo2 <= p2_0 <= hi2:
         raise HarnessInputError("--range", f"{param2} = {p2_0:g} lies outside [{lo2:g}, {hi2:g}]")
+    tol2 = 1e-9 * max(abs(lo2), abs(hi2), 1.0)  # the start may sit on the range's end up to rounding
     pmap = pmap or PeriodMap(sim, params, "sigma", theta)
     plane = PlaneMap(pmap, param2, log2, M)
     corr = _Corrector(plane, kind)
@@ -251,13 +252,14 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
     step = abs(ds)
     n = 0
     while n < max_points:
-        if not (lo2 * (1 - 1e-9) <= a.p2 <= hi2 * (1 + 1e-9) and sigma_range[0] <= a.sigma <= sigma_range[1]):
+        if not (lo2 - tol2 <= a.p2 <= hi2 + tol2 and sigma_range[0] <= a.sigma <= sigma_range[1]):
             end = {"reason": "range", "note": f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
                    f"[{sigma_range[0]:g}, {sigma_range[1]:g}]"}
             break
         b = corr.along(a, step)
         if b is not None and not _same_pattern(b.ev.contacts, pattern):
             good, bad = _bisect_pattern(corr, a, step, pattern, locate_tol)
+            pmap.params = {**plane.base, param2: good.p2}
             gap = pmap.gap(good.ev.points, good.ev.contacts, good.sigma)
             pts.append(good)
             end = {"reason": "graze", "note": f"the orbit's contacts per period change "
@@ -267,6 +269,7 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
         if b is None or float(b.tangent @ a.tangent) < 0.9:
             step *= 0.5
             if step < ds_min:
+                pmap.params = {**plane.base, param2: a.p2}
                 gap = pmap.gap(a.ev.points, a.ev.contacts, a.sigma)
                 if gap < GRAZE_GAP * (1.0 + a.sigma):
                     # the corrector fails at the corner where the event meets the graze (the map is
@@ -284,13 +287,18 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
         a = b
         n += 1
         step = min(step * 1.5, ds_max)
+    gaps = []
+    for p in pts:  # each point's gap with its own p2 (the free flow depends on nu and Omega)
+        pmap.params = {**plane.base, param2: p.p2}
+        gaps.append(pmap.gap(p.ev.points, p.ev.contacts, p.sigma))
+    pmap.params = dict(plane.base)  # a caller's map is left as it was given
     last = pts[-1]
     end.update({"sigma": last.sigma, "p2": last.p2})
     turns = significant_turns(turns, last.p2)
     return EventCurve(kind, M, int(pattern.sum()), param2, np.array([p.sigma for p in pts]),
                       np.array([p.p2 for p in pts]), np.array([p.ev.points[0] for p in pts]),
                       np.array([p.multipliers for p in pts]),
-                      np.array([pmap.gap(p.ev.points, p.ev.contacts, p.sigma) for p in pts]), turns, end,
+                      np.array(gaps), turns, end,
                       pmap.evaluations)
 
 

@@ -214,7 +214,8 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
         evs.append(ev)
         n += 1
         p2, sg = of_q(float(Y[1])), math.exp(float(Y[0]))
-        if not (lo2 * (1 - 1e-9) <= p2 <= hi2 * (1 + 1e-9) and sigma_range[0] <= sg <= sigma_range[1]):
+        tol2 = 1e-9 * max(abs(lo2), abs(hi2), 1.0)
+        if not (lo2 - tol2 <= p2 <= hi2 + tol2 and sigma_range[0] <= sg <= sigma_range[1]):
             end = {"reason": "range", "note": f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
                    f"[{sigma_range[0]:g}, {sigma_range[1]:g}]"}
             break
