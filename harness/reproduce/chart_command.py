@@ -74,9 +74,10 @@ def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: st
         cl = w["closing"]
         if cl["closes"] is not None:
             ax.plot([cl["closes"]], [min(cl["sigma"], top)], "*", color=col, ms=13, mec="k", zorder=5)
+            clipped = cl["sigma"] >= top  # an asymptote: the star sits on the top of the axes
             ax.annotate(f"M = {w['M']} closes\n{problem.param2} = {cl['closes']:.5g}", (cl["closes"], min(cl["sigma"], top)),
-                        textcoords="offset points", xytext=(-70, 8 + 14 * w["M"]), fontsize=7, color=col,
-                        arrowprops={"arrowstyle": "-", "color": col, "lw": 0.6})
+                        textcoords="offset points", xytext=(12, -30 if clipped else -4), fontsize=7, color=col,
+                        bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": col, "lw": 0.5, "alpha": 0.85})
     ax.set_yscale("log")
     ax.set_ylim(problem.sigma_grid[0], top)
     ax.set_ylabel("forcing above grazing, sigma")
