@@ -194,7 +194,7 @@ class ImpactOscillatorPy(Fmi2Slave):
     #: among those it asked for), so per-step "logEvents" messages cost nothing otherwise.
     log_categories = {
         "logStatusError": "errors: bad parameters, calls in the wrong state, solver failures",
-        "logEvents": "wall events per step, and those the grazing guard recovered",
+        "logEvents": "wall events per step, and those recovered by the rescue of a stepped-over crossing",
     }
 
     def __init__(self, **kwargs: Any) -> None:
@@ -468,7 +468,7 @@ class ImpactOscillatorPy(Fmi2Slave):
             self.log(
                 f"fmi2DoStep: {self.driver.events - events_before} wall events in "
                 f"({current_time!r}, {current_time + step_size!r}], "
-                f"{self.driver.guard_hits - guard_before} of them found by the grazing guard",
+                f"{self.driver.guard_hits - guard_before} of them recovered by the rescue of a stepped-over crossing",
                 Fmi2Status.ok,
                 "logEvents",
             )

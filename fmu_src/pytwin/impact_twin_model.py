@@ -510,7 +510,7 @@ class CvodeDriver:
         self.needs_reinit: bool = True
         self._fresh: bool = True
         self.events: int = 0
-        self.guard_hits: int = 0  # crossings the grazing guard recovered
+        self.guard_hits: int = 0  # crossings stepped over and recovered by the rescue (side check)
         self.first_step_retries: int = 0  # see _cvode_step: a root past the point in step 1
 
     # -- time ------------------------------------------------------------------------------
