@@ -286,3 +286,24 @@ def test_an_impact_added_to_a_chatter_is_located_not_lost(sim, model) -> None:
         u, v, c = ex.state_at(z[0], z[1], THETA, THETA + 1.0)
         z = np.array([u, v])
     assert c == 4
+
+
+def test_sticking_onset_is_located_where_the_orbit_stops_sticking(sim, model) -> None:
+    """A rigid wall, r = 0.3: the period-1 orbit chatters into sticking (its D(F) is exactly 0)
+    for sigma above ~2.419; followed down, its chatter loses impacts in a cascade and the orbit
+    stops sticking.  Exactly one event is the sticking onset, and the exact flow agrees on both
+    sides of it: sticking above, not below."""
+    p = {**model.defaults(), "nu": 1.0, "Omega": 10.0, "r": 0.3, "wall": 2, "solver": 1}
+    a = _seed(sim, p, 3.25, 1)
+    assert a.impacts >= 20 and np.max(np.abs(a.multipliers)) == 0.0
+    br = continue_orbit(sim, p, 1, 3.25, a.points[0], "sigma", (2.3, 3.5), -1.0, ds_max=0.2)
+    (stick,) = [e for e in br.events if e.kind == "stick"]
+    assert 2.40 < stick.value < 2.44
+    for factor, sticks in ((1.001, True), (0.999, False)):
+        ex = ExactOscillator(p["nu"], p["Omega"], stick.value * factor, p["r"], 10.0, "rigid")
+        z = np.asarray(stick.point, dtype=float)
+        for _ in range(100):
+            u, v, _ = ex.state_at(z[0], z[1], THETA, THETA + 1.0)
+            z = np.array([u, v])
+        kinds = [k for _, k in ex.crossings(z[0], z[1], THETA, THETA + 1.0)]
+        assert ("stick" in kinds) == sticks, (factor, kinds)

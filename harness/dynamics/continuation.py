@@ -136,13 +136,18 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
         nonlocal a, end_note, steps
         n_old = int(a.ev.contacts.sum())
         rigid = int(pmap.params.get("wall", 0)) == 2
-        kind = "graze"
-        n_new = int(bad.ev.contacts.sum()) if bad is not None else n_beyond
-        if rigid and n_new is not None and n_new >= STICK_IMPACTS:
-            kind = "stick"
         nxt = _new_contact_orbit(cont, good, bad) if follow_grazing else None
         if nxt is not None and any(np.array_equal(np.roll(nxt.ev.contacts, k), good.ev.contacts) for k in range(M)):
             nxt = None  # the same contacts shifted: the same orbit again, not a new one
+        kind = "graze"
+        other = nxt if nxt is not None else bad
+        if rigid and other is not None:
+            # the sticking onset: on one side the orbit sticks to the wall for part of the period
+            # (its D(F^M) is exactly 0: the sticking phase forgets the state), on the other not
+            if _sticks(good) != _sticks(other):
+                kind = "stick"
+        elif rigid and n_beyond is not None and n_beyond >= STICK_IMPACTS:
+            kind = "stick"  # nothing to compare: the flow beyond chatters as long as a sticking orbit
         if nxt is None:
             event(kind, good, bracket, f"{n_old} impact(s) per period before; no orbit with another contact "
                   "count found next to it" + ("" if follow_grazing else " (not sought)") + "; branch ends")
@@ -173,8 +178,9 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
             good, bracket, bad = cont.locate_contact_change(a, ds)
             # a vanishing gap of a free passage, or a contact becoming grazing (its multipliers
             # diverge like 1/sqrt(depth): the square-root singularity)
-            # or, on a rigid wall, the chatter of one contact completing into sticking (the
-            # contacts jump to >= STICK_IMPACTS: the sticking onset, where the map is nonsmooth too)
+            # or a change of the contacts that the gap cannot see, told by the flow just beyond
+            # (on a rigid wall an impact added to a chatter, or the chatter completing into
+            # sticking: the map is nonsmooth there too)
             n_beyond = _contacts_beyond(pmap, good, bracket, M) if good is not a else None
             changed = n_beyond is not None and n_beyond != int(good.ev.contacts.sum())
             if good is not a and (pmap.gap(good.ev.points, good.ev.contacts, good.p) < GRAZE_GAP
@@ -242,6 +248,11 @@ def continue_orbit(sim: Simulator, params: Mapping[str, Any], M: int, p0: float,
     last = pts[-1]
     events.append(Event("end", last.p, len(pts) - 1, last.mult, last.ev.points[0], 0.0, end_note))
     return _branch(pmap, M, pts, labels, events)
+
+
+def _sticks(pt: BranchPoint) -> bool:
+    """The orbit sticks to a rigid wall for part of its period: its Jacobian is exactly 0."""
+    return bool(np.max(np.abs(pt.mult)) == 0.0)
 
 
 def _contacts_beyond(pmap: PeriodMap, good: BranchPoint, bracket: float, M: int) -> int | None:
