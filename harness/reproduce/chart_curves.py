@@ -25,6 +25,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from ..errors import FmuError
+
 __all__ = ["windows_at", "continue_window", "window_closing", "chart_curves", "scan_check", "edge_check"]
 
 EDGE_KINDS = ("flip", "fold", "ns", "graze", "stick")
@@ -103,8 +105,11 @@ def continue_window(sim: Any, params: Mapping[str, Any], window: Mapping[str, An
         if e is None:
             out[side] = None
             continue
+        if e["kind"] == "stick":
+            out[side] = {"kind": "stick", "failed": "a sticking onset is not continued in two parameters"}
+            continue
         try:
-            if e["kind"] in ("graze", "stick"):
+            if e["kind"] == "graze":
                 s_out = e["sigma"] + sign * max(2.0 * e["bracket"], 1e-9 * e["sigma"])
                 curve = continue_graze(sim, params, window["M"], e["sigma"], e["point"], s_out, param2, p2_range,
                                        log2, 1.0, max_points=max_points, sigma_range=sigma_range, theta=theta)
@@ -113,9 +118,9 @@ def continue_window(sim: Any, params: Mapping[str, Any], window: Mapping[str, An
                                        p2_range, log2, 1.0, sigma_range=sigma_range, max_points=max_points,
                                        theta=theta)
             out[side] = curve.as_dict()
-        except (ValueError, ArithmeticError) as exc:
-            out[side] = {"kind": e["kind"], "failed": str(exc)}
-        except Exception as exc:  # an HarnessInputError from the start: the edge could not be continued
+        except (ValueError, ArithmeticError, FmuError) as exc:
+            # no start on the extended system (HarnessInputError is a ValueError), no graze where
+            # the branch said one, or the FMU failing on the way: the edge is reported, not charted
             out[side] = {"kind": e["kind"], "failed": f"{type(exc).__name__}: {exc}"}
     return out
 
