@@ -300,7 +300,13 @@ static double last_good_before(Solver *s, double t) {
     return (s->tau_good <= t && s->tau_good >= start) ? s->tau_good : start;
 }
 
+static int over_budget(Solver *s, const ModelData *m, int events);
+
+/* A rescue counts as a step against the doStep's budget: a rescue that never located its
+ * crossing (a bug) would otherwise repeat without end instead of failing. */
 static int rescue(Solver *s, const ModelData *m, double t) {
+    s->steps_used += 1.0;
+    if (over_budget(s, m, 0)) return -1;
     if (locate_crossing(s, m, last_good_before(s, t), t) != 0) {
         snprintf(s->msg, sizeof s->msg,
                  "could not locate a wall crossing stepped over before t = %.17g",
