@@ -9,6 +9,8 @@ checksum (as a careless or hostile importer could) to reach the field-by-field c
 """
 from __future__ import annotations
 
+from typing import Any
+
 import struct
 
 import numpy as np
@@ -144,16 +146,23 @@ def test_version_and_size_are_checked(running):
     _refused(s, reseal(b), "version")
 
 
-def test_a_cs_state_is_refused_by_a_model_exchange_instance(running):
-    _, blob = running
-    md = read_model_description(str(FMU_PATH))
-    me = FMU2Model(guid=md.guid, unzipDirectory=extract(str(FMU_PATH)),
-                   modelIdentifier=md.modelExchange.modelIdentifier, instanceName="me")
-    msgs = []
+def _me_instance(name: str) -> tuple[FMU2Model, list[str], Any]:
+    """An instantiated FMI 2 Model Exchange instance of the FMU, its log messages collected, and
+    the logger callbacks (release them after freeInstance)."""
     from harness.fmu.fmi2_logging import Fmi2Callbacks
 
+    md = read_model_description(str(FMU_PATH))
+    me = FMU2Model(guid=md.guid, unzipDirectory=extract(str(FMU_PATH)),
+                   modelIdentifier=md.modelExchange.modelIdentifier, instanceName=name)
+    msgs: list[str] = []
     cb = Fmi2Callbacks(lambda _name, _status, _category, text: msgs.append(text))
     me.instantiate(callbacks=cb.functions)
+    return me, msgs, cb
+
+
+def test_a_cs_state_is_refused_by_a_model_exchange_instance(running):
+    _, blob = running
+    me, msgs, cb = _me_instance("me")
     try:
         me.setupExperiment(startTime=0.0)
         me.enterInitializationMode()
@@ -300,15 +309,8 @@ def test_ramps_that_put_the_inputs_out_of_range_are_refused(ramped, delta, value
 def test_a_model_exchange_state_with_ramps_is_refused():
     """Model Exchange has no input derivatives: its own state with a ramp written in (resealed)
     is refused, and the instance goes on from a good state."""
-    md = read_model_description(str(FMU_PATH))
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    me = FMU2Model(guid=md.guid, unzipDirectory=extract(str(FMU_PATH)),
-                   modelIdentifier=md.modelExchange.modelIdentifier, instanceName="me-ramp")
-    msgs = []
-    from harness.fmu.fmi2_logging import Fmi2Callbacks
-
-    cb = Fmi2Callbacks(lambda _name, _status, _category, text: msgs.append(text))
-    me.instantiate(callbacks=cb.functions)
+    vr = {v.name: v.valueReference for v in read_model_description(str(FMU_PATH)).modelVariables}
+    me, msgs, cb = _me_instance("me-ramp")
     try:
         me.setupExperiment(startTime=0.0)
         me.enterInitializationMode()

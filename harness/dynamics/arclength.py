@@ -21,6 +21,19 @@ __all__ = ["BranchPoint", "ArclengthCorrector", "CORRECTOR_TOL"]
 CORRECTOR_TOL = 1e-10
 
 
+def illinois_update(lo: float, hi: float, flo: float, fhi: float, s: float, f: float,
+                    side: int) -> tuple[float, float, float, float, int]:
+    """One bracket update of the Illinois method (regula falsi that halves the value kept at the
+    end retained twice in a row, so the bracket shrinks from both sides)."""
+    if (f > 0) == (flo > 0):
+        if side == -1:
+            fhi *= 0.5
+        return s, hi, f, fhi, -1
+    if side == +1:
+        flo *= 0.5
+    return lo, s, flo, f, +1
+
+
 class BranchPoint:
     """A point of a branch: x = (w, p), the map's evaluation there (orbit, contacts, D(F^M),
     d/dp), the multipliers and the unit tangent (its orientation is set by the caller)."""
@@ -95,16 +108,7 @@ class ArclengthCorrector:
                 best, best_f = pt, abs(f)
             if not math.isfinite(f) or f == 0.0 or abs(f) < 1e-14:
                 return pt, 0.0
-            if (f > 0) == (flo > 0):
-                lo, flo = s, f
-                if side == -1:
-                    fhi *= 0.5
-                side = -1
-            else:
-                hi, fhi = s, f
-                if side == +1:
-                    flo *= 0.5
-                side = +1
+            lo, hi, flo, fhi, side = illinois_update(lo, hi, flo, fhi, s, f, side)
             # the bracket in arclength (the parameter may be at a turning point, where its own
             # bracket says nothing), with the parameter's rate along the tangent
             if (hi - lo) * max(abs(a.tangent[2]), 1e-3) < self.locate_tol:

@@ -39,6 +39,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from .arclength import illinois_update
 from .curves import CurvePoint, EventCurve, significant_turns
 from .periodic_map import MapEvaluation, PeriodMap
 from ..errors import HarnessInputError
@@ -336,16 +337,7 @@ def _locate_turn(corr: _Corrector, a: CurvePoint, step: float, tol: float) -> di
             break
         fs = f(pt)
         best = pt
-        if (fs > 0) == (flo > 0):
-            lo, flo = s, fs
-            if side == -1:
-                fhi *= 0.5
-            side = -1
-        else:
-            hi, fhi = s, fs
-            if side == 1:
-                flo *= 0.5
-            side = 1
+        lo, hi, flo, fhi, side = illinois_update(lo, hi, flo, fhi, s, fs, side)
         if hi - lo < tol or abs(fs) < 1e-12:
             break
     return {"sigma": best.sigma, "p2": best.p2, "side": "max" if a.tangent[3] > 0 else "min",

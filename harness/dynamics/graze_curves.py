@@ -78,7 +78,13 @@ class _Plane:
                 break
         if t_out is None:
             return None
-        while t_in - t_out > tol:
+        return self.bisect(P, N, t_in, t_out, w, ev, tol)
+
+    def bisect(self, P: np.ndarray, N: np.ndarray, t_in: float, t_out: float, w: np.ndarray, ev: MapEvaluation,
+               tol: float) -> tuple[np.ndarray, np.ndarray, MapEvaluation] | None:
+        """Bisection in t on P + t N between ``t_in`` (the orbit with the pattern exists: w, ev)
+        and ``t_out`` (it does not), then :meth:`polish`."""
+        while abs(t_in - t_out) > tol:
             mid = 0.5 * (t_in + t_out)
             found = self.orbit(P + mid * N, w)
             if found is not None:
@@ -158,19 +164,11 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
     # the first point: bisection across the curve along ln sigma, between sigma_in and sigma_out
     N = np.array([1.0 if sigma_in > sigma_out else -1.0, 0.0])
     mid = np.array([0.5 * (math.log(sigma_in) + math.log(sigma_out)), q0])
-    t_in, t_out = abs(math.log(sigma_in / sigma_out)) / 2, -abs(math.log(sigma_in / sigma_out)) / 2
-    w, ev = w0, ev0
-    while t_in - t_out > locate_tol:
-        t = 0.5 * (t_in + t_out)
-        found = plane.orbit(mid + t * N, w)
-        if found is not None:
-            t_in, (w, ev) = t, found
-        else:
-            t_out = t
-    first = plane.polish(mid, N, t_in, w, ev, locate_tol)
+    half = abs(math.log(sigma_in / sigma_out)) / 2
+    first = plane.bisect(mid, N, half, -half, w0, ev0, locate_tol)
     if first is None:
         raise ValueError(f"the period-{M} orbit's change between sigma = {sigma_in:.10g} and {sigma_out:.10g} "
-                         f"is not a graze (gap {plane.gap(mid + t_in * N, ev):.3g} at its last point)")
+                         "is not a graze (the gap does not vanish at its last orbit)")
     Ys, ws, evs = [first[0]], [first[1]], [first[2]]
     T = np.array([0.0, 1.0 if direction > 0 else -1.0])  # first step along p2
     turns: list[dict[str, Any]] = []
