@@ -178,17 +178,17 @@ def accuracy() -> dict:
 
     - regular: J and S of one period (both modes) against Richardson-extrapolated central
       differences of mapcheck.exact (the Python closed form, exact crossing times), max relative
-      error over the cases of tests/test_fmu_sensitivities.py;
+      error over the cases of tests/fmu/test_sensitivities.py;
     - near grazing: a contact x deep (the wall-free orbit at sigma = x), CVODE mode against
       closed-form mode, and both against differences of mapcheck.exact with steps 1e-2 x; the
       slope of log max|J| against log x (expected -1/2);
     - CVODE mode against closed-form mode, one period from the same state, max |du|, |dv| over
-      12 periods of each case of tests/test_fmu_closed_form.py.
+      12 periods of each case of tests/fmu/test_closed_form.py.
     """
     from tests.fmu_support import on_orbit
     from tests.sens_support import UNDERDAMPED, Fmu, exact_derivatives, one_period
-    from tests.test_fmu_closed_form import CASES as CF_CASES
-    from tests.test_fmu_sensitivities import CASES as SENS_CASES
+    from tests.fmu.test_closed_form import CASES as CF_CASES
+    from tests.fmu.test_sensitivities import CASES as SENS_CASES
 
     def rel(a, b):
         return float(np.max(np.abs(a - b)) / np.max(np.abs(b)))
@@ -287,7 +287,7 @@ def section(res: dict) -> str:
               f"mapcheck.exact, {A['regular']['n']} cases away from grazing: max relative error "
               f"{A['regular']['cvode']:.1e} (CVODE mode), {A['regular']['closed']:.1e} (closed form), median "
               f"{A['regular']['median']:.1e}. CVODE mode against closed-form mode, one period from the same "
-              f"state, every case of tests/test_fmu_closed_form.py: max {A['cvode_vs_closed_per_period']:.1e}. "
+              f"state, every case of tests/fmu/test_closed_form.py: max {A['cvode_vs_closed_per_period']:.1e}. "
               f"Near grazing, max|J| ~ depth^s with s = {A['slope_wall1']:.3f} (compliant), "
               f"{A['slope_wall2']:.3f} (rigid), depths 1e-5 .. 1e-12:", "",
               "| wall | depth | max abs J | CVODE vs closed form (rel) | closed form vs differences (rel) |",

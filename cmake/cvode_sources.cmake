@@ -1,7 +1,7 @@
 # The part of SUNDIALS 6.4.1 (Debian's source package, BSD-3-Clause) that the FMU needs: CVODE
 # with the serial N_Vector, dense and band matrices, the dense linear solver and the Newton
 # nonlinear solver (not the profiler: it is off, and its file needs POSIX or MPI timers). The lists were found by linking the FMU with -z defs against these files alone
-# and taking gcc -MM's headers; tests/test_fmu_sources.py rebuilds the binary from them.
+# and taking gcc -MM's headers; tests/platforms/test_sources.py rebuilds the binary from them.
 # Paths are relative to the SUNDIALS source tree; impact_stage_sources() copies them into an
 # FMU's sources/ so that `-I sources` alone resolves every #include:
 #   public headers    include/<module>/x.h -> sources/<module>/x.h   (#include <module/x.h>)

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # API reference from the docstrings (pdoc, numpy docstring style) -> build/docs/index.html.
 # Extra arguments go to pdoc (e.g. `bash scripts/docs.sh --no-search`); DOCS_OUT=DIR writes
-# elsewhere (tests/test_api_docs.py builds into a temporary folder).
+# elsewhere (tests/project/test_api_docs.py builds into a temporary folder).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"

@@ -15,7 +15,7 @@ On demand, not in CI (it takes about an hour):
     .venv/bin/python scripts/mutants.py --list               # the list
     .venv/bin/python scripts/mutants.py --markdown out.md    # also write the result table
 
-The last result, with every survivor explained, is in TESTING.md.  ``tests/test_mutants_list.py``
+The last result, with every survivor explained, is in TESTING.md.  ``tests/project/test_mutants_list.py``
 (in CI) checks that every mutant's snippet still occurs exactly once, so the list cannot rot
 silently when the code changes.
 """
@@ -55,13 +55,13 @@ def _m(id: str, path: str, find: str, replace: str, tests: str, what: str) -> Mu
     return Mutant(id, path, find, replace, tuple(ALSO_RUN.get(id, "").split() + tests.split()), what)
 
 
-FMU_PORTS = "tests/test_fmu_ports.py"
-EVENTS = "tests/test_fmu_events_total.py"
-PHYS = "tests/test_fmu_physics.py"
-SENS = "tests/test_fmu_sensitivities.py tests/test_harness_sensitivities.py"
-CF = "tests/test_fmu_closed_form.py"
-TRUTH = "tests/test_fmu_inputs_truth.py"
-GUARD = "tests/test_fmu_grazing_guard.py"
+FMU_PORTS = "tests/fmu/test_ports.py"
+EVENTS = "tests/fmu/test_events_total.py"
+PHYS = "tests/fmu/test_physics.py"
+SENS = "tests/fmu/test_sensitivities.py tests/harness/test_sensitivities.py"
+CF = "tests/fmu/test_closed_form.py"
+TRUTH = "tests/fmu/test_inputs_truth.py"
+GUARD = "tests/fmu/test_grazing_guard.py"
 # mutants that survived the first run (issue 22): the independent-truth tests that now kill them run first
 ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28",
                                 "M52")}
@@ -105,10 +105,10 @@ MUTANTS: tuple[Mutant, ...] = (
        "if (y[1] > 0.0) model_event_update(m, tau, y, 0); /* an impact */", FMU_PORTS,
        "wall jumping into the mass: impact decided on the absolute velocity"),
     _m("M13", "fmu_src/model.c", "const double h = m->kappa2 * d * sqrt(d); /* kappa^2 d^{3/2} */",
-       "const double h = m->kappa2 * d; /* kappa^2 d^{3/2} */", "tests/test_contact_laws.py",
+       "const double h = m->kappa2 * d; /* kappa^2 d^{3/2} */", "tests/fmu/test_contact_laws.py",
        "Hertz law linear"),
     _m("M14", "fmu_src/model.c", "return m->contact == CONTACT_HERTZ ? h : h * (1.0 + m->alpha_hc * dv);",
-       "return m->contact == CONTACT_HERTZ ? h : h * (1.0 - m->alpha_hc * dv);", "tests/test_contact_laws.py",
+       "return m->contact == CONTACT_HERTZ ? h : h * (1.0 - m->alpha_hc * dv);", "tests/fmu/test_contact_laws.py",
        "Hunt-Crossley damping with the wrong sign (energy gain)"),
     _m("M15", "fmu_src/model.c", "    J[1][1] = -m->nu;", "    J[1][1] = m->nu;", f"{PHYS} {EVENTS}",
        "the analytic Jacobian CVODE's Newton iteration uses has the damping's sign wrong"),
@@ -148,59 +148,59 @@ MUTANTS: tuple[Mutant, ...] = (
        "after a ramp the inputs snap back to their start-of-step values instead of holding the end values"),
     # -- harness: classification, Lyapunov exponents, sampling, sweeps ---------------------------
     _m("M29", "harness/dynamics/classify.py", "    threshold = tol * (1.0 + amplitude)\n", "    threshold = tol\n",
-       "tests/test_harness_classify.py", "periodicity threshold not scaled with the orbit's size"),
+       "tests/harness/test_classify.py", "periodicity threshold not scaled with the orbit's size"),
     _m("M30", "harness/dynamics/classify.py", "return OrbitClass(m, int(imp[n - m :].sum()), residual)",
-       "return OrbitClass(m, int(imp[n - 1]), residual)", "tests/test_harness_classify.py",
+       "return OrbitClass(m, int(imp[n - 1]), residual)", "tests/harness/test_classify.py",
        "impacts per orbit period taken from the last forcing period only"),
     _m("M31", "harness/dynamics/classify.py", "if residual <= threshold and np.array_equal(imp[m:], imp[:-m]):",
-       "if residual <= threshold:", "tests/test_harness_classify.py",
+       "if residual <= threshold:", "tests/harness/test_classify.py",
        "period accepted although the impact sequence does not repeat"),
     _m("M32", "harness/dynamics/classify.py", "    threshold = tol * (1.0 + max(np.ptp(u), np.ptp(v)))\n",
-       "    threshold = tol\n", "tests/test_harness_classify.py tests/test_harness_sweeps.py",
+       "    threshold = tol\n", "tests/harness/test_classify.py tests/harness/test_sweeps.py",
        "still-settling test not scaled with the orbit's size"),
     _m("M33", "harness/dynamics/lyapunov.py", "Q, R = np.linalg.qr(J @ Q)", "Q, R = np.linalg.qr(Q @ J)",
-       "tests/test_harness_lyapunov.py", "QR accumulation with the product transposed"),
+       "tests/harness/test_lyapunov.py", "QR accumulation with the product transposed"),
     _m("M34", "harness/dynamics/lyapunov.py", "err = means.std(axis=0, ddof=1) / math.sqrt(b)",
-       "err = means.std(axis=0, ddof=1)", "tests/test_harness_lyapunov.py",
+       "err = means.std(axis=0, ddof=1)", "tests/harness/test_lyapunov.py",
        "standard error of the exponents without the 1/sqrt(blocks)"),
     _m("M35", "harness/dynamics/sampling.py", "sim.start(params, start_period + theta, state0)",
-       "sim.start(params, start_period, state0)", "tests/test_harness_oracle.py tests/test_harness_fmi.py",
+       "sim.start(params, start_period, state0)", "tests/harness/test_oracle.py tests/harness/test_fmi.py",
        "the section phase theta ignored at the start"),
     _m("M36", "harness/dynamics/jacobian.py",
        "return (one_period(sim, params, state + dx, t0) - one_period(sim, params, state - dx, t0)) / (2.0 * step)",
        "return (one_period(sim, params, state + dx, t0) - one_period(sim, params, state - dx, t0)) / step",
-       "tests/test_harness_jacobian.py", "central difference divided by h, not 2h"),
+       "tests/harness/test_jacobian.py", "central difference divided by h, not 2h"),
     _m("M37", "harness/runs/tasks.py",
        "state0 = (value, state0[1]) if task.param == INITIAL_STATE[0] else (state0[0], value)",
        "state0 = (state0[0], value) if task.param == INITIAL_STATE[0] else (value, state0[1])",
-       "tests/test_harness_basins.py tests/test_harness_sweeps.py", "a basin scan's u0 and v0 swapped"),
+       "tests/harness/test_basins.py tests/harness/test_sweeps.py", "a basin scan's u0 and v0 swapped"),
     _m("M38", "harness/runs/sweeps.py", "start = (float(second), state0[1]) if spec.scan_param == INITIAL_STATE[0] "
-       "else (state0[0], float(second))", "start = state0", "tests/test_harness_basins.py",
+       "else (state0[0], float(second))", "start = state0", "tests/harness/test_basins.py",
        "a scan over v0 runs every row from the first v0"),
     _m("M39", "harness/dynamics/basins.py", "return float(max(d.min(axis=1).max(), d.min(axis=0).max()))",
-       "return float(d.min(axis=1).max())", "tests/test_harness_basins.py",
+       "return float(d.min(axis=1).max())", "tests/harness/test_basins.py",
        "orbit distance one-sided (a sub-orbit matches a larger one)"),
     _m("M40", "harness/runs/tasks.py", "    return state[0] > u_wall or (state[0] == u_wall and state[1] > 0.0)",
-       "    return state[0] > u_wall", "tests/test_harness_basins.py",
+       "    return state[0] > u_wall", "tests/harness/test_basins.py",
        "a start on the rigid wall moving into it is not an invalid start"),
     # -- mapcheck: the paper's maps and the closed form ------------------------------------------
     _m("M41", "mapcheck/coeffs.py", "c3 = (1.0 + 2.0 * re) * gamma - one ** 2 * P22 ** 3",
-       "c3 = (1.0 + 2.0 * re) * gamma + one ** 2 * P22 ** 3", "tests/test_mapcheck_maps.py tests/test_mapcheck_orbits.py",
+       "c3 = (1.0 + 2.0 * re) * gamma + one ** 2 * P22 ** 3", "tests/mapcheck/test_maps.py tests/mapcheck/test_orbits.py",
        "c3 of (38) with the corrected sign undone"),
     _m("M42", "mapcheck/windows.py", "hi = np.inf if M == 1 else 1.0 / M ** 2", "hi = np.inf if M == 1 else 1.0 / M",
-       "tests/test_mapcheck_windows.py", "upper window edge of (64) 1/M instead of 1/M^2"),
+       "tests/mapcheck/test_windows.py", "upper window edge of (64) 1/M instead of 1/M^2"),
     _m("M43", "mapcheck/maps.py",
        "return nu * Omega ** 2 * np.asarray(sigma, dtype=float) / (2.0 * np.abs(A) * (1.0 + r_eff) ** 2)",
        "return nu * Omega ** 2 * np.asarray(sigma, dtype=float) / (2.0 * np.abs(A) * (1.0 + r_eff))",
-       "tests/test_mapcheck_maps.py tests/test_mapcheck_windows.py", "rho(sigma) with (1 + r), not (1 + r)^2"),
+       "tests/mapcheck/test_maps.py tests/mapcheck/test_windows.py", "rho(sigma) with (1 + r), not (1 + r)^2"),
     _m("M44", "mapcheck/maps.py", "    vt = v - one * (sq - 2.0 * nu * u)\n", "    vt = v - one * (sq - nu * u)\n",
-       "tests/test_mapcheck_maps.py tests/test_reproduce_direct.py", "(27) with nu instead of 2 nu"),
+       "tests/mapcheck/test_maps.py tests/analysis/test_direct.py", "(27) with nu instead of 2 nu"),
     _m("M45", "mapcheck/exact.py", "        vr = -self.r * st.v", "        vr = -self.r * st.v * (1.0 - 1e-6)",
-       f"tests/test_mapcheck_exact.py {PHYS}", "the closed form's rigid impact law off by 1e-6 relative"),
+       f"tests/mapcheck/test_exact.py {PHYS}", "the closed form's rigid impact law off by 1e-6 relative"),
     _m("M46", "mapcheck/linear.py", "disc = np.sqrt(complex(nu * nu - 4.0 * Omega * Omega))",
-       "disc = np.sqrt(complex(nu * nu - 2.0 * Omega * Omega))", "tests/test_mapcheck_linear.py",
+       "disc = np.sqrt(complex(nu * nu - 2.0 * Omega * Omega))", "tests/mapcheck/test_linear.py",
        "free-flight eigenvalues from the wrong discriminant"),
-    # -- found by tests/test_fmu_inputs_truth.py (issue 22): CVODE on a moving wall ---------------
+    # -- found by tests/fmu/test_inputs_truth.py (issue 22): CVODE on a moving wall ---------------
     _m("M47", "fmu_src/solver_cvode.c", "        m->u = model_wall_position(m, s->tau);\n        m->v = m->du_wall;\n",
        "", TRUTH, "a sticking mass integrated by CVODE drifts an ulp off the moving wall (released at rest, "
        "an impact counted every other step)"),

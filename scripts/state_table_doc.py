@@ -1,7 +1,7 @@
 """Renders docs/fmi-state-machine.md from the state table in fmu_src/fmu_core.c (issue 19).
 
 ``python scripts/state_table_doc.py`` rewrites the file; ``--check`` exits 1 if it differs from
-what the C table gives (tests/test_fmi_state_doc.py runs that check, scripts/docs.sh the
+what the C table gives (tests/fmu/test_fmi_state_doc.py runs that check, scripts/docs.sh the
 rewrite), so the documented table cannot drift from the one the FMU enforces.
 """
 from __future__ import annotations
@@ -26,7 +26,7 @@ not NULL and that the call is allowed in the instance's state; the states in whi
 is allowed are one table, `STATE_TABLE` in fmu_src/fmu_core.c, taken from FMI 2.0.4 sections
 3.2.3 and 4.2.4 and FMI 3.0 sections 3.2 and 4.2. This page is generated from that table
 (`python scripts/state_table_doc.py`; a test fails when they differ), and
-tests/test_fmi_conformance.py checks every (state, function) pair of the built FMUs against a
+tests/fmu/test_fmi_conformance.py checks every (state, function) pair of the built FMUs against a
 second table written from the standards' text (tests/fmi_standard.py).
 
 **After an error.** Any call that returns Error (a call in the wrong state, a bad argument, a

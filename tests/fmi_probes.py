@@ -1,6 +1,6 @@
 """Every FMI 2.0 / 3.0 function of the C FMU, callable by name with valid arguments (issue 19).
 
-The conformance suite (tests/test_fmi_conformance.py) brings an instance into a state of the
+The conformance suite (tests/fmu/test_fmi_conformance.py) brings an instance into a state of the
 standard's state machine (:func:`drive`) and calls one function there (:func:`call`). Arguments
 are valid for this FMU (a real output to read, the input F_ext to set, zero-length arrays for
 types it has no variables of), so a refusal can only come from the state. Library loading,

@@ -1,6 +1,6 @@
 /*
  * The fuzzer's corpus (tests/fuzz_corpus/) replayed through a C importer, for the binaries of
- * every platform (tests/test_platform_corpus.py; natively, under wine, under qemu-user). A port
+ * every platform (tests/platforms/test_corpus.py; natively, under wine, under qemu-user). A port
  * of tests/fuzz/executor.py's actions and oracle: no Fatal, no non-finite value with status OK,
  * refused sets and state restores change nothing, a serialised state restores the same values,
  * Model Exchange and Co-Simulation calls refused on the other interface, "must_pass" actions

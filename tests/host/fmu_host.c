@@ -1,5 +1,5 @@
 /*
- * A small FMI importer in portable C for the platform tests (tests/test_platforms.py): it loads
+ * A small FMI importer in portable C for the platform tests (tests/platforms/test_platforms.py): it loads
  * one binary of the FMU (FMI 2.0 or 3.0), and for each start state read from stdin runs one
  * forcing period with Co-Simulation (one doStep of length 1) or Model Exchange (its own
  * fixed-step RK4 with event location by bisection on the wall indicator), and prints the state
