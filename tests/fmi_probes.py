@@ -1,4 +1,4 @@
-"""Every FMI 2.0 / 3.0 function of the C FMU, callable by name with valid arguments (issue 19).
+"""Every FMI 2.0 / 3.0 function of the C FMU, callable by name with valid arguments.
 
 The conformance suite (tests/fmu/test_fmi_conformance.py) brings an instance into a state of the
 standard's state machine (:func:`drive`) and calls one function there (:func:`call`). Arguments

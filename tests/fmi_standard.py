@@ -1,4 +1,4 @@
-"""The FMI 2.0.4 and FMI 3.0 state machines, written from the standards' text (issue 19).
+"""The FMI 2.0.4 and FMI 3.0 state machines, written from the standards' text.
 
 This table is the conformance suite's reference. It is written from the standards, not from
 fmu_src/fmu_core.c's STATE_TABLE, so that the two can be compared: tests/fmu/test_fmi_conformance.py

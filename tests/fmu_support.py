@@ -146,7 +146,7 @@ def refused_and_restored(fmu: LoggedSlave, call, *args) -> None:  # noqa: ANN001
         fmu.slave.freeFMUstate(saved)
 
 
-# -- added for FMI 3.0 / Model Exchange / contact-law tests (issue 8) ---------------------------
+# -- FMI 3.0, Model Exchange and contact-law helpers -----------------------------------------
 FMU3_PATH = ROOT / "build" / "fmu" / "ImpactOscillator_fmi3.fmu"
 
 

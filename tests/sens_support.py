@@ -2,7 +2,7 @@
 
 Drives fmpy's FMU2Slave / FMU3Slave by hand (not through the harness), so that the FMU is
 tested on its own: parameters by name with their FMI type from modelDescription.xml, one period
-per doStep, the outputs J_uu ... S_v (issue 11).
+per doStep, the outputs J_uu ... S_v.
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""``impact-harness chart`` (issue 18, items 3 and 4): the ODE's windows over (sigma, Gamma).
+"""``impact-harness chart``: the ODE's windows over (sigma, Gamma).
 
 Independent truth: Figure 9's ODE windows at Gamma = 10 computed on the exact closed-form flow
 by :mod:`harness.reproduce.fig9_maps` (Newton on mapcheck.exact's pre-impact map, its docstring's

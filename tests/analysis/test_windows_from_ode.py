@@ -1,6 +1,6 @@
-"""``impact-harness windows`` finds the ODE's windows from the ODE (issue 18, item 5).
+"""``impact-harness windows`` finds the ODE's windows from the ODE.
 
-The issue's two reproductions, an underdamped oscillator that is not the paper's (nu = 0.8,
+Two reproductions, an underdamped oscillator that is not the paper's (nu = 0.8,
 Omega = 2.5, r = 0.8: alpha ~ -1.05): with a rigid wall, and with a compliant wall Gamma = 100.
 Each edge the tool reports is checked by brute force on the independent closed form
 (:class:`mapcheck.exact.ExactOscillator`): just inside the edge the exact flow settles on the

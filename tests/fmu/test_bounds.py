@@ -1,4 +1,4 @@
-"""Bounded work per doStep and tiny steps (issue 13.3).
+"""Bounded work per doStep and tiny steps.
 
 The work of one doStep is bounded by the parameters max_steps_per_time (CVODE steps) and
 max_events_per_time (wall events), per unit of time advanced (at least one unit), and by a cap

@@ -1,4 +1,4 @@
-"""The closed-form solver mode of the FMU (solver = 1, issue 11.3): exact propagation on each
+"""The closed-form solver mode of the FMU (solver = 1): exact propagation on each
 side of the wall with a certified crossing search. Checked against the FMU's CVODE mode (per
 period, within the error budget 1e-8), against mapcheck.exact (the independent closed form in
 Python), on contacts down to 1e-14 deep, with sticking on the rigid wall, in FMI 2.0 and 3.0;

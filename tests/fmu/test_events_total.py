@@ -1,4 +1,4 @@
-"""Events that cannot be lost (issue 13.1): the FMU against the closed form over the whole
+"""Events that cannot be lost: the FMU against the closed form over the whole
 restitution range, both wall models, a strongly damped and an underdamped oscillator.
 
 Every state the model can reach must be handled: grazing entries, entries at zero velocity
@@ -12,7 +12,7 @@ any perturbation (its saltation matrix grows like 1/|v_in|); there the allowance
 plus the map's own response to a perturbation of 1e-10 (the FMU's accuracy before the impact),
 measured on the closed form by finite differences.
 
-The test covers r = 0, 0.02, ..., 1 over IMPACT_RSCAN_PERIODS periods (default 200, the issue's proof; a few minutes); set
+The test covers r = 0, 0.02, ..., 1 over IMPACT_RSCAN_PERIODS periods (default 200; a few minutes); set
 IMPACT_RSCAN_PERIODS=20 for a quick look.
 """
 from __future__ import annotations
@@ -38,7 +38,7 @@ CASES = {
     "damped-compliant": ("compliant", FIG9, 0.2, 10.0, 0.5, on_orbit(0.2, 0.5)),
     "damped-rigid": ("rigid", FIG9, 0.2, 10.0, 0.5, on_orbit(0.2, 0.5)),
     "underdamped-compliant": ("compliant", UNDERDAMPED, 0.05, 1000.0, 0.5, on_orbit(0.05, 0.5)),
-    # the chatter of issue 13: impacts accumulate and end in sticking in the first period
+    # chatter: impacts accumulate and end in sticking in the first period
     "underdamped-rigid": ("rigid", UNDERDAMPED, 10.0, 10.0, 0.0, dict(u0=-0.03, v0=0.0)),
 }
 
@@ -105,7 +105,7 @@ def test_every_period_matches_the_closed_form(fmu, case, r):
         assert total_exact > 0, "the case was meant to hit the wall"
 
 
-# -- the failures reported in issue 13, each run past the time at which it failed -------------
+# -- failures once reported, each run past the time at which it failed -------------
 
 @pytest.mark.parametrize("sigma,Gamma,failed_at", [(0.2, 10.0, 88.49), (0.5, 10.0, 55.49),
                                                    (1.0, 10.0, 35.0), (0.2, 1e12, 87.0)])

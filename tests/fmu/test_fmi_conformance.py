@@ -1,4 +1,4 @@
-"""State-machine conformance of the C FMU, every (state, function) pair (issue 19, item 3).
+"""State-machine conformance of the C FMU, every (state, function) pair.
 
 For each interface (FMI 2.0 CS, FMI 2.0 ME, FMI 3.0 CS without and with eventModeUsed, FMI 3.0
 ME), each state of its state machine and each function of its version, a fresh instance of the
@@ -137,7 +137,7 @@ def test_the_fmu_table_agrees_with_the_standard_table() -> None:
 
 
 def test_fmi3_nested_do_step_fails_the_outer_one() -> None:
-    """Issue 19: a nested fmi3DoStep inside intermediateUpdate once left the instance in Error
+    """A nested fmi3DoStep inside intermediateUpdate once left the instance in Error
     while the outer one returned OK."""
     x = Instance("fmi3-cs")
     try:
@@ -152,7 +152,7 @@ def test_fmi3_nested_do_step_fails_the_outer_one() -> None:
 
 @pytest.mark.parametrize("interface", ("fmi2-cs", "fmi3-cs"))
 def test_debug_logging_categories_are_checked(interface: str) -> None:
-    """Issue 19: SetDebugLogging(n = 3, categories = NULL) returned OK. Now n > 0 with a NULL
+    """SetDebugLogging(n = 3, categories = NULL) returned OK. Now n > 0 with a NULL
     array, or a category not in the modelDescription's LogCategories, is an error; the declared
     ones are accepted."""
     fn = "fmi2SetDebugLogging" if interface == "fmi2-cs" else "fmi3SetDebugLogging"
@@ -173,7 +173,7 @@ def test_debug_logging_categories_are_checked(interface: str) -> None:
     ("fmi3-me", "Continuous", ERROR), ("fmi3-me", "Event", OK)])
 def test_tunable_parameter_only_in_event_mode_for_model_exchange(interface: str, state: str,
                                                                  expected: int) -> None:
-    """Issue 19: FMI 2.0 Continuous-Time Mode accepted SetReal(sigma). There only continuous
+    """FMI 2.0 Continuous-Time Mode accepted SetReal(sigma). There only continuous
     inputs may be set (FMI 2.0.4 3.2.3, FMI 3.0 3.2); a tunable parameter changes in Event
     Mode."""
     x = Instance(interface)

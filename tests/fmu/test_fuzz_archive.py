@@ -1,4 +1,4 @@
-"""A damaged FMU archive is one line of bad input, never a traceback (issue 13.5, found by
+"""A damaged FMU archive is one line of bad input, never a traceback (found by
 bench/issue13_inputs.py: a byte flipped inside the deflate stream of the binary raised
 ``zlib.error``, which the archive check did not catch).
 

@@ -1,11 +1,11 @@
-"""The FMI fuzzer on the ASan + UBSan build of the FMU (issue 13.4).
+"""The FMI fuzzer on the ASan + UBSan build of the FMU.
 
 * ``test_fuzz``: a fixed seed and IMPACT_FUZZ_SEQUENCES (default 2000) random FMI 2.0/3.0 call
   sequences; any sanitizer report, crash, hang (20 s per sequence) or oracle violation
   (tests/fuzz/executor.py) fails it, with each failing sequence's seed and a minimised version.
   More on demand: ``IMPACT_FUZZ_SEQUENCES=100000 IMPACT_FUZZ_SEED=7 pytest tests/fmu/test_fuzz_fmi.py``.
 * ``test_corpus``: every sequence in tests/fuzz_corpus/ (minimised fuzzer finds and the inputs
-  of issue 13's "Why") replays cleanly.
+  of the reported failures) replays cleanly.
 * The rest checks the fuzzer itself: the sanitizer is live in its child process, sequences are
   reproducible from their seed, corruption and minimisation do what they say.
 """
@@ -131,7 +131,7 @@ def test_minimise_keeps_what_the_failure_needs() -> None:
 
 
 def test_the_standard_model_flags_an_illegal_call_answered_ok() -> None:
-    """The fuzzer's state-machine oracle (issue 19): fed the calls of an FMU that accepts a call
+    """The fuzzer's state-machine oracle: fed the calls of an FMU that accepts a call
     the standard forbids, it reports; the standard's transitions move it (Error -> error state,
     FMI 3.0 -> Terminated; Reset -> Instantiated; SetFMUState -> unknown, not judged)."""
     from tests.fuzz.standard_model import StateModel

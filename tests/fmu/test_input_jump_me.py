@@ -1,10 +1,10 @@
-"""One rule for input jumps in Co-Simulation and Model Exchange (issue 19, item 6).
+"""One rule for input jumps in Co-Simulation and Model Exchange.
 
 A compliant wall given as a staircase u_wall(t): at t = 1 it steps past the mass while the mass
 is in contact (the mass is then outside: the contact ends, the mass does not move; README
 "Inputs that jump", model_input_jump), at t = 2.5 it steps back. Model Exchange through fmpy
 (FMI 2.0 and 3.0, fmpy's CVODE at rtol 1e-10) once put the mass onto the new wall position and
-counted an extra impact (2e-2 per period, issue 19). Here ME, the FMU's own Co-Simulation (the
+counted an extra impact (2e-2 per period). Here ME, the FMU's own Co-Simulation (the
 input set between steps) and the closed form, solved piecewise between the jumps
 (mapcheck.exact with u_wall held constant, the state carried across each jump unchanged), agree
 at every period, and so do the impact counts.

@@ -1,4 +1,4 @@
-"""The FMU's input promises against an independent reference (issue 22, item 1): ramped ports
+"""The FMU's input promises against an independent reference: ramped ports
 whose doSteps cross the closed form's re-origin, inputs holding their end-of-step values,
 sticking on a moving rigid wall and its release with the wall's velocity, grazing exits from
 inside the compliant wall, in both solver modes (``solver`` 0 CVODE, 1 the closed form).

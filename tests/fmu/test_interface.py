@@ -230,7 +230,7 @@ def test_calls_in_the_wrong_state(fmu):
 def test_tolerances_cvode_cannot_meet_are_rejected_where_they_enter():
     """rtol at round-off (1e-18) once failed the step inside CVODE; it is now refused when set,
     with the valid range in the message, and the instance goes on with its previous value.
-    (A step that exceeds the work bound fails with fmi2Error: the solver's tests, issue 13.3.)"""
+    (A step that exceeds the work bound fails with fmi2Error: see test_bounds.py.)"""
     fmu = LoggedSlave(name="hard")
     try:
         fmu.slave.reset()

@@ -1,4 +1,4 @@
-"""The FMU's ports (issue 14.2): inputs F_ext and u_wall, outputs F_contact, v_impact, t_impact.
+"""The FMU's ports: inputs F_ext and u_wall, outputs F_contact, v_impact, t_impact.
 
 Independent truths: the closed form with constant ports (mapcheck.exact.ExactOscillator(F_ext=,
 u_wall=), an exact scaling of the port-free problem), scipy's DOP853 for ramps given as input

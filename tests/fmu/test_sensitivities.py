@@ -1,4 +1,4 @@
-"""The FMU's sensitivities (issue 11.1): J = d(u, v)(end of doStep)/d(u, v)(start) and
+"""The FMU's sensitivities: J = d(u, v)(end of doStep)/d(u, v)(start) and
 S = d(u, v)(end)/d sigma, from the variational equations with saltation matrices at every wall
 event, in CVODE mode (integrated alongside the state) and in closed-form mode (analytic).
 

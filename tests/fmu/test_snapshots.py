@@ -1,4 +1,4 @@
-"""FMU-state snapshots (issue 13.2): versioned, tagged with the interface (FMI 2.0/3.0, CS/ME),
+"""FMU-state snapshots: versioned, tagged with the interface (FMI 2.0/3.0, CS/ME),
 checksummed and validated field by field. A bad state is refused with a message and leaves the
 instance exactly as it was; nothing non-finite ever comes back with OK.
 
@@ -235,7 +235,7 @@ def test_own_states_always_round_trip_after_reset():
         s.close()
 
 
-# -- the input ramps (issue 22): F_ext, u_wall with their derivatives and reference time --------
+# -- the input ramps: F_ext, u_wall with their derivatives and reference time --------
 DF, DW = 0.3725, -0.0193  # distinct doubles, so that their place in the state is found
 
 

@@ -1,4 +1,4 @@
-"""Results independent of the importer's time grid (issue 14.1), FMI 2.0 and 3.0 Co-Simulation.
+"""Results independent of the importer's time grid, FMI 2.0 and 3.0 Co-Simulation.
 
 Importers compute communication points differently: fmusim as t0 + k h, others by summing
 t += h, some with variable steps; the points land a few ulps off "round" times. The FMU used to
@@ -29,7 +29,7 @@ from mapcheck.exact import ExactOscillator
 from tests.fmu_support import FMU3_PATH, FMU_PATH, WALLS
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
-SIGMA, R, GAMMA = 0.5, 0.9, 10.0  # the issue's case: Figure 9, sigma = 0.5 (period 2)
+SIGMA, R, GAMMA = 0.5, 0.9, 10.0  # Figure 9, sigma = 0.5 (period 2)
 T0 = 0.5
 START = dict(u0=-(1.0 + SIGMA) - 1.0, v0=0.0)  # on the wall-free orbit p(t) at t = 0.5
 BUDGET = 1e-8

@@ -22,7 +22,7 @@ import pytest
 from tests.fuzz.model import ROOT, describe
 
 
-# Missing tools fail rather than skip: issue 13 asks that these checks can fail CI, and a silent skip
+# Missing tools fail rather than skip: these checks must be able to fail CI, and a silent skip
 # after a broken set-up would hide exactly that (scripts/setup.sh installs valgrind and cc).
 @pytest.fixture(autouse=True)
 def _tools_present() -> None:

@@ -1,7 +1,7 @@
-"""Nothing non-finite with OK (issue 13.2): every value that enters the FMU is checked where it
+"""Nothing non-finite with OK: every value that enters the FMU is checked where it
 enters (setters, start values, Model Exchange states and time, inputs, the start time), derived
 quantities that could overflow are checked too (kappa, the forcing amplitude), and a step that
-returns OK has finite outputs. The inputs of the issue's "Why" list are here one by one, and
+returns OK has finite outputs. The inputs once reported as leaking non-finite values are here one by one, and
 the corners of the valid ranges run to a finite state or fail with a message, never OK with inf.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""A fuzzer of the FMU's FMI 2.0 and 3.0 C interfaces (issue 13.4).
+"""A fuzzer of the FMU's FMI 2.0 and 3.0 C interfaces.
 
 ``bindings`` loads the shared libraries with ctypes (no fmpy: the fuzzer must run inside a process
 whose allocator is AddressSanitizer's), ``model`` reads the variables from modelDescription.xml,

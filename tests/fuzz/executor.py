@@ -1,6 +1,6 @@
 """Runs one action sequence against a loaded FMU binary and checks the oracle.
 
-The oracle (issue 13): the process does not crash, no sanitizer reports (both are seen by the
+The oracle: the process does not crash, no sanitizer reports (both are seen by the
 parent process, runner.py), and in this process
 
 * ``nonfinite``: no call returns OK (or Warning) with a non-finite value: every getter's result,

@@ -1,4 +1,4 @@
-"""The standard's state machine as the fuzzer's oracle (issue 19, item 3).
+"""The standard's state machine as the fuzzer's oracle.
 
 Every FMI call the executor makes goes through :class:`RecordingLibrary`, which records the
 function's name and status. :class:`StateModel` replays them against tests/fmi_standard.py (the

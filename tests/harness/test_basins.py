@@ -1,4 +1,4 @@
-"""Basins of attraction (issue 21, item 4): attractors told apart by their stroboscopic orbits,
+"""Basins of attraction: attractors told apart by their stroboscopic orbits,
 coexisting attractors of equal period kept apart, starts inside a rigid wall marked invalid,
 parallel and resumable like sweeps.  The labels are checked against the closed-form flow of
 mapcheck (an independent solver): every attractor is a periodic orbit of the exact flow with
@@ -29,7 +29,7 @@ ROOT = Path(__file__).resolve().parents[2]
 #: one impact, the down scan on a period-3 orbit with two (tests/harness/test_cli_signals.py's
 #: loop): two coexisting attractors of the same period.
 COEXIST = {"nu": 0.196, "Omega": 7.368, "r": 0.9, "Gamma": 1000.0, "wall": "compliant", "sigma": 0.01, "solver": 1}
-#: The underdamped oscillator of issue 18 on a rigid wall: one stable one-impact period-1 orbit.
+#: An underdamped oscillator (not the paper's) on a rigid wall: one stable one-impact period-1 orbit.
 RIGID = {"nu": 0.8, "Omega": 2.5, "r": 0.8, "wall": "rigid", "sigma": 1.7, "solver": 1}
 
 

@@ -1,4 +1,4 @@
-"""Memory and work are estimated before anything is allocated (issue 13, item 5): huge grids,
+"""Memory and work are estimated before anything is allocated: huge grids,
 sample counts and time series are refused in one line with the estimate and the way out."""
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ from tests.cli_support import run_main as _run_main
 ROOT = Path(__file__).resolve().parents[2]
 
 
-# The inputs of issue 13's "Why", each with the flag the refusal must name and what it says.
+# Inputs that once allocated without bound, each with the flag the refusal must name and what it says.
 HUGE = [
     (["sweep", "--num", "1e9"], "--num", "memory"),
     (["sweep", "--scan", "Gamma=1:10:1000000"], "--scan", "memory"),

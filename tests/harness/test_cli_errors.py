@@ -1,5 +1,5 @@
 """Failures a user can cause end in one line on stderr and exit status 2, never a traceback
-(issue 13, item 5): broken FMU binaries, unreadable experiment files, unwritable outputs."""
+broken FMU binaries, unreadable experiment files, unwritable outputs."""
 from __future__ import annotations
 
 import os
@@ -136,7 +136,7 @@ def test_broken_fmu_in_a_real_process(garbage_fmu: Path, tmp_path: Path) -> None
 
 
 def test_rejected_sweep_leaves_no_checkpoint_and_no_note_next_time(tmp_path: Path, capsys) -> None:
-    """Issue 12: a run refused for a bad parameter left OUT.partial, and the corrected rerun
+    """A run refused for a bad parameter left OUT.partial, and the corrected rerun
     printed a note about discarding it."""
     out = tmp_path / "s.nc"
     base = ["sweep", "--param", "contact", "--mode", "fresh", "--solver", "closed-form", "--transient", "2",

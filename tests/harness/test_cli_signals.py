@@ -1,4 +1,4 @@
-"""Interrupted and killed runs (issue 13, item 5; issue 12's hysteresis loop): chains keep their
+"""Interrupted and killed runs: chains keep their
 finished points and resume, `--mode both` is one loop, workers and temporary folders die with
 the run.  Interruptions land at known points through the test hook, never after a sleep."""
 from __future__ import annotations
@@ -56,7 +56,7 @@ LOOP_PARAMS = {"nu": 0.196, "Omega": 7.368, "Gamma": 1000.0, "r": 0.9, "wall": 1
 
 
 def test_both_is_a_loop_down_starts_where_up_ended(model: FmuModel) -> None:
-    """Issue 12: the down scan of `--mode both` started again from (u0, v0) at the top. Now its
+    """The down scan of `--mode both` started again from (u0, v0) at the top. Now its
     first point goes on from the up scan's last state: the clock runs on, and an independent
     restart of the FMU from the up scan's final sample reproduces the down scan's first point."""
     grid = np.linspace(-0.03, 0.03, 5)

@@ -1,4 +1,4 @@
-"""Continuation of the FMU's periodic orbits against independent truth (issue 18, items 1, 2, 6).
+"""Continuation of the FMU's periodic orbits against independent truth.
 
 Truth: mapcheck's closed-form solution of the ODE (:mod:`mapcheck.exact`) with mapcheck's own
 Newton shooting (:func:`mapcheck.orbits.solve_periodic_orbit`, finite differences): a code path
@@ -43,7 +43,7 @@ def fig9(model) -> dict:
 
 @pytest.fixture(scope="module")
 def under(model) -> dict:
-    """The issue's underdamped oscillator (alpha ~ -1.05), rigid wall."""
+    """An underdamped oscillator (alpha ~ -1.05), rigid wall."""
     return {**model.defaults(), "nu": 0.8, "Omega": 2.5, "r": 0.8, "wall": 2, "solver": 1}
 
 
@@ -74,7 +74,7 @@ def test_attractors_kept_apart_and_refined(sim, fig9, under) -> None:
         assert orb.converged and _rotations_match(a.points, orb.z, 1e-8)
         assert np.allclose(np.sort_complex(a.multipliers), np.sort_complex(orb.multipliers), atol=1e-5)
     (p1,) = rigid.attractors
-    # the issue's sweep of the underdamped rigid case: multipliers -0.921, -0.312 at 1.70
+    # a sweep of the underdamped rigid case: multipliers -0.921, -0.312 at 1.70
     assert p1.label == "P1/1" and np.allclose(np.sort(p1.multipliers.real), [-0.921, -0.312], atol=1e-3)
 
 
@@ -148,7 +148,7 @@ def test_switch_at_flip_reaches_period_two_window(sim, fig9) -> None:
 
 
 def test_underdamped_rigid_window(sim, under) -> None:
-    """The issue's rigid case: the one-impact period-1 orbit is stable from a flip at sigma ~ 1.60
+    """The underdamped rigid case: the one-impact period-1 orbit is stable from a flip at sigma ~ 1.60
     up to the end of the range (3), with multipliers ~ -0.969 at 1.64."""
     a = _seed(sim, under, 1.7, 1)
     down = continue_orbit(sim, under, 1, 1.7, a.points[0], p_range=(1.0, 3.0), direction=-1, max_points=60)

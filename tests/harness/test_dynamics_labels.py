@@ -1,9 +1,9 @@
-"""The sweeps' ``dynamics`` label never contradicts the numbers next to it (issue 21, item 3).
+"""The sweeps' ``dynamics`` label never contradicts the numbers next to it.
 
 A sweep over Figure 9's sigma in [0.01, 0.6] with a short transient holds chaos (sigma < 0.15),
 the period-adding windows and points near their edges that still converge (a period found in the
 samples, which still shrink towards a shorter one).  Every point's label is checked against its
-own period, samples and Lyapunov exponent by the issue's rules, and the labels "periodic" and
+own period, samples and Lyapunov exponent by the rules of harness.dynamics.classify, and the labels "periodic" and
 "chaotic" against an independent truth: a run 40 times longer from the same start settles on a
 period dividing the one found (periodic), or finds no period at all (chaotic).
 """

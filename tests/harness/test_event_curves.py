@@ -1,4 +1,4 @@
-"""Two-parameter continuation of the windows' edges (issue 18, items 3 and 6) against independent truth.
+"""Two-parameter continuation of the windows' edges against independent truth.
 
 Truth: mapcheck's closed-form flow (:class:`mapcheck.exact.ExactOscillator`) with mapcheck's own Newton
 shooting and finite-difference multipliers (:func:`mapcheck.orbits.solve_periodic_orbit`): it shares

@@ -1,6 +1,6 @@
 """``jacobian``: the singularity exponent with its standard error and fit range, soft and hard
 contacts fitted apart at a compliant wall, saved in the NetCDF; ``--state`` prints and saves the
-multipliers; the help says the default is exact (issue 21, item 5).
+multipliers; the help says the default is exact.
 
 Independent truths: scipy's linear regression for the slope and its standard error; the theory's
 exponents (docs/theory.md section 8): +1/2 for soft elastic contacts (r = 1), -1/2 for the

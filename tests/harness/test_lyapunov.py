@@ -189,7 +189,7 @@ def test_chaotic_orbit_has_a_positive_exponent(model, sim, fig9_orbits) -> None:
 def test_classification_rules() -> None:
     assert classify_dynamics(3, False, math.nan, math.nan) == PERIODIC
     assert classify_dynamics(3, True, -0.01, 0.001) == PERIODIC  # still settling, but attracting
-    assert classify_dynamics(12, True, -0.055, 0.029) == PERIODIC  # the period-12 orbit
+    assert classify_dynamics(12, True, -0.055, 0.029) == PERIODIC  # a period-12 orbit with a near-zero exponent
     assert classify_dynamics(3, True, 0.01, 0.001) == NOT_CONVERGED  # settling, exponent not negative
     assert classify_dynamics(3, True, math.nan, math.nan) == NOT_CONVERGED  # settling, no exponent
     assert classify_dynamics(0, False, -0.05, 0.002) == NOT_CONVERGED  # stable, transient not over

@@ -1,5 +1,5 @@
 """A script that calls run_sweep with worker processes outside ``if __name__ == "__main__":`` gets one
-error that names the line and the fix, before any worker starts (issue 21, item 6); the same
+error that names the line and the fix, before any worker starts; the same
 script under the guard runs.  Real scripts in a subprocess, the real pool."""
 from __future__ import annotations
 

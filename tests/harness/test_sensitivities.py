@@ -1,4 +1,4 @@
-"""Map Jacobians, multipliers and Newton shooting from the FMU's own derivatives (issue 11).
+"""Map Jacobians, multipliers and Newton shooting from the FMU's own derivatives.
 
 The harness detects the FMU's sensitivity outputs (``sensitivities``, ``J_uu`` ... ``S_v``)
 by name; with them a Jacobian is one run of the variational equations, without them it is

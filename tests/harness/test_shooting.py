@@ -17,7 +17,7 @@ from harness.dynamics.shooting import StroboscopicMap, map_guided_windows
 from mapcheck.coeffs import coefficients
 from mapcheck.linear import invert_alpha_gamma
 
-#: The issue's reproducer: (alpha, gamma) = (0.5, 0.05), r = 0.8, compliant wall Gamma = 10,
+#: A case where shooting once failed: (alpha, gamma) = (0.5, 0.05), r = 0.8, compliant wall Gamma = 10,
 #: the A~ map's period-4 window (closed-form maximal orbits, mapcheck).
 GUIDE_M4 = (0.0007036372600123284, 0.004341898116748781)
 

@@ -2,7 +2,7 @@
 window found on mapcheck's closed-form flow (``mapcheck.exact.ExactOscillator``, the exact
 solution, with ``mapcheck.orbits.window_edge``'s own march, bisection and finite-difference
 Newton: no harness code), and the edge kinds checked by the multipliers on each side of each
-edge (issue 22, item 2).
+edge.
 
 Case: the period-4 window of the issue-17 reproducer, (alpha, gamma) = (0.5, 0.05), r = 0.8,
 compliant wall Gamma = 10 (the map's A~ window is the guide the harness starts from).

@@ -1,4 +1,4 @@
-"""Sweep figures for a talk (issue 21, item 2): the Lyapunov panel whenever the data has
+"""Sweep figures for a talk: the Lyapunov panel whenever the data has
 exponents, one colour per class with a legend listing exactly the classes that occur, titles
 that fit in the figure; and a u0 x v0 scan with starts inside the rigid wall runs to the end,
 those starts marked invalid.

@@ -1,4 +1,4 @@
-"""Messages that cost a user an hour when missing (issue 21, item 6): a discarded checkpoint
+"""Messages that cost a user an hour when missing: a discarded checkpoint
 says which settings differ, a config file's mistakes come all in one run, and --u0/--v0 say at
 which time the state applies."""
 from __future__ import annotations

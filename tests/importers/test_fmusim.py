@@ -129,7 +129,7 @@ def test_me_in_fmusims_cvode(name: str, version: str, tmp_path: Path) -> None:
 
 # The wall steps into the mass (compliant wall, the overdamped orbit at u ~ -0.067 at t = 3):
 # the CS rule keeps the state and starts a contact without an impact (docs/fmu.md); ME applies
-# the same rule at fmusim's input event (issue 19, item 6). Only u_wall steps here: after an
+# the same rule at fmusim's input event. Only u_wall steps here: after an
 # F_ext step fmusim's CVODE goes on with its history across the jump (docs/importers.md).
 INTO_THE_MASS = [(0.0, 0.0, 0.0), (3.0, 0.0, 0.0), (3.0, 0.0, -0.1), (10.0, 0.0, -0.1)]
 ME_HOLDS = [(0.0, 0.0, 0.0), (3.0, 0.0, -0.1)]

@@ -1,4 +1,4 @@
-"""The fuzzer's corpus (tests/fuzz_corpus/, issue 13) replayed on every platform (issue 20).
+"""The fuzzer's corpus (tests/fuzz_corpus/) replayed on every platform.
 
 tests/fmu/test_fuzz_fmi.py replays each sequence natively, in Python through ctypes, under the
 sanitizers. Here the same sequences, written as text, go through tests/host/corpus_replay.c (a C

@@ -1,4 +1,4 @@
-"""Every binary in the FMUs, tested where it runs (issue 20): x86_64 Linux natively, x86_64
+"""Every binary in the FMUs, tested where it runs: x86_64 Linux natively, x86_64
 Windows under wine, aarch64 Linux under qemu-user, each through the same C host
 (tests/host/fmu_host.c) built with that target's toolchain, FMI 2.0 and 3.0, Co-Simulation and
 Model Exchange.
@@ -34,7 +34,7 @@ CASES = {
     "underdamped-rigid": dict(UNDERDAMPED, wall="rigid"),
 }
 PERIODS = 100
-TOL = 1e-8  # per period, absolute on (u, v); the issue's bound
+TOL = 1e-8  # per period, absolute on (u, v): the bound the platforms promise
 INTERFACES = [(fmi, itf) for fmi in ("fmi2", "fmi3") for itf in ("cs", "me")]
 
 

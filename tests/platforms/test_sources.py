@@ -1,4 +1,4 @@
-"""The FMUs' sources (issue 20): FMI 3.0 sources/ with buildDescription.xml, FMI 2.0 <SourceFiles>,
+"""The FMUs' sources: FMI 3.0 sources/ with buildDescription.xml, FMI 2.0 <SourceFiles>,
 CVODE's needed files and its license inside. Rebuilt from the archive alone -- with fmpy's
 build_platform_binary (only `-I sources` and the listed files) and with a plain
 `cmake -S sources` -- the Linux binary gives, through the C host, the same states one period on

@@ -1,6 +1,6 @@
 """The API reference builds with the one documented command (`bash scripts/docs.sh`, README
 "Documentation"): a page per module of harness and mapcheck, and the harness page groups the
-entry points as a user looks for them (issue 12, item 4)."""
+entry points as a user looks for them."""
 from __future__ import annotations
 
 import os

@@ -1,4 +1,4 @@
-"""Smoke test of the benchmark script (issue 7): ``bench/run.py --quick`` finishes and produces
+"""Smoke test of the benchmark script: ``bench/run.py --quick`` finishes and produces
 its table with sane accuracy columns.  No timing is asserted (the machine is shared)."""
 from __future__ import annotations
 

@@ -74,7 +74,7 @@ def test_exact_derivatives_fit_from_1e_minus_9(fig) -> None:
     eight decades at Gamma = 10 (+1/2 at r = 1, -1/2 at r = 0.9) to 0.01, and the exact
     Jacobian agrees with the differences where both are reliable (x = 1e-4 .. 1e-2)."""
     name, _, res = fig
-    assert res["method"] == "exact", "the project's FMU reports its derivatives (issue 11)"
+    assert res["method"] == "exact", "the project's FMU reports its derivatives"
     expected = 0.5 if name == "fig6" else -0.5
     soft = res["slopes"]["10.0"]["soft"]
     assert soft["x_range"][0] == pytest.approx(1e-9)

@@ -1,4 +1,4 @@
-"""The pythonfmu twin's column of the state-machine conformance suite (issue 19, items 2 and 3).
+"""The pythonfmu twin's column of the state-machine conformance suite.
 
 The twin (build/fmu/ImpactOscillatorPy.fmu, FMI 2.0 Co-Simulation) is judged against the same
 standard table as the C FMU (tests/fmi_standard.py, "fmi2-cs"): every (state, function) pair,

@@ -1,4 +1,4 @@
-"""The pythonfmu twin's FMI 2.0 Co-Simulation state machine (issue 19, item 2).
+"""The pythonfmu twin's FMI 2.0 Co-Simulation state machine.
 
 FMI 2.0.4, section 4.2.4 (the table of allowed calls per state) and 2.1.3 (after fmi2Error the
 simulation cannot go on; fmi2Reset, fmi2SetFMUstate or fmi2FreeInstance lead on).  Each case

@@ -1,4 +1,4 @@
-"""The pythonfmu twin's results do not depend on the importer's time grid (issue 14.1, twin).
+"""The pythonfmu twin's results do not depend on the importer's time grid (twin).
 
 The twin (build/fmu/ImpactOscillatorPy.fmu, FMI 2.0 CS; CVODE through scikit-sundae) used to
 set every communication point as CVODE's stop time, as the C FMU did.  On fmusim's grid
@@ -10,7 +10,7 @@ returns its interpolant there, CVodeGetDky), as the C FMU does in one-step mode 
 CVodeGetDky (fmu_src/solver_cvode.c; impact_twin_model.CvodeDriver._cvode_step).
 
 Checks, with the grids and the closed form of tests/fmu/test_timegrid.py:
-* the issue's case, t0 + k 0.01 over 100 periods, compliant and rigid: against the closed form,
+* the reported case, t0 + k 0.01 over 100 periods, compliant and rigid: against the closed form,
   against the summed grid, and against the C FMU on the same grid;
 * every grid of the C FMU's time-grid test (t0 + k h for h = 1e-4 .. 10, summed, random
   variable steps, points a few ulps off the integers), every wall model: every communication
@@ -32,7 +32,7 @@ from tests.fmu_support import FMU_PATH
 
 TWIN_FMU = Path(__file__).resolve().parents[2] / "build" / "fmu" / "ImpactOscillatorPy.fmu"
 
-#: The issue's grids: 100 periods at h = 0.01, as fmusim computes them and as a summing importer.
+#: The grids that exposed the drift: 100 periods at h = 0.01, as fmusim computes them and as a summing importer.
 ISSUE_GRID, SUMMED_GRID = fixed(0.01, 100), summed(0.01, 100)
 
 #: Twin against the C FMU on the same grid.  No wall and the rigid wall: the same bits (both

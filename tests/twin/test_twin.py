@@ -153,7 +153,7 @@ def test_build_command_writes_a_valid_fmu(tmp_path: Path) -> None:
     assert len(md.findall("ModelStructure/InitialUnknowns/Unknown")) == 7
 
 
-#: The variables of the oscillator FMU (issue 6), in value-reference order.
+#: The variables of the oscillator FMU, in value-reference order.
 ISSUE_VARIABLES = ["nu", "Omega", "sigma", "r", "Gamma", "wall", "u0", "v0", "rtol", "atol",
                    "F_g", "phi", "kappa", "u", "v", "impacts", "in_contact"]
 
