@@ -270,8 +270,11 @@ def run_one(m: Mutant, timeout: float) -> tuple[str, str, float]:
             (copy / "build").symlink_to(ROOT / "build")
         env = {**os.environ, "PYTHONPATH": str(copy), "PYTHONDONTWRITEBYTECODE": "1"}
         try:
-            res = subprocess.run([sys.executable, "-m", "pytest", "-x", "-q", "-rf", "-p", "no:cacheprovider",
-                                  *m.tests], cwd=copy, env=env, capture_output=True, text=True, timeout=timeout)
+            # -n 0: the mutant's few tests in this process; under pytest-xdist, -x ends a failing
+            # run with exit status 2 (interrupted) instead of 1, which would read as an error
+            res = subprocess.run([sys.executable, "-m", "pytest", "-n", "0", "-x", "-q", "-rf", "-p",
+                                  "no:cacheprovider", *m.tests], cwd=copy, env=env, capture_output=True,
+                                 text=True, timeout=timeout)
         except subprocess.TimeoutExpired:
             return "killed", "timeout (the tests hung)", time.monotonic() - t0
         failed = re.findall(r"^FAILED (\S+)", res.stdout, re.M)

@@ -19,6 +19,9 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 CROSS = ROOT / "build" / "cross"
+#: wine's prefix, outside the source tree (scripts/cross_build.sh says why); the same default there
+WINEPREFIX = Path(os.environ.get("IMPACT_WINEPREFIX")
+                  or Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "impact-grazing" / "wineprefix")
 WINE = "/usr/lib/wine/wine64"
 WINESERVER = "/usr/lib/wine/wineserver64"
 AARCH64_SYSROOT = "/usr/aarch64-linux-gnu"
@@ -64,7 +67,7 @@ def require_cross_build() -> None:
 
 def env() -> dict[str, str]:
     """The environment for wine: the prefix scripts/cross_build.sh initialised, no debug output."""
-    return dict(os.environ, WINEPREFIX=str(CROSS / "wineprefix"), WINEDEBUG="-all")
+    return dict(os.environ, WINEPREFIX=str(WINEPREFIX), WINEDEBUG="-all")
 
 
 def unpack(fmu: Path, dest: Path) -> Path:

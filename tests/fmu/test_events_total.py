@@ -71,6 +71,7 @@ def run_periods(fmu: LoggedSlave, case: str, r: float, periods: int):
     return np.array(states), np.array(impacts)
 
 
+@pytest.mark.slow  # the r scan: every case over R_GRID
 @pytest.mark.parametrize("case", list(CASES))
 @pytest.mark.parametrize("r", R_GRID)
 def test_every_period_matches_the_closed_form(fmu, case, r):
@@ -127,7 +128,7 @@ def test_compliant_wall_with_r0_runs_past_the_reported_failure(fmu, sigma, Gamma
 
 
 @pytest.mark.parametrize("r", [0.44, 0.46, 0.48, 0.5, 0.6, 0.68])
-def test_rigid_chatter_of_the_issue_sticks_and_releases(fmu, r):
+def test_rigid_chatter_sticks_and_releases(fmu, r):
     """nu 0.196, Omega 7.368, sigma 10, u0 -0.03, v0 0: the impacts accumulate in the first
     period and the mass sticks; the FMU used to stop with a state 2.9e-24 inside the wall."""
     lin, sigma = UNDERDAMPED, 10.0

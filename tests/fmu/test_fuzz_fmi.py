@@ -25,6 +25,8 @@ from tests.fuzz.executor import corrupt
 from tests.fuzz.model import ROOT, describe
 from tests.fuzz.sequences import Generator
 
+pytestmark = pytest.mark.slow  # builds the ASan + UBSan FMU and fuzzes it
+
 CORPUS = sorted((ROOT / "tests" / "fuzz_corpus").glob("*.json"))
 
 # Findings still open in fmu_src (see the "finding" field of each corpus file); an entry here marks its corpus files xfail (not strict) until

@@ -21,6 +21,8 @@ import pytest
 
 from tests.fuzz.model import ROOT, describe
 
+pytestmark = pytest.mark.slow  # the release binaries under valgrind memcheck
+
 
 # Missing tools fail rather than skip: these checks must be able to fail CI, and a silent skip
 # after a broken set-up would hide exactly that (scripts/setup.sh installs valgrind and cc).

@@ -158,6 +158,7 @@ def test_cli_bad_input_is_one_line(tmp_path: Path, capsys, bad: str, flag: str) 
     assert code == 2 and flag in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_cli_interrupted_scan_resumes_with_no_point_missing(tmp_path: Path) -> None:
     out = tmp_path / "b.nc"
     cmd = [sys.executable, "-m", "harness", *ARGS, "--backend", "serial", "--out", str(out), "--no-plot"]

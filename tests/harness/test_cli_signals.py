@@ -20,6 +20,8 @@ from harness.dynamics.sampling import sample_periods
 from harness.runs.tasks import TEST_HOOK_ENV
 from harness.io.tempdirs import PREFIX, remove_stale
 
+pytestmark = pytest.mark.slow  # real processes interrupted and killed, then resumed
+
 ROOT = Path(__file__).resolve().parents[2]
 TMP = Path(os.environ.get("TMPDIR", "/tmp"))
 

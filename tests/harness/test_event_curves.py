@@ -72,6 +72,7 @@ def m2(sim, fig9):
     return fc, gc
 
 
+@pytest.mark.slow
 def test_flip_curve_points_are_flips_of_the_exact_flow(m2, fig9) -> None:
     fc, _ = m2
     assert fc.kind == "flip" and fc.M == 2 and fc.impacts == 1
@@ -125,6 +126,7 @@ def test_graze_curve_points_graze_in_the_exact_flow(m2, fig9) -> None:
                     and free_passage_max_u(flow2, sig * 1.01, orb2) < 0.0)
 
 
+@pytest.mark.slow
 def test_period_3_closes_where_flip_meets_graze(sim, fig9) -> None:
     flip, graze = _edges(sim, fig9, 0.2, 3)
     assert (flip.kind, graze.kind) == ("flip", "graze")
@@ -165,6 +167,7 @@ def test_period_1_flip_runs_off_to_large_sigma(sim, fig9) -> None:
         assert flips and flips[0] == pytest.approx(expected, rel=rel), sigma
 
 
+@pytest.mark.slow
 def test_period_4_closes_at_the_tip_of_its_thin_window(sim, fig9) -> None:
     """Figure 9's period-4 window (0.0016 wide at Gamma = 10) closes where its graze edge meets its
     flip edge; checked by one-parameter continuation in sigma at fixed Gamma on both sides."""

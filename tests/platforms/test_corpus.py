@@ -20,6 +20,8 @@ from tests.fuzz.model import _parse
 from tests.platform_support import (CROSS, NATIVE, PLATFORMS, TOKEN, WINESERVER, env,
                                     require_cross_build, to_hex, unpack)
 
+pytestmark = pytest.mark.slow  # replays the fuzz corpus on every platform
+
 ROOT = Path(__file__).resolve().parents[2]
 CORPUS = sorted((ROOT / "tests" / "fuzz_corpus").glob("*.json"))
 PORTED_CORRUPTIONS = {"none", "bitflip", "nan", "inf", "zero_word"}

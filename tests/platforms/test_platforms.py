@@ -25,6 +25,8 @@ from tests.fmu_support import FMU3_PATH, FMU_PATH
 from tests.platform_support import (NATIVE, PLATFORMS, WINESERVER, env, host_input, imports,
                                     require_cross_build, run_host, unpack)
 
+pytestmark = pytest.mark.slow  # the Windows and aarch64 binaries under wine and qemu-user
+
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112, r=0.9, Gamma=10.0, sigma=0.5)
 UNDERDAMPED = dict(nu=0.8, Omega=2.5, r=0.8, Gamma=10.0, sigma=0.5)
 CASES = {

@@ -19,6 +19,8 @@ from fmpy.build import build_platform_binary
 from tests.fmu_support import FMU3_PATH, FMU_PATH
 from tests.platform_support import NATIVE, host_input, require_cross_build, run_host, unpack
 
+pytestmark = pytest.mark.slow  # rebuilds the FMUs from their shipped sources
+
 CASE = dict(nu=4.605170185988091, Omega=0.3059238689620112, r=0.9, Gamma=10.0, sigma=0.5,
             wall="compliant")
 STARTS = np.array([[k, -1.0 + 0.3 * k, 0.2 - 0.1 * k] for k in range(5)], dtype=float)

@@ -8,8 +8,12 @@ import pkgutil
 import subprocess
 from pathlib import Path
 
+import pytest
+
 import harness
 import mapcheck
+
+pytestmark = pytest.mark.slow  # builds every API page with pdoc through scripts/docs.sh
 
 ROOT = Path(__file__).resolve().parents[2]
 GROUPS = ("FMU driving", "Sampling", "Sweeps", "Errors", "Basins of attraction", "Shooting", "Lyapunov exponents",

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # runs the benchmark script
+
 ROOT = Path(__file__).resolve().parents[2]
 METHODS = ("harness", "c_driver", "twin", "dop853", "exact")
 

@@ -13,6 +13,8 @@ import pytest
 
 from harness.reproduce import run_target
 
+pytestmark = pytest.mark.slow  # reproduces the paper's Figures 6 and 7
+
 #: 0.05 in the exponent: over the >= 1 decade fitted, a 12% distortion of the end points;
 #: what the O(1) part and the next order (x^(1/2) relative) leave at beta <= 0.1.
 TOL = 0.05

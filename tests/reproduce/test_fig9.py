@@ -13,6 +13,8 @@ import pytest
 from harness.cli.main import main
 from harness.reproduce import run_target
 
+pytestmark = pytest.mark.slow  # reproduces the paper's Figure 9
+
 FMU = Path(__file__).resolve().parents[2] / "build" / "fmu" / "ImpactOscillator.fmu"
 
 
