@@ -114,7 +114,7 @@ _EXPORTS = {
     "FmuSimulator": "fmu.simulator", "MappingSimulator": "fmu.simulator", "Simulator": "fmu.simulator",
     "SweepStats": "runs.sweeps", "run_sweep": "runs.sweeps",
     "StroboscopicMap": "dynamics.shooting", "map_guided_windows": "dynamics.shooting",
-    "compare_windows": "reproduce.windows",
+    "compare_windows": "analysis.windows",
     "run_basins": "runs.basin_scan", "Attractor": "dynamics.basins", "identify_attractors": "dynamics.basins",
 }
 

@@ -7,7 +7,7 @@ from typing import Any
 
 from mapcheck.compare import markdown_window_table
 
-from . import Context
+from .context import Context
 from .windows_plots import labels_for
 
 #: Map variants (keys in the JSON); the coefficient equation depends on the wall.
