@@ -1,4 +1,4 @@
-"""Plots of the map-vs-ODE window comparison (:mod:`harness.reproduce.windows`).
+"""Plots of the map-vs-ODE window comparison (:mod:`harness.analysis.windows`).
 
 Every title names the parameter set; axes carry natural labels.
 """

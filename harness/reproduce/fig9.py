@@ -1,6 +1,6 @@
 """Figure 9: truncated period adding at (alpha, gamma) = (0.99, 0.01), r = 0.9.
 
-This is ``impact-harness windows`` (:mod:`harness.reproduce.windows`) with the paper's
+This is ``impact-harness windows`` (:mod:`harness.analysis.windows`) with the paper's
 parameters and grids:
 
 * ``theory_64``   -- (64), rho in [1/(4M), 1/M^2], with rho(sigma) linear from (48);
