@@ -67,6 +67,7 @@ The public entry points, grouped as you look for them:
 
 * `compare_windows` (``impact-harness windows``) -- for any (alpha, gamma) or (nu, Omega), r and
   wall: window edges of (64), the 2D map, the A~ map and the ODE, with report.md, JSON and plots;
+* `harness.analysis` -- the window comparison and the chart for any parameter set;
 * `harness.reproduce` -- the paper's figures (``impact-harness reproduce FIG``);
 * `mapcheck.compare` -- the generic comparison logic (coordinates, window tables, fits).
 
