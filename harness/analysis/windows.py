@@ -39,8 +39,7 @@ from mapcheck.compare import (
 from ..errors import HarnessInputError
 from .context import Context, write_outputs
 from .window_problem import (  # noqa: F401  (the parameter set is part of this module's API)
-    BASE_RANGE, M_AUTO_LIMIT, MAP_WALLS, WALL_CODES, WindowProblem, WindowSettings, command_line, default_settings,
-    map_guide,
+    M_AUTO_LIMIT, WindowProblem, WindowSettings, command_line, default_settings, map_guide,
 )
 from .windows_report import SCAN_TOL, VARIANT_KEYS, report
 

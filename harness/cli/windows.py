@@ -9,7 +9,8 @@ from typing import Any
 
 from mapcheck.compare import markdown_window_table
 
-from ..analysis.windows import MAP_WALLS, WALL_CODES, compare_windows
+from ..analysis.window_problem import MAP_WALLS, WALL_CODES
+from ..analysis.windows import compare_windows
 
 __all__ = ["register", "cmd_windows"]
 
