@@ -21,7 +21,7 @@ import numpy as np
 from harness.fmu.fmi import FmuModel
 from harness.dynamics.lyapunov import lyapunov_exponents
 from harness.reproduce.fig9 import problem, settings
-from harness.reproduce.windows import predicted_windows
+from harness.analysis.windows import predicted_windows
 from harness.dynamics.shooting import StroboscopicMap, map_guided_windows
 from sections import write_section as write_marked_section  # bench/sections.py, next to this script
 from harness.fmu.simulator import FmuSimulator

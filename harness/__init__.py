@@ -67,6 +67,7 @@ The public entry points, grouped as you look for them:
 
 * `compare_windows` (``impact-harness windows``) -- for any (alpha, gamma) or (nu, Omega), r and
   wall: window edges of (64), the 2D map, the A~ map and the ODE, with report.md, JSON and plots;
+* `harness.analysis` -- the window comparison and the chart for any parameter set;
 * `harness.reproduce` -- the paper's figures (``impact-harness reproduce FIG``);
 * `mapcheck.compare` -- the generic comparison logic (coordinates, window tables, fits).
 
@@ -114,7 +115,7 @@ _EXPORTS = {
     "FmuSimulator": "fmu.simulator", "MappingSimulator": "fmu.simulator", "Simulator": "fmu.simulator",
     "SweepStats": "runs.sweeps", "run_sweep": "runs.sweeps",
     "StroboscopicMap": "dynamics.shooting", "map_guided_windows": "dynamics.shooting",
-    "compare_windows": "reproduce.windows",
+    "compare_windows": "analysis.windows",
     "run_basins": "runs.basin_scan", "Attractor": "dynamics.basins", "identify_attractors": "dynamics.basins",
 }
 

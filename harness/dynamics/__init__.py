@@ -7,6 +7,6 @@ periodic orbits with located bifurcations and grazings (:mod:`.continuation`, :m
 :mod:`.branch`, :mod:`.periodic_map`).
 
 Layer: above :mod:`harness.fmu` and :mod:`harness.io`; may import those, the ground
-(:mod:`harness.config`, :mod:`harness.settings`, :mod:`harness.errors`) and :mod:`mapcheck`;
+(:mod:`harness.config`, :mod:`harness.errors`) and :mod:`mapcheck`;
 nothing from ``runs``, ``cli`` or ``reproduce``.
 """

@@ -11,7 +11,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..settings import check_count, check_theta
+from ..config import check_count, check_theta
 from ..errors import HarnessInputError
 from ..fmu.simulator import Simulator
 

@@ -2,7 +2,7 @@
 Co-Simulation instance per thread (:mod:`.slaves`, :mod:`.simulator`), and the FMI 2 logger
 that stays valid for every instance (:mod:`.fmi2_logging`).
 
-Layer: above :mod:`harness.io` and the ground (:mod:`harness.config`, :mod:`harness.settings`,
-:mod:`harness.errors`); imports nothing from ``dynamics``, ``runs``, ``cli`` or ``reproduce``.
+Layer: above :mod:`harness.io` and the ground (:mod:`harness.config`, :mod:`harness.errors`);
+imports nothing from ``dynamics``, ``runs``, ``analysis``, ``reproduce`` or ``cli``.
 This is the only subpackage that knows about fmpy.
 """

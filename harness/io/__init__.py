@@ -5,6 +5,6 @@ the ``__main__``-guard check before worker processes start (:mod:`.main_guard`),
 progress bars (:mod:`.progress`), per-process temporary folders (:mod:`.tempdirs`) and child
 processes that go with their parent (:mod:`.children`).
 
-Layer: the bottom, beside the ground (:mod:`harness.config`, :mod:`harness.settings`,
-:mod:`harness.errors`); imports nothing else from ``harness``.
+Layer: the bottom, beside the ground (:mod:`harness.config`, :mod:`harness.errors`); imports
+nothing else from ``harness``.
 """

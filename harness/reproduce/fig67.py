@@ -259,7 +259,8 @@ def _fmt(v: Any, spec: str = "+.3f") -> str:
     return "-" if v is None else format(v, spec)
 
 
-def _report(ctx: Context, res: dict[str, Any]) -> str:
+def _what_was_compared(ctx: Context, res: dict[str, Any]) -> list[str]:
+    """The title, the parameters, what was compared and the exact-vs-differences cross-check."""
     p = res["parameters"]
     r = p["r"]
     fig = ctx.target
@@ -293,7 +294,12 @@ def _report(ctx: Context, res: dict[str, Any]) -> str:
     elif res["method"] == "fd":
         lines += ["This FMU does not report its derivatives: the scan stops at x = 1e-5, where the differences "
                   "stop being usable.", ""]
-    lines += [
+    return lines
+
+
+def _fitted_slopes(res: dict[str, Any]) -> list[str]:
+    """The exponents of J11 - P11 per stiffness, soft and hard contacts apart."""
+    lines = [
         "## Fitted slopes",
         "",
         "| Gamma | soft slope | soft, offset removed | soft x range | soft beta range | hard slope | hard, offset removed | hard x range | hard beta range |",
@@ -309,13 +315,12 @@ def _report(ctx: Context, res: dict[str, Any]) -> str:
             + f"{_fmt(h and h['slope'])} | {_fmt(h and h['slope_offset_removed'])} | "
             + ("-" if not h else f"{h['x_range'][0]:.1e}-{h['x_range'][1]:.1e}") + " | "
             + ("-" if not h else f"{h['beta_range'][0]:.2g}-{h['beta_range'][1]:.2g}") + " |")
-    hard = {G: f["hard"]["slope"] for G, f in res["slopes"].items() if f["hard"]}
-    h4 = res["slopes"].get(1e4, {}).get("hard")
-    b4 = h4["beta_range"][1] if h4 else float("nan")
-    lines += [
-        "",
-        "'-': the regime covers less than a decade of reliable x at this stiffness.",
-        "",
+    return lines + ["", "'-': the regime covers less than a decade of reliable x at this stiffness.", ""]
+
+
+def _hysteresis_table(res: dict[str, Any]) -> list[str]:
+    """Where the up and down scans start and stop impacting, per stiffness."""
+    lines = [
         "## Bifurcation diagrams (Gamma = 10 and 1000)",
         "",
         "Up scan from the non-impacting orbit, then down scan from where the up scan ended.",
@@ -329,7 +334,15 @@ def _report(ctx: Context, res: dict[str, Any]) -> str:
         lines.append(f"| {G:g} | {_fmt(h['up_first_impacting_sigma'], '.4g')} | "
                      f"{_fmt(h['down_lowest_impacting_sigma'], '.4g')} ({orb_s}) | "
                      f"{_fmt(h['down_return_to_nonimpacting_sigma'], '.4g')} | {_fmt(h['hysteresis_width'], '.3g')} |")
-    lines += [
+    return lines
+
+
+def _verdict(fig: str, res: dict[str, Any]) -> list[str]:
+    """Soft regime against the theory; the hard regime's approach to -1/2 as the wall stiffens."""
+    hard = {G: f["hard"]["slope"] for G, f in res["slopes"].items() if f["hard"]}
+    h4 = res["slopes"].get(1e4, {}).get("hard")
+    b4 = h4["beta_range"][1] if h4 else float("nan")
+    return [
         "",
         "## Verdict, and where theory and FMU disagree",
         "",
@@ -342,4 +355,8 @@ def _report(ctx: Context, res: dict[str, Any]) -> str:
         f"Figures: `{fig}_jacobian.png` (|J11 - P11| against x, fitted ranges shaded, slopes annotated), "
         f"`{fig}_bifurcation.png` (FMU up/down scans at Gamma = 10 and 1000).",
     ]
-    return "\n".join(lines)
+
+
+def _report(ctx: Context, res: dict[str, Any]) -> str:
+    return "\n".join(_what_was_compared(ctx, res) + _fitted_slopes(res) + _hysteresis_table(res)
+                     + _verdict(ctx.target, res))

@@ -1,8 +1,9 @@
-"""An experiment bound to its FMU: the validated settings of a run (parameters of the right
-type, initial state, sampling, run options), built from defaults, a TOML file and CLI flags.
+"""An experiment bound to its FMU: the settings of :mod:`harness.config` (layered, with their
+origin) checked against the FMU that runs them -- parameters coerced to the FMU's types, the
+initial state, sampling and run options.
 
-Lives in the runs layer because it opens the FMU (:mod:`harness.fmu`); the specs it is made of
-are in :mod:`harness.config`.
+Lives in the runs layer because it opens the FMU (:mod:`harness.fmu`); where the settings come
+from and their specs are :mod:`harness.config`'s job.
 """
 from __future__ import annotations
 

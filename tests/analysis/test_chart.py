@@ -13,7 +13,7 @@ import math
 import pytest
 
 from harness.cli.main import main
-from harness.reproduce.chart import closing, parse_range
+from harness.analysis.chart import closing, parse_range
 from harness.errors import HarnessInputError
 
 pytestmark = pytest.mark.slow

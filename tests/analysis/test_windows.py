@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from harness.cli.main import main
-from harness.reproduce.windows import WindowProblem, default_settings
+from harness.analysis.windows import WindowProblem, default_settings
 from tests.edge_support import ExactFlow, dominant, edge_sides, good
 
 ARGS = ["--alpha", "0.5", "--gamma", "0.05", "--r", "0.8", "--wall", "compliant", "--Gamma", "10"]

@@ -27,7 +27,7 @@ from harness.dynamics.attractors import find_attractors
 from harness.dynamics.continuation import continue_orbit
 from harness.dynamics.event_curves import continue_event
 from harness.dynamics.graze_curves import continue_graze
-from harness.reproduce.chart_curves import window_closing
+from harness.analysis.chart_curves import window_closing
 from tests.edge_support import ExactFlow
 
 ROOT = Path(__file__).resolve().parents[2]

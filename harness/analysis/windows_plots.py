@@ -1,4 +1,4 @@
-"""Plots of the map-vs-ODE window comparison (:mod:`harness.reproduce.windows`).
+"""Plots of the map-vs-ODE window comparison (:mod:`harness.analysis.windows`).
 
 Every title names the parameter set; axes carry natural labels.
 """
@@ -46,19 +46,25 @@ def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any],
     says why."""
     applies = applies or {}
     from ..io import plots  # noqa: F401  (selects the Agg backend)
-    import matplotlib.pyplot as plt
 
-
-    eq = problem.coefficient_eq()
     try:
         c = problem.coefficients()
     except (ValueError, ArithmeticError):
         c = None
+    return [_plot_maps(ctx, problem, st, c, applies), _plot_ode_scans(ctx, problem, st, ds, windows, c, applies),
+            _plot_windows(ctx, problem, st, windows, applies)]
+
+
+def _plot_maps(ctx: Any, problem: Any, st: Any, c: Any, applies: dict[str, str | None]) -> str:
+    """TARGET_map.png: the map's bifurcation diagram with rho linear in sigma and with A~(sigma),
+    the (64) window edges over it."""
+    import matplotlib.pyplot as plt
+
+    eq = problem.coefficient_eq()
     params = problem.describe()
     grid = st.scan_grid
     n_map = int(st.extra.get("map_points", 4 * len(grid) + 1))
     sig = np.geomspace(grid[0], grid[-1], n_map) if st.log_sigma else np.linspace(grid[0], grid[-1], n_map)
-    files = []
     fig, axes = plt.subplots(2, 1, figsize=(8, 7), sharex=True)
     for ax, variant, key, what in ((axes[0], "paper", "map", f"rho linear in sigma {eq}"),
                                    (axes[1], "tilde", "map_A_tilde", f"rho with |A~(sigma)|, {eq}")):
@@ -94,7 +100,14 @@ def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any],
     if st.log_sigma:
         axes[1].set_xscale("log")
     fig.tight_layout()
-    files.append(_save(fig, ctx.out / f"{ctx.target}_map.png"))
+    return _save(fig, ctx.out / f"{ctx.target}_map.png")
+
+
+def _plot_ode_scans(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any], c: Any,
+                    applies: dict[str, str | None]) -> str:
+    """TARGET_ode.png: the FMU's up/down scans (in the A~ map's natural coordinates where that
+    map applies) with the shooting's window edges."""
+    import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(8, 4.8))
     for direction, style in (("up", dict(color="tab:blue", marker=".", ms=2)),
@@ -116,11 +129,17 @@ def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any],
                   else f"u at t = n + {problem.theta:g}")
     if st.log_sigma:
         ax.set_xscale("log")
-    ax.set_title(f"ODE (FMU): quasi-static up/down scans\n{params}", fontsize=9)
+    ax.set_title(f"ODE (FMU): quasi-static up/down scans\n{problem.describe()}", fontsize=9)
     ax.legend(loc="lower left", fontsize=8, markerscale=3)
     fig.tight_layout()
-    files.append(_save(fig, ctx.out / f"{ctx.target}_ode.png"))
+    return _save(fig, ctx.out / f"{ctx.target}_ode.png")
 
+
+def _plot_windows(ctx: Any, problem: Any, st: Any, windows: dict[str, Any], applies: dict[str, str | None]) -> str:
+    """TARGET_windows.png: the windows of each source that applies, one row each."""
+    import matplotlib.pyplot as plt
+
+    grid = st.scan_grid
     fig, ax = plt.subplots(figsize=(8, 4.0))
     labels = labels_for(problem)
     names = ["ode"] + [k for k in ("theory_64", "map", "map_A_tilde") if not applies.get(k)]
@@ -139,8 +158,7 @@ def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any],
         ax.set_xscale("log")
     ax.set_xlim(float(grid[0]), x_hi)
     ax.set_ylim(-0.6, len(names) - 0.4)
-    ax.set_title(f"Stable maximal period-M windows (M = 1 extends beyond the plot)\n{params}", fontsize=9)
+    ax.set_title(f"Stable maximal period-M windows (M = 1 extends beyond the plot)\n{problem.describe()}", fontsize=9)
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), fontsize=8, ncol=8, frameon=False)
     fig.tight_layout()
-    files.append(_save(fig, ctx.out / f"{ctx.target}_windows.png"))
-    return files
+    return _save(fig, ctx.out / f"{ctx.target}_windows.png")

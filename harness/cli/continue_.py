@@ -10,7 +10,6 @@ label; provenance as attributes), a PNG and report.md, and prints the report.
 from __future__ import annotations
 
 import argparse
-import json
 import time
 from pathlib import Path
 from typing import Any, Sequence
@@ -19,8 +18,8 @@ import numpy as np
 
 from ..errors import HarnessInputError
 from ..io.progress import progress_bar
-from .commands import _command_line, _experiment, _outputs
-from .main import count
+from .experiment_args import command_line, experiment_of, output_paths
+from .options import count
 
 __all__ = ["register", "cmd_continue", "branch_report"]
 
@@ -82,15 +81,8 @@ def _state(text: str) -> np.ndarray:
     return z
 
 
-def cmd_continue(args: argparse.Namespace) -> int:
-    """``continue``: branches, NetCDF, plot, report."""
-    from ..dynamics.attractors import find_attractors
-    from ..dynamics.branch import branches_dataset
-    from ..dynamics.continuation import continue_orbit, switch_at_flip
-    from ..fmu.simulator import FmuSimulator
-    from ..io.results import provenance, write_netcdf
-
-    exp = _experiment(args, _extra(args))
+def _check_args(args: argparse.Namespace, exp: Any) -> tuple[float, float]:
+    """The flags the library does not check itself; returns the parameter range."""
     lo, hi = _range(args.p_range)
     if not lo <= args.start <= hi:
         raise HarnessInputError("--start", f"{args.start:g} lies outside --range {args.p_range}")
@@ -100,58 +92,85 @@ def cmd_continue(args: argparse.Namespace) -> int:
         raise HarnessInputError("-M", f"must be in 1..64, got {args.M}")
     if not 0.0 <= args.theta < 1.0:
         raise HarnessInputError("--theta", f"must lie in [0, 1), got {args.theta}")
-    out, plot = _outputs(args, exp, "continue")
-    report_path = Path(args.report) if args.report else out.with_suffix(".md")
-    t0 = time.perf_counter()
-    sim = FmuSimulator(exp.model.source())
-    params = dict(exp.params)
-    search = ""
+    return lo, hi
+
+
+def _start_orbit(args: argparse.Namespace, sim: Any, params: dict[str, Any]) -> tuple[int, np.ndarray, str]:
+    """The period, a point of the orbit to start from and how it was found (for the report):
+    ``--state``, or the shortest attractor the scans find at ``--start``."""
+    from ..dynamics.attractors import find_attractors
+
     if args.state is not None:
         if args.M is None:
             raise HarnessInputError("-M", "give the period of the orbit through --state")
         M, z0 = args.M, _state(args.state)
-        search = f"started from the given state ({z0[0]:.6g}, {z0[1]:.6g}) at {args.param} = {args.start:g}"
-    else:
-        scan = find_attractors(sim, params, [args.start], args.param, M_max=args.M or 8, theta=args.theta)
-        cands = [a for a in scan.attractors if args.M is None or a.period == args.M]
-        scans = ", ".join(scan.scans)
-        if not cands:
-            raise HarnessInputError("--start", f"no stable period-{args.M or '1..8'} orbit found at {args.param} = "
-                                    f"{args.start:g} by the scans ({scans}; {scan.transient} periods of transient "
-                                    "from rest, near the wall and on the wall-free orbit); give --state U,V")
-        a = cands[0]
-        M, z0 = a.period, a.points[0]
-        others = [b.label for b in scan.attractors if b is not a]
-        search = (f"started from the attractor {a.label} found at {args.param} = {args.start:g} by {', '.join(a.found_by)}"
-                  + (f" (also found there: {', '.join(others)})" if others else ""))
+        return M, z0, f"started from the given state ({z0[0]:.6g}, {z0[1]:.6g}) at {args.param} = {args.start:g}"
+    scan = find_attractors(sim, params, [args.start], args.param, M_max=args.M or 8, theta=args.theta)
+    cands = [a for a in scan.attractors if args.M is None or a.period == args.M]
+    scans = ", ".join(scan.scans)
+    if not cands:
+        raise HarnessInputError("--start", f"no stable period-{args.M or '1..8'} orbit found at {args.param} = "
+                                f"{args.start:g} by the scans ({scans}; {scan.transient} periods of transient "
+                                "from rest, near the wall and on the wall-free orbit); give --state U,V")
+    a = cands[0]
+    others = [b.label for b in scan.attractors if b is not a]
+    search = (f"started from the attractor {a.label} found at {args.param} = {args.start:g} by {', '.join(a.found_by)}"
+              + (f" (also found there: {', '.join(others)})" if others else ""))
+    return a.period, a.points[0], search
+
+
+def _branches(args: argparse.Namespace, sim: Any, params: dict[str, Any], M: int, z0: np.ndarray,
+              p_range: tuple[float, float]) -> tuple[list[Any], list[str]]:
+    """The branch continued each way asked, and with ``--switch`` the period-2M branch at every
+    flip; returns the branches and what each is (for the dataset and the report)."""
+    from ..dynamics.continuation import continue_orbit, switch_at_flip
+
     dirs = {"both": (-1.0, 1.0), "up": (1.0,), "down": (-1.0,)}[args.direction]
     branches, kinds = [], []
     with progress_bar(total=args.max_points * len(dirs), desc="continue", unit="step",
                       disable=args.no_progress) as bar:
         for d in dirs:
-            br = continue_orbit(sim, params, M, args.start, z0, args.param, (lo, hi), d, ds_max=args.ds_max,
+            br = continue_orbit(sim, params, M, args.start, z0, args.param, p_range, d, ds_max=args.ds_max,
                                 max_points=args.max_points, theta=args.theta, locate_tol=args.locate_tol, progress=bar)
             branches.append(br)
             kinds.append("up" if d > 0 else "down")
         if args.switch:
             for br in list(branches):
                 for e in [e for e in br.events if e.kind == "flip"]:
-                    sw = switch_at_flip(sim, params, br, e, p_range=(lo, hi), max_points=args.max_points,
+                    sw = switch_at_flip(sim, params, br, e, p_range=p_range, max_points=args.max_points,
                                         locate_tol=args.locate_tol, ds_max=args.ds_max)
                     if sw is not None:
                         branches.append(sw)
                         kinds.append(f"period {2 * M} from the flip at {e.value:.10g}")
                     else:
                         e.note = f"no period-{2 * M} orbit found next to it (branch switching tried on both sides)"
+    return branches, kinds
+
+
+def cmd_continue(args: argparse.Namespace) -> int:
+    """``continue``: branches, NetCDF, plot, report."""
+    from ..dynamics.branch import branches_dataset
+    from ..fmu.simulator import FmuSimulator
+    from ..io.results import provenance, write_netcdf
+
+    exp = experiment_of(args, _extra(args))
+    lo, hi = _check_args(args, exp)
+    out, plot = output_paths(args, exp, "continue")
+    report_path = Path(args.report) if args.report else out.with_suffix(".md")
+    t0 = time.perf_counter()
+    sim = FmuSimulator(exp.model.source())
+    params = dict(exp.params)
+    M, z0, search = _start_orbit(args, sim, params)
+    branches, kinds = _branches(args, sim, params, M, z0, (lo, hi))
     settings = {**exp.as_attrs(), "continue.param": args.param, "continue.range": [lo, hi],
                 "continue.start": args.start, "continue.M": M, "continue.theta": args.theta, "continue.search": search}
-    attrs = provenance(settings, exp.model, "serial", time.perf_counter() - t0, _command_line(args))
+    attrs = provenance(settings, exp.model, "serial", time.perf_counter() - t0, command_line(args))
     ds = branches_dataset(branches, kinds, attrs)
     write_netcdf(ds, out)
     from ..io.plots import parameter_title
 
     title = f"{parameter_title(ds.attrs, (args.param,))}: continuation in {args.param}"
-    text = branch_report(branches, kinds, title, search, _command_line(args), params)
+    text = branch_report(branches, kinds, title, search, command_line(args), params)
     try:
         report_path.write_text(text)
     except OSError as exc:

@@ -1,4 +1,5 @@
-"""CLI of ``impact-harness windows`` (:mod:`.windows`)."""
+"""``impact-harness windows``: the window edges of the maps vs the ODE for any parameter set
+(:func:`harness.analysis.windows.compare_windows`)."""
 from __future__ import annotations
 
 import argparse
@@ -8,7 +9,8 @@ from typing import Any
 
 from mapcheck.compare import markdown_window_table
 
-from .windows import MAP_WALLS, WALL_CODES, command_line, compare_windows
+from ..analysis.window_problem import MAP_WALLS, WALL_CODES
+from ..analysis.windows import compare_windows
 
 __all__ = ["register", "cmd_windows"]
 

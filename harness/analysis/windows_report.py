@@ -7,7 +7,7 @@ from typing import Any
 
 from mapcheck.compare import markdown_window_table
 
-from . import Context
+from .context import Context
 from .windows_plots import labels_for
 
 #: Map variants (keys in the JSON); the coefficient equation depends on the wall.
@@ -53,23 +53,15 @@ def _all_windows_table(res: dict[str, Any], f: str) -> list[str]:
     return out
 
 
-def report(ctx: Context, problem: Any, res: dict[str, Any], title: str | None = None) -> str:
-    """report.md: the ODE's windows (every attractor seen, shot to its edges), where each map
-    applies, the table, the scans, the differences, the verdict."""
-    labels = labels_for(problem)
+def _how_found(ctx: Context, problem: Any, res: dict[str, Any], title: str | None) -> list[str]:
+    """The title, the parameters, and how the ODE's windows were found and the maps compared."""
     p = res["parameters"]
-    applies = res.get("map_applicability", {})
-    ode_los = [w[0] for w in res["windows"]["ode"].values() if w and w[0]]
-    digits = 4 if min(ode_los or [1.0]) > 0.01 else 6
-    f = f".{digits}f"
-    table = markdown_window_table(res["windows"], labels, digits=digits, na=applies)
     eq = problem.coefficient_eq()
     g0, g1, gn = p["sigma_grid"]
     grid_txt = (f"geometric grid of {gn} points, {res['scan_grid_step']:.3g} relative step" if res["scan_grid_geometric"]
                 else f"grid of {gn} points, step {res['scan_grid_step']:.3g}")
     rho = "" if p["rho_per_sigma"] is None else f"; rho/sigma = {p['rho_per_sigma']:.6g} from {eq}"
-    auto = p["M_max"] == "auto"
-    lines = [
+    return [
         f"# {title or 'Windows of periodic orbits: the ODE, and the maps beside it'}",
         "",
         f"Parameters: {problem.describe()} -> nu = {p['nu']:.6f}, Omega = {p['Omega']:.6f}{rho}. "
@@ -96,13 +88,24 @@ def report(ctx: Context, problem: Any, res: dict[str, Any], title: str | None = 
         f"- **2D map**: (37)/(38) with {eq}, closed-form maximal orbits, edges by bisection;",
         "- **2D map, A~(sigma)**: the same with |A~(sigma)| = (1+sigma) 4 pi^2 - sigma Omega^2 in rho.",
         "",
-        "## Where the maps apply",
-        "",
     ]
+
+
+def _where_maps_apply(res: dict[str, Any], labels: dict[str, str]) -> list[str]:
+    applies = res.get("map_applicability", {})
+    lines = ["## Where the maps apply", ""]
     for k in VARIANT_KEYS:
         why = applies.get(k)
         lines.append(f"- {labels[k]}: " + ("applies." if why is None else f"**does not apply**: {why}."))
-    lines += [
+    return lines
+
+
+def _maximal_windows(res: dict[str, Any], labels: dict[str, str], digits: int) -> list[str]:
+    """The table of the maximal windows from the four sources, the ODE's edge kinds, and where
+    period adding truncates (``--M-max auto``)."""
+    p = res["parameters"]
+    table = markdown_window_table(res["windows"], labels, digits=digits, na=res.get("map_applicability", {}))
+    lines = [
         "",
         "## Stable windows of maximal orbits (one impact per period), in sigma",
         "",
@@ -115,48 +118,68 @@ def report(ctx: Context, problem: Any, res: dict[str, Any], title: str | None = 
     kinds = res["edge_kinds"]["ode"]
     if kinds:
         lines += ["", "ODE edge kinds (lower/upper): " + ", ".join(f"M = {M}: {k[0]}/{k[1]}" for M, k in kinds.items())]
-    if auto:
+    if p["M_max"] == "auto":
         stop = res.get("period_adding_stop")
         lines += ["", (f"--M-max auto: period adding truncates at M = {stop}: no stable maximal window at M = {stop} "
                        f"and M = {stop + 1} (searched up to period {p['M_scan_limit']})." if stop is not None else
                        f"--M-max auto: stable maximal windows up to the scan's limit M = {p['M_scan_limit']}; period "
                        "adding did not truncate there.")]
-    all_rows = _all_windows_table(res, f)
-    lines += ["", "## Every periodic window of the ODE (any number of impacts per period)", ""]
-    lines += all_rows or [f"No stable periodic orbit with impacts was seen in sigma [{g0:.4g}, {g1:.4g}]."]
+    return lines
+
+
+def _every_window(res: dict[str, Any], f: str) -> list[str]:
+    g0, g1, _ = res["parameters"]["sigma_grid"]
+    lines = ["", "## Every periodic window of the ODE (any number of impacts per period)", ""]
+    return lines + (_all_windows_table(res, f)
+                    or [f"No stable periodic orbit with impacts was seen in sigma [{g0:.4g}, {g1:.4g}]."])
+
+
+def _scan_confirmation(res: dict[str, Any], f: str) -> list[str]:
+    """The shooting's edges against the scans' (empty when the ODE has no maximal window)."""
     conf = [(M, cf) for M, cf in res["scan_confirmation"].items() if res["windows"]["ode"].get(M)]
-    if conf:
-        lines += ["", "## Confirmation by the up/down scans", "",
-                  "| M | shooting | lowest point in down scan | highest point in up scan |", "|---|---|---|---|"]
-        for M, cf in conf:
-            w = res["windows"]["ode"][M]
-            lo = "beyond the range" if w[0] is None else format(w[0], f)
-            hi = "beyond the range" if w[1] is None else format(w[1], f)
-            lo_s = "not seen" if cf["scan_lower"] is None else (
-                f"{cf['scan_lower']:{f}} ({cf['lower_minus_shooting']:+.2g})" if cf["lower_minus_shooting"] is not None
-                else f"{cf['scan_lower']:{f}}")
-            hi_s = "-" if w[1] is None else ("not seen" if cf["scan_upper"] is None else
-                                             f"{cf['scan_upper']:{f}} ({cf['upper_minus_shooting']:+.2g})")
-            lines.append(f"| {M} | [{lo}, {hi}] | {lo_s} | {hi_s} |")
-        lines += ["", "Scan minus shooting, in sigma. A scan edge is a grid point, so it lies up to one step inside "
-                  "the true edge; near a flip the decaying period-2M oscillation needs many periods to fall below "
-                  f"the classification tolerance ({SCAN_TOL:g}), so the down scan may lose period M some steps "
-                  "inside the window (critical slowing down)."]
+    if not conf:
+        return []
+    lines = ["", "## Confirmation by the up/down scans", "",
+             "| M | shooting | lowest point in down scan | highest point in up scan |", "|---|---|---|---|"]
+    for M, cf in conf:
+        w = res["windows"]["ode"][M]
+        lo = "beyond the range" if w[0] is None else format(w[0], f)
+        hi = "beyond the range" if w[1] is None else format(w[1], f)
+        lo_s = "not seen" if cf["scan_lower"] is None else (
+            f"{cf['scan_lower']:{f}} ({cf['lower_minus_shooting']:+.2g})" if cf["lower_minus_shooting"] is not None
+            else f"{cf['scan_lower']:{f}}")
+        hi_s = "-" if w[1] is None else ("not seen" if cf["scan_upper"] is None else
+                                         f"{cf['scan_upper']:{f}} ({cf['upper_minus_shooting']:+.2g})")
+        lines.append(f"| {M} | [{lo}, {hi}] | {lo_s} | {hi_s} |")
+    return lines + ["", "Scan minus shooting, in sigma. A scan edge is a grid point, so it lies up to one step inside "
+                    "the true edge; near a flip the decaying period-2M oscillation needs many periods to fall below "
+                    f"the classification tolerance ({SCAN_TOL:g}), so the down scan may lose period M some steps "
+                    "inside the window (critical slowing down)."]
+
+
+def _disagreement(res: dict[str, Any], labels: dict[str, str]) -> list[str]:
+    """Map edge minus ODE edge per variant and period (empty when nothing was compared)."""
     diffs = res["differences_to_ode"]
     Ms = [M for M, w in res["windows"]["ode"].items() if w is not None]
-    if diffs and Ms:
-        lines += ["", "## Where the maps and the ODE disagree", "",
-                  "| variant | " + " | ".join(f"M = {M} (lo, hi)" for M in Ms) + " | max abs |",
-                  "|---|" + "---|" * (len(Ms) + 1)]
-        for name, d in diffs.items():
-            cells = [("-" if d[M][0] is None else f"{d[M][0]:+.4g}") + ", " + ("-" if d[M][1] is None else f"{d[M][1]:+.4g}")
-                     for M in Ms]
-            lines.append(f"| {labels[name]} | " + " | ".join(cells) + f" | {res['max_abs_difference_to_ode'][name]:.4g} |")
-        lines += ["", "(map edge minus ODE edge, in sigma; inf: a window the ODE has is missing in the map.)"]
+    if not (diffs and Ms):
+        return []
+    lines = ["", "## Where the maps and the ODE disagree", "",
+             "| variant | " + " | ".join(f"M = {M} (lo, hi)" for M in Ms) + " | max abs |",
+             "|---|" + "---|" * (len(Ms) + 1)]
+    for name, d in diffs.items():
+        cells = [("-" if d[M][0] is None else f"{d[M][0]:+.4g}") + ", " + ("-" if d[M][1] is None else f"{d[M][1]:+.4g}")
+                 for M in Ms]
+        lines.append(f"| {labels[name]} | " + " | ".join(cells) + f" | {res['max_abs_difference_to_ode'][name]:.4g} |")
+    return lines + ["", "(map edge minus ODE edge, in sigma; inf: a window the ODE has is missing in the map.)"]
+
+
+def _verdict(ctx: Context, res: dict[str, Any], labels: dict[str, str]) -> list[str]:
+    """The closest variant, the highest period of each source's maximal windows, the figures."""
+    applies = res.get("map_applicability", {})
     mmax = {k: max([M for M, w in ws.items() if w is not None and w[0] is not None and (w[1] is None or w[1] >= w[0])]
                    or [0]) for k, ws in res["windows"].items()}
     best = res["best_variant"]
-    lines += ["", "## Verdict", ""]
+    lines = ["", "## Verdict", ""]
     if best is not None and math.isfinite(res["max_abs_difference_to_ode"][best]):
         lines.append(f"{labels[best]} agrees best with the ODE: largest edge difference "
                      f"{res['max_abs_difference_to_ode'][best]:.2g} in sigma (variant `{best}`).")
@@ -166,6 +189,18 @@ def report(ctx: Context, problem: Any, res: dict[str, Any], title: str | None = 
                  f"{mmax['ode'] if mmax['ode'] else 'none'}" + "".join(
                      f", {labels[k]} " + ("n/a" if applies.get(k) else f"M = {mmax[k] or 'none'}") for k in VARIANT_KEYS)
                  + ".")
-    lines += ["", f"Figures: `{ctx.target}_map.png` (the maps' bifurcation diagrams, where they apply), "
-              f"`{ctx.target}_ode.png` (the FMU's up/down scans), `{ctx.target}_windows.png` (the window tables)."]
+    return lines + ["", f"Figures: `{ctx.target}_map.png` (the maps' bifurcation diagrams, where they apply), "
+                    f"`{ctx.target}_ode.png` (the FMU's up/down scans), `{ctx.target}_windows.png` (the window tables)."]
+
+
+def report(ctx: Context, problem: Any, res: dict[str, Any], title: str | None = None) -> str:
+    """report.md: the ODE's windows (every attractor seen, shot to its edges), where each map
+    applies, the table, the scans, the differences, the verdict."""
+    labels = labels_for(problem)
+    ode_los = [w[0] for w in res["windows"]["ode"].values() if w and w[0]]
+    digits = 4 if min(ode_los or [1.0]) > 0.01 else 6
+    f = f".{digits}f"
+    lines = (_how_found(ctx, problem, res, title) + _where_maps_apply(res, labels)
+             + _maximal_windows(res, labels, digits) + _every_window(res, f) + _scan_confirmation(res, f)
+             + _disagreement(res, labels) + _verdict(ctx, res, labels))
     return "\n".join(lines)

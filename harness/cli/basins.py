@@ -13,7 +13,8 @@ import numpy as np
 from ..config import parameter_values
 from ..errors import HarnessInputError
 from ..runs.budget import Budget, grid_count, sweep_estimate
-from .commands import _command_line, _experiment, _outputs, execution_options
+from .experiment_args import command_line, experiment_of, output_paths
+from .options import execution_options
 from .resumable import run_resumable
 
 
@@ -50,7 +51,7 @@ def cmd_basins(args: argparse.Namespace) -> int:
     from ..runs.basin_scan import run_basins
     from ..runs.sweeps import SweepStats
 
-    exp = _experiment(args)
+    exp = experiment_of(args)
     gu, gv = _grid(args.u0_grid, "--u0-grid"), _grid(args.v0_grid, "--v0-grid")
     s = exp.sampling
     n_u, n_v = grid_count(gu[2], None), grid_count(gv[2], None)
@@ -62,14 +63,14 @@ def cmd_basins(args: argparse.Namespace) -> int:
     v0 = parameter_values(*gv, None, ("--v0-grid",) * 4)
     if args.match_tol is not None and not (np.isfinite(args.match_tol) and args.match_tol > 0):
         raise HarnessInputError("--match-tol", f"must be a finite number > 0, got {args.match_tol!r}")
-    out, plot = _outputs(args, exp, "basins")
+    out, plot = output_paths(args, exp, "basins")
     stats = SweepStats()
 
     def scan(checkpoint: str) -> Any:
         return run_basins(exp.model, u0, v0, exp.params, s, args.match_tol,
                           backend=exp.run.backend, workers=exp.run.workers, scheduler=exp.run.scheduler,
                           checkpoint=checkpoint, progress=exp.run.progress,
-                          settings={**exp.as_attrs(), "command": _command_line(args)}, stats=stats)
+                          settings={**exp.as_attrs(), "command": command_line(args)}, stats=stats)
 
     ds, ckpt = run_resumable(scan, exp, out, stats, args.no_resume)
     write_netcdf(ds, out)

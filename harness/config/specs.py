@@ -1,60 +1,6 @@
-"""Experiment description: defaults, TOML experiment files, CLI overrides, validation.
-
-An experiment file holds every parameter of a run::
-
-    [fmu]
-    path = "build/fmu/ImpactOscillator.fmu"
-
-    [model]            # any settable FMU variable, by name
-    sigma = 0.2
-    Gamma = 10.0
-    wall = "compliant" # or 0/1/2
-
-    [initial]
-    u0 = -1.0
-    v0 = 0.0
-
-    [sampling]
-    theta = 0.0        # section phase in [0, 1)
-    transient = 300    # periods discarded
-    samples = 40       # periods sampled
-    tol = 1e-5         # periodicity tolerance (relative)
-    extend = 0         # extra periods for points not yet periodic (slow near window edges)
-    lyapunov = 0       # periods of Lyapunov exponents after the samples (0: none)
-
-    [sweep]
-    param = "sigma"
-    start = 1.0
-    stop = 0.1
-    num = 91           # or: values = [...]
-    mode = "both"      # fresh | up | down | both
-    scan_param = "Gamma"        # optional second axis (2D scan)
-    scan_values = [10.0, 100.0]
-
-    [jacobian]
-    theta = 0.0        # phase of the coordinates J is expressed in
-    x_start = 1e-6
-    x_stop = 1e-2
-    x_num = 25
-
-    [simulate]
-    t0 = 0.0
-    t_end = 20.0
-    dt = 0.01
-
-    [run]
-    backend = "processes"   # serial | processes | dask
-    workers = 2
-    scheduler = ""          # tcp://host:port -> dask
-    out = "results/sweep.nc"
-    plot = "results/sweep.png"
-    progress = true
-
-Values come from three layers, later ones winning: built-in defaults (and the FMU's own
-start values for ``[model]``), the TOML file, the CLI flags.  Each value remembers where it
-came from so an error names the flag (``--theta``) or the file key
-(``exp.toml: sampling.theta``) the user actually wrote.
-"""
+"""The validated views of an experiment's sections: :class:`SamplingSpec`, :class:`SweepSpec` (with
+the grid of a swept parameter, :func:`parameter_values`, and its modes, :func:`parse_modes`) and
+:class:`RunSpec`."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -62,11 +8,12 @@ from typing import Any
 
 import numpy as np
 
-from .errors import HarnessInputError
-from .settings import (  # noqa: F401  (the defaults are part of this module's API)
-    BACKENDS, CLI_FLAGS, DEFAULTS, SWEEP_MODES, Layered, _count, _number, check_count, check_theta, default_fmu_path,
-    default_workers, load_toml, project_root,
-)
+from ..errors import HarnessInputError
+from .checks import _count, _number, check_count, check_theta
+from .defaults import BACKENDS, SWEEP_MODES, default_workers
+from .layers import Layered
+
+__all__ = ["SamplingSpec", "SweepSpec", "RunSpec", "parameter_values", "parse_modes", "sweep_directions"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -103,7 +50,7 @@ class SamplingSpec:
     @classmethod
     def from_layers(cls, layers: Layered) -> "SamplingSpec":
         """Validated view of ``[sampling]`` (errors name the flag or file key)."""
-        from .errors import ErrorCollector
+        from ..errors import ErrorCollector
 
         c, s = ErrorCollector(), "sampling"  # every bad key at once
         theta = c.check(check_theta, layers.get(s, "theta"), layers.arg(s, "theta"))
@@ -241,7 +188,7 @@ class RunSpec:
     @classmethod
     def from_layers(cls, layers: Layered) -> "RunSpec":
         """Validated view of ``[run]`` (backend, workers, scheduler, outputs)."""
-        from .errors import ErrorCollector
+        from ..errors import ErrorCollector
 
         r, c = "run", ErrorCollector()  # every bad key at once
         scheduler = layers.get(r, "scheduler") or None

@@ -1,0 +1,140 @@
+"""The command line's argument helpers: the parser class with one-line errors, the argparse types
+of counts, sizes and positive numbers, the option groups shared by the subcommands, and the CLI
+flags as a settings layer (:func:`overrides_from_args`, read by :mod:`harness.config`)."""
+from __future__ import annotations
+
+import argparse
+import builtins
+from typing import Any
+
+from ..errors import HarnessInputError
+
+__all__ = ["OneLineParser", "count", "size", "positive", "common_parent", "sampling_parent", "execution_options",
+           "overrides_from_args"]
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """ArgumentParser whose errors are one line (no usage dump), exit status 2."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
+def count(text: str) -> int:
+    """argparse type of counts: an integer, also written like ``1e9`` (so that a huge count
+    reaches the memory and work check and is refused with an estimate, not as a typo)."""
+    try:
+        return builtins.int(text)
+    except ValueError:
+        value = float(text)  # ValueError -> argparse's "invalid int value"
+        if not value.is_integer():
+            raise
+        return builtins.int(value)
+
+
+count.__name__ = "int"  # argparse names the type in its message: "invalid int value: 'abc'"
+
+
+def size(text: str) -> int:
+    """argparse type of memory sizes (``512M``, ``8G``)."""
+    from ..runs.budget import parse_size
+
+    return parse_size(text)
+
+
+def positive(text: str) -> float:
+    """argparse type of a finite number > 0."""
+    value = float(text)
+    if not (0 < value < float("inf")):
+        raise ValueError(text)
+    return value
+
+
+positive.__name__ = "positive number"
+
+
+def common_parent() -> argparse.ArgumentParser:
+    """Options shared by every subcommand that runs the FMU."""
+    p = OneLineParser(add_help=False)
+    g = p.add_argument_group("experiment")
+    g.add_argument("--config", "-c", metavar="FILE.toml", help="experiment file (TOML); flags override it")
+    g.add_argument("--fmu", dest="fmu__path", metavar="PATH",
+                   help="FMU to drive (default: build/fmu/ImpactOscillator.fmu or $IMPACT_HARNESS_FMU)")
+    g.add_argument("--set", dest="model_set", metavar="NAME=VALUE", action="append", default=[],
+                   help="set an FMU parameter, e.g. --set sigma=0.3 --set wall=rigid (repeatable)")
+    g.add_argument("--u0", dest="initial__u0", type=float, metavar="U",
+                   help="initial displacement u at the start time t = theta (the section phase, --theta; "
+                   "simulate: t = --t0); default: the FMU's start value")
+    g.add_argument("--v0", dest="initial__v0", type=float, metavar="V",
+                   help="initial velocity v at the start time t = theta (simulate: t = --t0); default: the FMU's start value")
+    g.add_argument("--solver", choices=("cvode", "closed-form"),
+                   help="the FMU's integrator: cvode (default) or closed-form (exact propagation of the linear "
+                   "contact law; an FMU without the parameter 'solver' has CVODE only)")
+    o = p.add_argument_group("output")
+    o.add_argument("--out", "-o", dest="run__out", metavar="FILE.nc", help="NetCDF result file")
+    o.add_argument("--plot", dest="run__plot", metavar="FILE.png", help="PNG plot (default: next to --out)")
+    o.add_argument("--no-plot", action="store_true", help="do not draw a plot")
+    o.add_argument("--no-progress", action="store_true", help="no progress bar")
+    b = p.add_argument_group("limits (checked before anything is allocated or run)")
+    b.add_argument("--max-memory", type=size, metavar="SIZE",
+                   help="largest memory a run may plan for, e.g. 2G (default: half the RAM)")
+    b.add_argument("--max-work", type=positive, metavar="N",
+                   help="largest number of FMU periods a run may integrate (default 1e8, ~8 CPU hours)")
+    b.add_argument("--force", action="store_true", help="run even beyond --max-work")
+    return p
+
+
+def sampling_parent() -> argparse.ArgumentParser:
+    """Options of stroboscopic sampling (strobe, sweep)."""
+    p = OneLineParser(add_help=False)
+    g = p.add_argument_group("stroboscopic sampling")
+    g.add_argument("--theta", dest="sampling__theta", type=float, metavar="PHASE",
+                   help="section phase in [0, 1): samples at t = n + theta (default 0)")
+    g.add_argument("--transient", dest="sampling__transient", type=count, metavar="N",
+                   help="periods discarded before sampling (default 300)")
+    g.add_argument("--samples", dest="sampling__samples", type=count, metavar="N",
+                   help="periods sampled (default 40)")
+    g.add_argument("--tol", dest="sampling__tol", type=float, metavar="TOL", help="periodicity tolerance, relative (default 1e-5)")
+    g.add_argument("--max-period", dest="sampling__max_period", type=count, metavar="M",
+                   help="largest period tried (default samples/2)")
+    g.add_argument("--extend", dest="sampling__extend", type=count, metavar="N",
+                   help="sweeps: up to N more periods for points not yet periodic (slow convergence "
+                   "near window edges; default 0)")
+    g.add_argument("--lyapunov", dest="sampling__lyapunov", type=count, metavar="N",
+                   help="Lyapunov exponents of the stroboscopic map over N periods after the samples, with "
+                   "their uncertainty, and the classification periodic / quasi-periodic / chaotic / not "
+                   "converged (exact with an FMU that reports its derivatives, else by differences at ~5x "
+                   "the cost; default 0: none)")
+    return p
+
+
+def overrides_from_args(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
+    """CLI flags as a ``{section: {key: value}}`` layer (flags not given are absent)."""
+    layer: dict[str, dict[str, Any]] = {}
+    for dest, value in vars(args).items():
+        if "__" in dest and value is not None:
+            section, key = dest.split("__", 1)
+            layer.setdefault(section, {})[key] = value
+    for item in getattr(args, "model_set", []) or []:
+        name, sep, value = item.partition("=")
+        if not sep or not name.strip():
+            raise HarnessInputError("--set", f"expected NAME=VALUE, got {item!r}")
+        layer.setdefault("model", {})[name.strip()] = value.strip()
+    if getattr(args, "solver", None):
+        layer.setdefault("model", {})["solver"] = args.solver
+    if getattr(args, "no_progress", False):
+        layer.setdefault("run", {})["progress"] = False
+    return layer
+
+
+def execution_options(p: argparse.ArgumentParser, what: str) -> None:
+    """Where a grid of runs executes, and its checkpoint (sweep, basins)."""
+    b = p.add_argument_group("execution")
+    b.add_argument("--backend", dest="run__backend", choices=["serial", "processes", "dask"],
+                   help="where to run (default processes, or dask with --scheduler)")
+    b.add_argument("--workers", "-j", dest="run__workers", type=count, metavar="N",
+                   help="local worker processes (default: all cores)")
+    b.add_argument("--scheduler", dest="run__scheduler", metavar="tcp://HOST:PORT", help="run on this Dask scheduler")
+    b.add_argument("--checkpoint", dest="run__checkpoint", metavar="DIR",
+                   help=f"directory of finished points, to resume an interrupted {what} (default: OUT.partial)")
+    b.add_argument("--no-resume", action="store_true", help="discard an existing checkpoint and start over")
