@@ -215,7 +215,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"{prog}: terminated", file=sys.stderr)
         return 143
     except HarnessInputError as exc:
-        print(f"{prog}: error: {exc}", file=sys.stderr)
+        from .flags import with_flags  # the library names Python arguments; the user typed flags
+
+        print(f"{prog}: error: {with_flags(exc, parser, args.command)}", file=sys.stderr)
         return 2
     except FmuRejectedInput as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)

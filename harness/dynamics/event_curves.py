@@ -74,9 +74,9 @@ class PlaneMap:
 
     def __init__(self, pmap: PeriodMap, param2: str, log2: bool, M: int) -> None:
         if pmap.param != "sigma":
-            raise HarnessInputError("--param", "event curves are continued in sigma and a second parameter")
+            raise HarnessInputError("pmap", "event curves are continued in sigma and a second parameter")
         if param2 in ("sigma", "u0", "v0", "wall", "solver", "contact", "sensitivities"):
-            raise HarnessInputError("--param2", f"{param2!r} cannot be the second parameter")
+            raise HarnessInputError("param2", f"{param2!r} cannot be the second parameter")
         self.pmap, self.param2, self.log2, self.M = pmap, param2, log2, M
         self.base = dict(pmap.params)
 
@@ -109,7 +109,7 @@ class PlaneMap:
             return float(np.linalg.det(J - np.eye(2)))
         if kind == "ns":
             return float(np.linalg.det(J)) - 1.0
-        raise HarnessInputError("--kind", f"unknown event {kind!r} (flip, fold, ns)")
+        raise HarnessInputError("kind", f"unknown event {kind!r} (flip, fold, ns)")
 
     def residual(self, kind: str, X: np.ndarray) -> tuple[np.ndarray, MapEvaluation]:
         ev = self.evaluate(X)
@@ -189,13 +189,13 @@ def _start(corr: _Corrector, w0: np.ndarray, sigma0: float, p2_0: float, directi
     X0 = np.array([w0[0] / (1.0 + sigma0), w0[1] / (1.0 + sigma0), math.log(sigma0), plane.q(p2_0)])
     H, ev = plane.residual(corr.kind, X0)
     if not np.all(np.isfinite(H)):
-        raise HarnessInputError("--start", f"the FMU's map is not finite at sigma = {sigma0:g}")
+        raise HarnessInputError("sigma0", f"the FMU's map is not finite at sigma = {sigma0:g}")
     t = _tangent(plane.jacobian(corr.kind, X0, ev), None)
     if t[3] * direction < 0:
         t = -t
     pt = corr.correct(X0, t)
     if pt is None:
-        raise HarnessInputError("--start", f"no {corr.kind} point of a period-{plane.M} orbit near sigma = "
+        raise HarnessInputError("z0", f"no {corr.kind} point of a period-{plane.M} orbit near sigma = "
                                 f"{sigma0:.10g}, {plane.param2} = {p2_0:g} (Newton on the extended system failed)")
     if pt.tangent[3] * direction < 0:
         pt.tangent = -pt.tangent

@@ -49,7 +49,7 @@ def plan_tasks(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, 
     """All tasks of a sweep, keyed by a stable key."""
     if {spec.param, spec.scan_param} & set(INITIAL_STATE) and any(m != "fresh" for m in spec.modes):
         name = spec.param if spec.param in INITIAL_STATE else spec.scan_param
-        raise HarnessInputError("--mode", f"the initial state {name!r} can only be swept with fresh starts")
+        raise HarnessInputError("spec.modes", f"the initial state {name!r} can only be swept with fresh starts")
     grid = np.sort(np.asarray(spec.values, dtype=float))
     scan = [None] if spec.scan_param is None else list(np.asarray(spec.scan_values, dtype=float))
     tasks: dict[str, SweepTask] = {}
