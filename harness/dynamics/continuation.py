@@ -23,6 +23,9 @@ Events, between two accepted points (:mod:`.branch`):
   exists, and the event's note says which.
 
 Period doubling: :func:`switch_at_flip` starts the period-2M branch at a located flip.
+
+The steps and the events between them are taken by :class:`.orbit_walk.OrbitWalk`, the step
+size by :class:`.step_control.StepControl` (shared with the curves in two parameters).
 """
 from __future__ import annotations
 

@@ -169,14 +169,13 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
                 break
             continue
         walk.add(res, control.size)
-        control.steps += 1
+        control.accept()
         p2, sg = of_q(float(res[0][1])), math.exp(float(res[0][0]))
         tol2 = 1e-9 * max(abs(lo2), abs(hi2), 1.0)
         if not (lo2 - tol2 <= p2 <= hi2 + tol2 and sigma_range[0] <= sg <= sigma_range[1]):
             control.stop("range", f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
                          f"[{sigma_range[0]:g}, {sigma_range[1]:g}]")
             break
-        control.grow(1.5)
     return walk.curve(control, of_q(q0))
 
 

@@ -109,10 +109,9 @@ class OrbitWalk:
             return False
         self.locate_smooth_events(trial)
         self.advance(trial)
-        sc.steps += 1
+        sc.accept(_growth(its))
         if self.progress is not None:
             self.progress.update(1)
-        sc.grow(_growth(its))
         return True
 
     def graze_at_corner(self) -> bool | None:
@@ -157,7 +156,7 @@ class OrbitWalk:
         how = "beyond it" if (nxt.p - good.p) * (good.p - a.p) > 0 else "back on the same side (nonsmooth fold)"
         self.record(kind, good, bracket, f"{n_old} -> {n_new} impacts per period; continued {how}")
         self.advance(nxt)
-        self.control.steps += 1
+        self.control.count()
         return False
 
     def graze_kind(self, good: BranchPoint, other: BranchPoint | None, n_beyond: int | None) -> str:

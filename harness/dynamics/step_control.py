@@ -62,8 +62,12 @@ class StepControl:
 
     def accept(self, growth: float = 1.5) -> None:
         """Count an accepted step and scale the next one by ``growth`` (at most the largest)."""
-        self.steps += 1
+        self.count()
         self.grow(growth)
+
+    def count(self) -> None:
+        """Count an accepted step, the step size unchanged (a switch to another orbit)."""
+        self.steps += 1
 
     def grow(self, growth: float) -> None:
         """Scale the step by ``growth``, capped at the largest step, keeping its sign."""
