@@ -13,8 +13,11 @@ class HarnessInputError(ValueError):
     Parameters
     ----------
     argument : str
-        The name of the argument as the user wrote it (``"--theta"``, ``"sampling.theta"``,
-        ``"theta"`` for the API), or the FMU variable concerned.
+        The name of the argument as the caller wrote it: the Python argument in the library
+        (``"p_range"``, ``"theta"``; :mod:`harness.cli.flags` turns it into the command's flag
+        when the CLI prints the message), a flag where the CLI checks its own input
+        (``"--theta"``), a key of the experiment file (``"sampling.theta"``), or the FMU
+        variable concerned.
     reason : str
         Why the value is rejected, phrased to complete "argument <name>: ...".
     """

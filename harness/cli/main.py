@@ -19,6 +19,7 @@ from typing import Any, Sequence
 
 from ..errors import FmuError, FmuRejectedInput, HarnessInputError, SweepTaskError
 from . import basins, chart, continue_, jacobian, reproduce, simulate, strobe, sweep, windows
+from .flags import with_flags
 from .options import OneLineParser, common_parent, sampling_parent
 
 PROG = "impact-harness"
@@ -78,17 +79,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args) or 0)
     except BaseException as exc:  # every exit of a command passes through one mapping to a status
-        return exit_status(exc, prog)
+        return exit_status(exc, prog, parser, args.command)
     finally:
         restore()  # the extraction folder goes at exit (harness.io.tempdirs), SIGTERM included
 
 
-def exit_status(exc: BaseException, prog: str) -> int:
+def exit_status(exc: BaseException, prog: str, parser: argparse.ArgumentParser | None = None,
+                command: str | None = None) -> int:
     """Report what stopped the command ``prog`` on stderr (one line, no traceback) and return
-    its exit status; re-raise what is not the command's to report (a bug: its traceback)."""
+    its exit status; re-raise what is not the command's to report (a bug: its traceback).
+    With the ``parser`` and the ``command``, a library error's Python argument is shown as the
+    command's flag."""
     if isinstance(exc, Terminated):
         print(f"{prog}: terminated", file=sys.stderr)
         return 143
+    if isinstance(exc, HarnessInputError) and parser is not None and command is not None:
+        exc = with_flags(exc, parser, command)  # the library names Python arguments; the user typed flags
     if isinstance(exc, (HarnessInputError, FmuRejectedInput)):
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2

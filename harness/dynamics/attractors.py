@@ -181,81 +181,110 @@ def find_attractors(sim: Simulator, params: Mapping[str, Any], values: Sequence[
     """
     values = np.asarray(values, dtype=float)
     if values.size == 0 or not np.all(np.isfinite(values)):
-        raise HarnessInputError(f"--{param}", "needs at least one finite parameter value")
+        raise HarnessInputError("values", "needs at least one finite parameter value")
     if M_max < 1:
-        raise HarnessInputError("--M-max", f"must be >= 1, got {M_max}")
+        raise HarnessInputError("M_max", f"must be >= 1, got {M_max}")
     bad = set(scans) - {"up", "down", "fresh"}
     if bad:
         raise HarnessInputError("scans", f"unknown scan(s) {sorted(bad)}; use up, down, fresh")
     pmap = PeriodMap(sim, params, param, theta, derivatives)
     starts = dict(DEFAULT_STARTS if starts is None else starts)
-    found: list[Attractor] = []
-    scan = AttractorScan(found, values, list(scans), M_max, transient)
-
-    def settle(p: float, z0: np.ndarray, name: str) -> np.ndarray:
-        """Run from z0, record the orbit reached (if periodic), return the final state."""
-        off = pmap.offset(p)
-        pts, _ = pmap.run(p, z0, transient)
-        z = pts[-1]
-        pts, cont = pmap.run(p, z, 2 * M_max + 1)
-        if not np.all(np.isfinite(pts)):
-            scan.not_periodic += 1
-            return pts[-1]
-        M = _detect_period(pts, M_max, detect_tol)
-        if M is not None:
-            w, ev, ok, res = refine_orbit(pmap, pts[-1] - off, p, M)
-        else:
-            # not yet periodic to detect_tol: a slow transient (a multiplier near the unit
-            # circle, next to a bifurcation) still ends near its orbit; Newton from there, for
-            # each period, accepting a stable orbit that the samples are close to
-            ok = False
-            spread = float(np.max(np.abs(pts[-M_max - 1:] - pts[-1]))) + 1e-12
-            for M in range(1, M_max + 1):
-                w, ev, ok, res = refine_orbit(pmap, pts[-1] - off, p, M)
-                ok = (ok and bool(np.all(np.abs(np.linalg.eigvals(ev.J)) < 1.0))
-                      and float(np.max(np.abs(ev.points[0] - pts[-1]))) < 10 * spread)
-                if ok:
-                    break
-        if not ok:
-            scan.not_periodic += 1
-            return pts[-1]
-        # a slowly converging orbit (a multiplier near -1) passes the sample test at 2M first:
-        # the refined orbit has the true (smallest) period
-        for d in range(1, M):
-            if M % d == 0 and np.max(np.abs(ev.points[d] - ev.points[0])) <= match:
-                w, ev, ok, res = refine_orbit(pmap, w, p, d)
-                if ok:
-                    M = d
-                    break
-        orb_pts, orb_cont = _canonical(ev.points, ev.contacts)
-        cand = Attractor(param, float(p), M, int(ev.contacts.sum()), orb_pts, orb_cont,
-                         np.linalg.eigvals(ev.J).astype(complex), res, [name], theta)
-        for a in found:
-            if a.value == cand.value and a.same_orbit(cand, match):
-                if name not in a.found_by:
-                    a.found_by.append(name)
-                break
-        else:
-            found.append(cand)
-        return w + off
-
+    search = _Search(pmap, AttractorScan([], values, list(scans), M_max, transient), detect_tol, match, param, theta)
     for direction in [s for s in scans if s in ("up", "down")]:
         order = values if direction == "up" else values[::-1]
         z = np.array(starts.get("rest") or (-1.0, 0.0), dtype=float)
         for p in order:
-            z = settle(float(p), z, direction)
+            z = search.settle(float(p), z, direction)
             if progress is not None:
                 progress.update(1)
     if "fresh" in scans:
         for p in values:
             for name, z0 in starts.items():
                 z = pmap.offset(float(p)) if z0 is None else np.asarray(z0, dtype=float)
-                settle(float(p), z, f"fresh:{name}")
+                search.settle(float(p), z, f"fresh:{name}")
             if progress is not None:
                 progress.update(1)
-    found.sort(key=lambda a: (a.value, a.period, a.impacts))
+    scan = search.scan
+    scan.attractors.sort(key=lambda a: (a.value, a.period, a.impacts))
     scan.periods_run = pmap.evaluations
     return scan
+
+
+class _Search:
+    """The attractors found so far by :func:`find_attractors`, and how a run from a state is
+    turned into one of them.
+
+    Parameters
+    ----------
+    pmap : PeriodMap
+    scan : AttractorScan
+        Filled as runs settle (its ``attractors`` and ``not_periodic``).
+    detect_tol, match, param, theta
+        As in :func:`find_attractors`.
+    """
+
+    def __init__(self, pmap: PeriodMap, scan: AttractorScan, detect_tol: float, match: float, param: str,
+                 theta: float) -> None:
+        self.pmap, self.scan, self.detect_tol, self.match = pmap, scan, detect_tol, match
+        self.param, self.theta = param, theta
+
+    def settle(self, p: float, z0: np.ndarray, name: str) -> np.ndarray:
+        """Run from z0, record the orbit reached (if periodic), return the final state."""
+        pmap, scan = self.pmap, self.scan
+        off = pmap.offset(p)
+        pts, _ = pmap.run(p, z0, scan.transient)
+        z = pts[-1]
+        pts, cont = pmap.run(p, z, 2 * scan.M_max + 1)
+        if not np.all(np.isfinite(pts)):
+            scan.not_periodic += 1
+            return pts[-1]
+        w, ev, ok, res, M = self.refine(p, pts, off)
+        if not ok:
+            scan.not_periodic += 1
+            return pts[-1]
+        # a slowly converging orbit (a multiplier near -1) passes the sample test at 2M first:
+        # the refined orbit has the true (smallest) period
+        for d in range(1, M):
+            if M % d == 0 and np.max(np.abs(ev.points[d] - ev.points[0])) <= self.match:
+                w, ev, ok, res = refine_orbit(pmap, w, p, d)
+                if ok:
+                    M = d
+                    break
+        orb_pts, orb_cont = _canonical(ev.points, ev.contacts)
+        self.add(Attractor(self.param, float(p), M, int(ev.contacts.sum()), orb_pts, orb_cont,
+                           np.linalg.eigvals(ev.J).astype(complex), res, [name], self.theta))
+        return w + off
+
+    def refine(self, p: float, pts: np.ndarray, off: np.ndarray) -> tuple[Any, Any, bool, float, int]:
+        """Newton on the orbit the samples ``pts`` settled on: (w, ev, ok, residual, period)."""
+        pmap, M_max = self.pmap, self.scan.M_max
+        M = _detect_period(pts, M_max, self.detect_tol)
+        if M is not None:
+            w, ev, ok, res = refine_orbit(pmap, pts[-1] - off, p, M)
+            return w, ev, ok, res, M
+        # not yet periodic to detect_tol: a slow transient (a multiplier near the unit
+        # circle, next to a bifurcation) still ends near its orbit; Newton from there, for
+        # each period, accepting a stable orbit that the samples are close to
+        ok = False
+        spread = float(np.max(np.abs(pts[-M_max - 1:] - pts[-1]))) + 1e-12
+        for M in range(1, M_max + 1):
+            w, ev, ok, res = refine_orbit(pmap, pts[-1] - off, p, M)
+            ok = (ok and bool(np.all(np.abs(np.linalg.eigvals(ev.J)) < 1.0))
+                  and float(np.max(np.abs(ev.points[0] - pts[-1]))) < 10 * spread)
+            if ok:
+                break
+        return w, ev, ok, res, M
+
+    def add(self, cand: Attractor) -> None:
+        """Record ``cand``, or its finder's name on the same orbit found before."""
+        name = cand.found_by[0]
+        for a in self.scan.attractors:
+            if a.value == cand.value and a.same_orbit(cand, self.match):
+                if name not in a.found_by:
+                    a.found_by.append(name)
+                break
+        else:
+            self.scan.attractors.append(cand)
 
 
 def families(attractors: Sequence[Attractor], match: float = 1e-2) -> list[list[Attractor]]:

@@ -42,6 +42,7 @@ import numpy as np
 from .arclength import illinois_update
 from .curves import CurvePoint, EventCurve, significant_turns
 from .periodic_map import MapEvaluation, PeriodMap
+from .step_control import StepControl
 from ..errors import HarnessInputError
 from ..fmu.simulator import Simulator
 
@@ -73,9 +74,9 @@ class PlaneMap:
 
     def __init__(self, pmap: PeriodMap, param2: str, log2: bool, M: int) -> None:
         if pmap.param != "sigma":
-            raise HarnessInputError("--param", "event curves are continued in sigma and a second parameter")
+            raise HarnessInputError("pmap", "event curves are continued in sigma and a second parameter")
         if param2 in ("sigma", "u0", "v0", "wall", "solver", "contact", "sensitivities"):
-            raise HarnessInputError("--param2", f"{param2!r} cannot be the second parameter")
+            raise HarnessInputError("param2", f"{param2!r} cannot be the second parameter")
         self.pmap, self.param2, self.log2, self.M = pmap, param2, log2, M
         self.base = dict(pmap.params)
 
@@ -108,7 +109,7 @@ class PlaneMap:
             return float(np.linalg.det(J - np.eye(2)))
         if kind == "ns":
             return float(np.linalg.det(J)) - 1.0
-        raise HarnessInputError("--kind", f"unknown event {kind!r} (flip, fold, ns)")
+        raise HarnessInputError("kind", f"unknown event {kind!r} (flip, fold, ns)")
 
     def residual(self, kind: str, X: np.ndarray) -> tuple[np.ndarray, MapEvaluation]:
         ev = self.evaluate(X)
@@ -188,13 +189,13 @@ def _start(corr: _Corrector, w0: np.ndarray, sigma0: float, p2_0: float, directi
     X0 = np.array([w0[0] / (1.0 + sigma0), w0[1] / (1.0 + sigma0), math.log(sigma0), plane.q(p2_0)])
     H, ev = plane.residual(corr.kind, X0)
     if not np.all(np.isfinite(H)):
-        raise HarnessInputError("--start", f"the FMU's map is not finite at sigma = {sigma0:g}")
+        raise HarnessInputError("sigma0", f"the FMU's map is not finite at sigma = {sigma0:g}")
     t = _tangent(plane.jacobian(corr.kind, X0, ev), None)
     if t[3] * direction < 0:
         t = -t
     pt = corr.correct(X0, t)
     if pt is None:
-        raise HarnessInputError("--start", f"no {corr.kind} point of a period-{plane.M} orbit near sigma = "
+        raise HarnessInputError("z0", f"no {corr.kind} point of a period-{plane.M} orbit near sigma = "
                                 f"{sigma0:.10g}, {plane.param2} = {p2_0:g} (Newton on the extended system failed)")
     if pt.tangent[3] * direction < 0:
         pt.tangent = -pt.tangent
@@ -235,11 +236,11 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
         Turning points and the end at a graze are located to this width in the arclength.
     """
     if kind not in SMOOTH_KINDS:
-        raise HarnessInputError("--kind", f"{kind!r} is not continued on the extended system (flip, fold, ns)")
+        raise HarnessInputError("kind", f"{kind!r} is not continued on the extended system (flip, fold, ns)")
     p2_0 = float(params[param2])
     lo2, hi2 = min(p2_range), max(p2_range)
     if not lo2 <= p2_0 <= hi2:
-        raise HarnessInputError("--range", f"{param2} = {p2_0:g} lies outside [{lo2:g}, {hi2:g}]")
+        raise HarnessInputError("p2_range", f"{param2} = {p2_0:g} lies outside [{lo2:g}, {hi2:g}]")
     tol2 = 1e-9 * max(abs(lo2), abs(hi2), 1.0)  # the start may sit on the range's end up to rounding
     pmap = pmap or PeriodMap(sim, params, "sigma", theta)
     plane = PlaneMap(pmap, param2, log2, M)
@@ -249,58 +250,69 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
     pattern = a.ev.contacts.copy()
     pts = [a]
     turns: list[dict[str, Any]] = []
-    end: dict[str, Any] = {"reason": "steps", "note": f"{max_points} steps done"}
-    step = abs(ds)
-    n = 0
-    while n < max_points:
+    control = StepControl(abs(ds), ds_min, ds_max, max_points)
+    while control.budget_left:
         if not (lo2 - tol2 <= a.p2 <= hi2 + tol2 and sigma_range[0] <= a.sigma <= sigma_range[1]):
-            end = {"reason": "range", "note": f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
-                   f"[{sigma_range[0]:g}, {sigma_range[1]:g}]"}
+            control.stop("range", f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
+                         f"[{sigma_range[0]:g}, {sigma_range[1]:g}]")
             break
-        b = corr.along(a, step)
+        b = corr.along(a, control.size)
         if b is not None and not _same_pattern(b.ev.contacts, pattern):
-            good, bad = _bisect_pattern(corr, a, step, pattern, locate_tol)
-            pmap.params = {**plane.base, param2: good.p2}
-            gap = pmap.gap(good.ev.points, good.ev.contacts, good.sigma)
+            good, bad = _bisect_pattern(corr, a, control.size, pattern, locate_tol)
             pts.append(good)
-            end = {"reason": "graze", "note": f"the orbit's contacts per period change "
-                   f"({int(pattern.sum())} -> {'?' if bad is None else int(bad.ev.contacts.sum())}): the {kind} "
-                   f"meets the orbit's graze; gap at the last point {gap:.2e}"}
+            control.stop("graze", _pattern_change_note(plane, kind, good, bad, pattern))
             break
         if b is None or float(b.tangent @ a.tangent) < 0.9:
-            step *= 0.5
-            if step < ds_min:
-                pmap.params = {**plane.base, param2: a.p2}
-                gap = pmap.gap(a.ev.points, a.ev.contacts, a.sigma)
-                if gap < GRAZE_GAP * (1.0 + a.sigma):
-                    # the corrector fails at the corner where the event meets the graze (the map is
-                    # nonsmooth there): the last point's free passage touches the wall
-                    end = {"reason": "graze", "note": f"the {kind} meets the orbit's graze (the corrector "
-                           f"stops at the corner; gap at the last point {gap:.2e})"}
-                else:
-                    end = {"reason": "lost", "note": f"corrector failed down to the step {ds_min:g} "
-                           f"(gap at the last point {gap:.2e}: not a graze)"}
+            if not control.shrink():
+                control.stop(*_failure_end(plane, kind, a, ds_min))
                 break
             continue
         if a.tangent[3] * b.tangent[3] < 0:
-            turns.append(_locate_turn(corr, a, step, locate_tol))
+            turns.append(_locate_turn(corr, a, control.size, locate_tol))
         pts.append(b)
         a = b
-        n += 1
-        step = min(step * 1.5, ds_max)
-    gaps = []
-    for p in pts:  # each point's gap with its own p2 (the free flow depends on nu and Omega)
-        pmap.params = {**plane.base, param2: p.p2}
-        gaps.append(pmap.gap(p.ev.points, p.ev.contacts, p.sigma))
-    pmap.params = dict(plane.base)  # a caller's map is left as it was given
+        control.accept()
+    return _event_curve(plane, kind, pattern, pts, turns, control)
+
+
+def _gap_at(plane: PlaneMap, pt: CurvePoint) -> float:
+    """The gap of the orbit at a curve point, with the point's own p2 (the free flow depends on
+    nu and Omega).  Leaves the period map at that p2."""
+    plane.pmap.params = {**plane.base, plane.param2: pt.p2}
+    return plane.pmap.gap(pt.ev.points, pt.ev.contacts, pt.sigma)
+
+
+def _pattern_change_note(plane: PlaneMap, kind: str, good: CurvePoint, bad: CurvePoint | None,
+                         pattern: np.ndarray) -> str:
+    """Why a curve ends where the orbit's contact pattern changes (located at ``good``)."""
+    gap = _gap_at(plane, good)
+    return (f"the orbit's contacts per period change ({int(pattern.sum())} -> "
+            f"{'?' if bad is None else int(bad.ev.contacts.sum())}): the {kind} meets the orbit's graze; "
+            f"gap at the last point {gap:.2e}")
+
+
+def _failure_end(plane: PlaneMap, kind: str, a: CurvePoint, ds_min: float) -> tuple[str, str]:
+    """(reason, note) of a curve whose corrector failed from ``a`` down to the smallest step."""
+    gap = _gap_at(plane, a)
+    if gap < GRAZE_GAP * (1.0 + a.sigma):
+        # the corrector fails at the corner where the event meets the graze (the map is
+        # nonsmooth there): the last point's free passage touches the wall
+        return "graze", (f"the {kind} meets the orbit's graze (the corrector stops at the corner; gap at the "
+                         f"last point {gap:.2e})")
+    return "lost", f"corrector failed down to the step {ds_min:g} (gap at the last point {gap:.2e}: not a graze)"
+
+
+def _event_curve(plane: PlaneMap, kind: str, pattern: np.ndarray, pts: list[CurvePoint],
+                 turns: list[dict[str, Any]], control: StepControl) -> EventCurve:
+    """The curve walked, with each point's gap and why it ended."""
+    gaps = [_gap_at(plane, p) for p in pts]
+    plane.pmap.params = dict(plane.base)  # a caller's map is left as it was given
     last = pts[-1]
-    end.update({"sigma": last.sigma, "p2": last.p2})
-    turns = significant_turns(turns, last.p2)
-    return EventCurve(kind, M, int(pattern.sum()), param2, np.array([p.sigma for p in pts]),
+    end: dict[str, Any] = {"reason": control.reason, "note": control.note, "sigma": last.sigma, "p2": last.p2}
+    return EventCurve(kind, plane.M, int(pattern.sum()), plane.param2, np.array([p.sigma for p in pts]),
                       np.array([p.p2 for p in pts]), np.array([p.ev.points[0] for p in pts]),
-                      np.array([p.multipliers for p in pts]),
-                      np.array(gaps), turns, end,
-                      pmap.evaluations)
+                      np.array([p.multipliers for p in pts]), np.array(gaps),
+                      significant_turns(turns, last.p2), end, plane.pmap.evaluations)
 
 
 def _bisect_pattern(corr: _Corrector, a: CurvePoint, step: float, pattern: np.ndarray,

@@ -25,6 +25,7 @@ import numpy as np
 
 from .curves import EventCurve, significant_turns
 from .periodic_map import MapEvaluation, PeriodMap, refine_orbit
+from .step_control import StepControl
 from ..fmu.simulator import Simulator
 
 __all__ = ["continue_graze", "GAP_TOL"]
@@ -153,15 +154,40 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
         orbit loses or gains stability ("loses"/"gains"); ``end`` why the curve stopped.
     """
     pmap = PeriodMap(sim, params, "sigma", theta)
-    to_q = (lambda p: math.log(p)) if log2 else float
     of_q = math.exp if log2 else float
+    q0 = (math.log if log2 else float)(float(params[param2]))
+    walk = _first_graze(pmap, M, sigma_in, z_in, sigma_out, param2, of_q, q0, locate_tol)
+    walk.T = np.array([0.0, 1.0 if direction > 0 else -1.0])  # first step along p2
+    lo2, hi2 = min(p2_range), max(p2_range)
+    control = StepControl(h, h_min, h_max, max_points)
+    while control.budget_left:
+        res = walk.next_point(control.size)
+        if res is None:
+            if not control.shrink():
+                control.stop("lost", f"no graze found across the curve (step down to {h_min:g}): the "
+                             "orbit with this contact pattern ends")
+                break
+            continue
+        walk.add(res, control.size)
+        control.accept()
+        p2, sg = of_q(float(res[0][1])), math.exp(float(res[0][0]))
+        tol2 = 1e-9 * max(abs(lo2), abs(hi2), 1.0)
+        if not (lo2 - tol2 <= p2 <= hi2 + tol2 and sigma_range[0] <= sg <= sigma_range[1]):
+            control.stop("range", f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
+                         f"[{sigma_range[0]:g}, {sigma_range[1]:g}]")
+            break
+    return walk.curve(control, of_q(q0))
+
+
+def _first_graze(pmap: PeriodMap, M: int, sigma_in: float, z_in: Any, sigma_out: float, param2: str,
+                 of_q: Callable[[float], float], q0: float, locate_tol: float) -> _GrazeWalk:
+    """The walk started at the first point of the curve: the graze located by bisection across
+    the curve along ln sigma, between ``sigma_in`` (the orbit with its pattern) and ``sigma_out``."""
     w_in = np.asarray(z_in, dtype=float) - pmap.offset(sigma_in)
     w0, ev0, ok, _ = refine_orbit(pmap, w_in, sigma_in, M)
     if not ok:
         raise ValueError(f"no period-{M} orbit at sigma = {sigma_in:g} near the given point")
     plane = _Plane(pmap, param2, of_q, M, ev0.contacts.copy())
-    q0 = to_q(float(params[param2]))
-    # the first point: bisection across the curve along ln sigma, between sigma_in and sigma_out
     N = np.array([1.0 if sigma_in > sigma_out else -1.0, 0.0])
     mid = np.array([0.5 * (math.log(sigma_in) + math.log(sigma_out)), q0])
     half = abs(math.log(sigma_in / sigma_out)) / 2
@@ -169,65 +195,81 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
     if first is None:
         raise ValueError(f"the period-{M} orbit's change between sigma = {sigma_in:.10g} and {sigma_out:.10g} "
                          "is not a graze (the gap does not vanish at its last orbit)")
-    Ys, ws, evs = [first[0]], [first[1]], [first[2]]
-    T = np.array([0.0, 1.0 if direction > 0 else -1.0])  # first step along p2
-    turns: list[dict[str, Any]] = []
-    end: dict[str, Any] = {"reason": "steps", "note": f"{max_points} steps done"}
-    lo2, hi2 = min(p2_range), max(p2_range)
-    step = h
+    return _GrazeWalk(plane, first, N, locate_tol)
 
-    def stable(e: MapEvaluation) -> bool:
-        return bool(np.all(np.abs(np.linalg.eigvals(e.J)) < 1.0))
 
-    def normal(T_: np.ndarray) -> np.ndarray:
-        n = np.array([-T_[1], T_[0]])
-        return n if n @ N >= 0 else -n
+def _stable(ev: MapEvaluation) -> bool:
+    return bool(np.all(np.abs(np.linalg.eigvals(ev.J)) < 1.0))
 
-    def next_point(s: float) -> tuple[np.ndarray, np.ndarray, MapEvaluation] | None:
+
+class _GrazeWalk:
+    """The graze curve walked so far: its points Y with their orbits, the secant T of the last
+    two points (the direction of the next step) and the normal N across the curve (pointing to
+    the side where the orbit has its pattern), and the turns met.
+
+    Parameters
+    ----------
+    plane : _Plane
+    first : (Y, w, ev)
+        The first graze point.
+    N : ndarray
+        The first normal.
+    locate_tol : float
+    """
+
+    def __init__(self, plane: _Plane, first: tuple[np.ndarray, np.ndarray, MapEvaluation], N: np.ndarray,
+                 locate_tol: float) -> None:
+        self.plane, self.N, self.locate_tol = plane, N, locate_tol
+        self.Ys, self.ws, self.evs = [first[0]], [first[1]], [first[2]]
+        #: the direction of the next step (the caller sets the first one)
+        self.T = np.array([0.0, 1.0])
+        self.turns: list[dict[str, Any]] = []
+
+    def normal(self, T: np.ndarray) -> np.ndarray:
+        """The normal to ``T`` on the side of the current normal."""
+        n = np.array([-T[1], T[0]])
+        return n if n @ self.N >= 0 else -n
+
+    def next_point(self, s: float) -> tuple[np.ndarray, np.ndarray, MapEvaluation] | None:
+        """The graze located across the curve at a step ``s`` along T from the last point, from
+        the orbit extrapolated along the last two."""
+        Ys, ws = self.Ys, self.ws
         f = s / max(float(np.linalg.norm(Ys[-1] - Ys[-2])), 1e-300) if len(Ys) >= 2 else 0.0
         w_guess = ws[-1] + f * (ws[-1] - ws[-2]) if len(Ys) >= 2 else ws[-1]
-        return plane.locate(Ys[-1] + s * T, normal(T), w_guess, locate_tol)
+        return self.plane.locate(Ys[-1] + s * self.T, self.normal(self.T), w_guess, self.locate_tol)
 
-    n = 0
-    while n < max_points:
-        res = next_point(step)
-        if res is None:
-            step *= 0.5
-            if step < h_min:
-                end = {"reason": "lost", "note": f"no graze found across the curve (step down to {h_min:g}): the "
-                       "orbit with this contact pattern ends"}
-                break
-            continue
+    def add(self, res: tuple[np.ndarray, np.ndarray, MapEvaluation], step: float) -> None:
+        """Accept the point ``res`` found at ``step``, recording a change of stability or a
+        turning point in p2 between it and the last point."""
         Y, w, ev = res
-        if stable(ev) != stable(evs[-1]):
-            turns.append(_stability_change(next_point, step, stable(evs[-1]), of_q, locate_tol, stable))
-        T_new = (Y - Ys[-1]) / np.linalg.norm(Y - Ys[-1])
-        if T_new[1] * T[1] < 0 and len(Ys) >= 2:
-            turns.append({"sigma": float(math.exp(Ys[-1][0])), "p2": float(of_q(Ys[-1][1])),
-                          "side": "max" if T[1] > 0 else "min", "multipliers": _mults(evs[-1])})
-        N = normal(T_new)
-        T = T_new
-        Ys.append(Y)
-        ws.append(w)
-        evs.append(ev)
-        n += 1
-        p2, sg = of_q(float(Y[1])), math.exp(float(Y[0]))
-        tol2 = 1e-9 * max(abs(lo2), abs(hi2), 1.0)
-        if not (lo2 - tol2 <= p2 <= hi2 + tol2 and sigma_range[0] <= sg <= sigma_range[1]):
-            end = {"reason": "range", "note": f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
-                   f"[{sigma_range[0]:g}, {sigma_range[1]:g}]"}
-            break
-        step = min(step * 1.5, h_max)
-    plane.pmap.params = {**plane.base, param2: of_q(q0)}
-    sig = np.exp(np.array([Y[0] for Y in Ys]))
-    p2s = np.array([of_q(float(Y[1])) for Y in Ys])
-    end.update({"sigma": float(sig[-1]), "p2": float(p2s[-1])})
-    turns = significant_turns(turns, float(p2s[-1]))
-    mult = np.array([np.linalg.eigvals(e.J).astype(complex) for e in evs])
-    gaps = np.array([plane.gap(Y, e) for Y, e in zip(Ys, evs)])
-    plane.pmap.params = {**plane.base, param2: of_q(q0)}
-    return EventCurve("graze", M, int(plane.pattern.sum()), param2, sig, p2s, np.array([e.points[0] for e in evs]),
-                      mult, gaps, turns, end, pmap.evaluations)
+        of_q = self.plane.of_q
+        if _stable(ev) != _stable(self.evs[-1]):
+            self.turns.append(_stability_change(self.next_point, step, _stable(self.evs[-1]), of_q,
+                                                self.locate_tol, _stable))
+        T_new = (Y - self.Ys[-1]) / np.linalg.norm(Y - self.Ys[-1])
+        if T_new[1] * self.T[1] < 0 and len(self.Ys) >= 2:
+            self.turns.append({"sigma": float(math.exp(self.Ys[-1][0])), "p2": float(of_q(self.Ys[-1][1])),
+                               "side": "max" if self.T[1] > 0 else "min", "multipliers": _mults(self.evs[-1])})
+        self.N = self.normal(T_new)
+        self.T = T_new
+        self.Ys.append(Y)
+        self.ws.append(w)
+        self.evs.append(ev)
+
+    def curve(self, control: StepControl, p2_0: float) -> EventCurve:
+        """The curve walked, why it ended, and the map's p2 put back to ``p2_0``."""
+        plane, of_q = self.plane, self.plane.of_q
+        plane.pmap.params = {**plane.base, plane.param2: p2_0}
+        sig = np.exp(np.array([Y[0] for Y in self.Ys]))
+        p2s = np.array([of_q(float(Y[1])) for Y in self.Ys])
+        end: dict[str, Any] = {"reason": control.reason, "note": control.note,
+                               "sigma": float(sig[-1]), "p2": float(p2s[-1])}
+        turns = significant_turns(self.turns, float(p2s[-1]))
+        mult = np.array([np.linalg.eigvals(e.J).astype(complex) for e in self.evs])
+        gaps = np.array([plane.gap(Y, e) for Y, e in zip(self.Ys, self.evs)])
+        plane.pmap.params = {**plane.base, plane.param2: p2_0}
+        return EventCurve("graze", plane.M, int(plane.pattern.sum()), plane.param2, sig, p2s,
+                          np.array([e.points[0] for e in self.evs]), mult, gaps, turns, end, plane.pmap.evaluations)
 
 
 def _mults(ev: MapEvaluation) -> list[list[float]]:

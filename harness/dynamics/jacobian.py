@@ -251,16 +251,16 @@ def jacobian_vs_x(
         "auto", "exact" or "fd" (see :func:`map_jacobian`).  With exact derivatives the scan
         reaches x = 1e-9 and below; differences stop being usable near x ~ 1e-5.
     """
-    method = resolve_method(sim, method, "--method")
-    theta = check_theta(theta, "--theta")
-    measure_theta = check_theta(measure_theta, "--measure-theta")
+    method = resolve_method(sim, method, "method")
+    theta = check_theta(theta, "theta")
+    measure_theta = check_theta(measure_theta, "measure_theta")
     for name in ("nu", "Omega", "sigma"):
         if name not in params:
             raise HarnessInputError(name, "needed for the free-flight coordinates of the Jacobian")
     nu, Om, sigma = float(params["nu"]), float(params["Omega"]), float(params["sigma"])
     x = np.asarray(x, dtype=float)
     if x.size == 0:
-        raise HarnessInputError("--x-num", "empty range of x")
+        raise HarnessInputError("x", "empty range of x")
     t_meas = measure_theta - 1.0  # measured over [n - 1 + m, n + m], so the impact near n is inside
     d = (theta - measure_theta) % 1.0
     T = free_propagator(nu, Om, d)

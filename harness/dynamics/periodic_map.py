@@ -85,7 +85,7 @@ class PeriodMap:
         self.params = {k: v for k, v in params.items() if k not in ("u0", "v0")}
         self.param = param
         if param in ("u0", "v0", "wall", "solver", "contact", "sensitivities"):
-            raise HarnessInputError("--param", f"{param!r} cannot be continued (not a real model parameter)")
+            raise HarnessInputError("param", f"{param!r} cannot be continued (not a real model parameter)")
         self.theta = float(theta)
         self.derivatives = resolve_method(sim, derivatives, "derivatives")
         if hasattr(sim, "track_derivatives"):

@@ -1,11 +1,7 @@
 """Newton shooting on the FMU's stroboscopic map: periodic orbits and window edges.
 
-The map is the FMU's one-period map at the section phase ``theta`` (default 1/2: half a
-period away from the impacts near t = n, so every sample is out of contact).  It is
-written in coordinates relative to the wall-free orbit p(t) of (4), w = z - p(theta),
-a translation (same fixed points and multipliers) that makes continuation in sigma work:
-a change of sigma moves p(theta) by O(dsigma) while the impacting orbit lives within
-O(1e-3) of grazing, so continuing z itself would lose the impact on the first step.
+The map (:class:`.stroboscopic_map.StroboscopicMap`) is the FMU's one-period map at the
+section phase ``theta``, in coordinates w = z - p(theta) relative to the wall-free orbit.
 
 Edges of a stable window of maximal period-M orbits (one impact per period):
 
@@ -37,13 +33,10 @@ import numpy as np
 
 from mapcheck.orbits import PeriodicOrbit, edge_kind, solve_periodic_orbit
 
-from .jacobian import resolve_method
+from .stroboscopic_map import StroboscopicMap
 from ..errors import FmuRejectedInput
-from ..fmu.simulator import Simulator
 
 __all__ = ["StroboscopicMap", "Edge", "NEWTON", "MARCH_STEPS", "good_orbit", "window_edges", "map_guided_windows", "newton_for"]
-
-TWO_PI = 2.0 * math.pi
 
 #: Width of a guide window in march steps (the step is width / MARCH_STEPS).
 MARCH_STEPS = 6.3
@@ -55,75 +48,6 @@ MARCH_STEPS = 6.3
 #: max_iter 12: from a continued or map guess Newton converges in <= 6 iterations; a
 #: failing solve (beyond an edge) should not cost more than that.
 NEWTON: dict[str, Any] = {"tol": 1e-9, "rel_h": 1e-4, "scale": np.array([1e-2, 1e-1]), "max_iter": 12}
-
-
-class StroboscopicMap:
-    """The FMU's one-period map at phase ``theta``, in coordinates w = z - p(theta).
-
-    Parameters
-    ----------
-    sim : Simulator
-        Restarted for every evaluation (``start`` at t0 = theta).
-    params : mapping
-        FMU parameters (sigma is set per call of :meth:`at`).
-    theta : float
-        Section phase; keep it away from the impacts (1/2).
-    derivatives : str
-        "auto" (the FMU's exact derivatives when it reports them), "exact" or "fd" (central
-        differences, the fallback and cross-check).
-    """
-
-    def __init__(self, sim: Simulator, params: Mapping[str, Any], theta: float = 0.5,
-                 derivatives: str = "auto") -> None:
-        self.sim = sim
-        self.params = {k: v for k, v in params.items() if k not in ("u0", "v0")}
-        self.theta = float(theta)
-        self.evaluations = 0
-        self.derivatives = resolve_method(sim, derivatives, "derivatives")
-        if hasattr(sim, "track_derivatives"):
-            # variational equations only where they are used
-            sim.track_derivatives(self.derivatives == "exact")
-
-    def offset(self, sigma: float) -> np.ndarray:
-        """p(theta) of (4) at this sigma."""
-        th = TWO_PI * self.theta
-        return np.array([(1.0 + sigma) * math.cos(th) - 1.0, -TWO_PI * (1.0 + sigma) * math.sin(th)])
-
-    def at(self, sigma: float) -> Callable[[float, float], tuple[float, float, int]]:
-        """The map at ``sigma`` as ``step(wu, wv) -> (wu1, wv1, wall entries)``."""
-        params = {**self.params, "sigma": float(sigma)}
-        off = self.offset(sigma)
-        t0 = self.theta
-
-        def step(wu: float, wv: float) -> tuple[float, float, int]:
-            self.sim.start(params, t0, (wu + off[0], wv + off[1]))
-            self.sim.advance(t0 + 1.0)
-            u, v, n = self.sim.read()
-            self.evaluations += 1
-            return u - off[0], v - off[1], n
-
-        return step
-
-    def at_with_jacobian(self, sigma: float) -> Callable[[float, float], tuple[float, float, int, np.ndarray]] | None:
-        """The map at ``sigma`` with its exact Jacobian, ``dstep(wu, wv) -> (wu1, wv1, n, J)``
-        (J in w coordinates = J in z: a translation), or None with finite differences."""
-        if self.derivatives != "exact":
-            return None
-        step = self.at(sigma)
-
-        def dstep(wu: float, wv: float) -> tuple[float, float, int, np.ndarray]:
-            u, v, n = step(wu, wv)
-            return u, v, n, self.sim.derivatives()[0]  # type: ignore[attr-defined]
-
-        return dstep
-
-    def iterate(self, sigma: float, w: np.ndarray, n: int) -> tuple[np.ndarray, int]:
-        """n periods in one run (no restarts) from w; returns (w_n, wall entries)."""
-        off = self.offset(sigma)
-        self.sim.start({**self.params, "sigma": float(sigma)}, self.theta, tuple(np.asarray(w) + off))
-        self.sim.advance(self.theta + n)
-        u, v, k = self.sim.read()
-        return np.array([u, v]) - off, k
 
 
 @dataclass
@@ -232,69 +156,101 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
         raise ValueError(f"no stable maximal period-{M} orbit found at sigma = {sigma_in}")
     edges = []
     for direction, limit in ((-1.0, sigma_range[0]), (+1.0, sigma_range[1])):
-        s_good, o_good = sigma_in, orb
-        s_bad, o_bad = None, None
+        search = _EdgeSearch(smap, M, direction, sigma_in, orb, guess_of, newton, accept)
+        if not search.march(limit, dp, geometric):
+            # no bracket inside the range: unresolved, never a number
+            edges.append(Edge(None, "range", abs(limit - search.s_good), search.o_good.multipliers,
+                              float(search.s_good), None))
+            continue
+        search.bisect(xtol)
+        edges.append(search.edge(kind_of))
+    return edges[0], edges[1]
+
+
+class _EdgeSearch:
+    """The search for one edge of a window, on one side of ``sigma_in``: the last sigma with a
+    good orbit and the first without, and the last two good orbits for a secant predictor.
+
+    Parameters
+    ----------
+    smap, M, guess_of, newton, accept
+        As in :func:`window_edges`.
+    direction : float
+        -1 for the lower edge, +1 for the upper.
+    s_good, o_good
+        A sigma inside the window and the good orbit there.
+    """
+
+    def __init__(self, smap: StroboscopicMap, M: int, direction: float, s_good: float, o_good: PeriodicOrbit,
+                 guess_of: Callable[[float], np.ndarray | None], newton: Mapping[str, Any] | None,
+                 accept: Callable[[PeriodicOrbit], bool] | None) -> None:
+        self.smap, self.M, self.direction = smap, M, direction
+        self.guess_of, self.newton, self.accept = guess_of, newton, accept
+        self.s_good, self.o_good = s_good, o_good
+        self.s_bad: float | None = None
+        self.o_bad: PeriodicOrbit | None = None
         # last two good (sigma, anchor) for a secant predictor: near a graze another periodic
         # orbit (with the extra contact) lies ~1e-4 away, so plain continuation over a step
         # of ~1e-4 in sigma can land on it; the secant's error is O(step^2)
-        history = [(s_good, _rotate_to_impact(o_good, M))]
+        self.history = [(s_good, _rotate_to_impact(o_good, M))]
 
-        def guesses(s: float) -> list:
-            anchor = _rotate_to_impact(o_good, M)
-            out = []
-            if len(history) >= 2:
-                (s1, z1), (s2, z2) = history[-2], history[-1]
-                if s2 != s1:
-                    out.append(z2 + (z2 - z1) * (s - s2) / (s2 - s1))
-            return out + [anchor, guess_of(s)]
+    def guesses(self, s: float) -> list:
+        """Newton's starts at ``s``: the secant prediction, the last good orbit, the guide's."""
+        anchor = _rotate_to_impact(self.o_good, self.M)
+        out = []
+        if len(self.history) >= 2:
+            (s1, z1), (s2, z2) = self.history[-2], self.history[-1]
+            if s2 != s1:
+                out.append(z2 + (z2 - z1) * (s - s2) / (s2 - s1))
+        return out + [anchor, self.guess_of(s)]
 
-        def remember(s: float, o: PeriodicOrbit) -> None:
-            history.append((s, _rotate_to_impact(o, M)))
-            history.sort(key=lambda e: direction * e[0])  # the two nearest the edge last
-            del history[:-2]
+    def probe(self, s: float) -> None:
+        """Shoot at ``s``: it becomes the last good sigma or the first bad one."""
+        ok, o = good_orbit(self.smap, self.M, s, self.guesses(s), self.newton, self.accept)
+        if ok:
+            self.s_good, self.o_good = s, o
+            self.history.append((s, _rotate_to_impact(o, self.M)))
+            self.history.sort(key=lambda e: self.direction * e[0])  # the two nearest the edge last
+            del self.history[:-2]
+        else:
+            self.s_bad, self.o_bad = s, o
 
-        while s_bad is None:
-            s = s_good * math.exp(direction * dp) if geometric else s_good + direction * dp
-            if (s - limit) * direction > 0:
+    def march(self, limit: float, dp: float, geometric: bool) -> bool:
+        """Step towards ``limit`` until a sigma without a good orbit; False when the range ends
+        first (the end of the range itself is tested before giving up)."""
+        while self.s_bad is None:
+            s_good = self.s_good
+            s = s_good * math.exp(self.direction * dp) if geometric else s_good + self.direction * dp
+            if (s - limit) * self.direction > 0:
                 if s_good == limit:
-                    break
-                s = limit  # test the end of the range itself before giving up
-            ok, o = good_orbit(smap, M, s, guesses(s), newton, accept)
-            if ok:
-                s_good, o_good = s, o
-                remember(s, o)
-            else:
-                s_bad, o_bad = s, o
-        if s_bad is None:
-            # no bracket inside the range: unresolved, never a number
-            edges.append(Edge(None, "range", abs(limit - s_good), o_good.multipliers, float(s_good), None))
-            continue
-        while abs(s_bad - s_good) > xtol:
-            s = 0.5 * (s_good + s_bad)
-            ok, o = good_orbit(smap, M, s, guesses(s), newton, accept)
-            if ok:
-                s_good, o_good = s, o
-                remember(s, o)
-            else:
-                s_bad, o_bad = s, o
+                    return False
+                s = limit
+            self.probe(s)
+        return True
+
+    def bisect(self, xtol: float) -> None:
+        """Bisect the bracket [s_good, s_bad] until narrower than ``xtol``."""
+        while abs(self.s_bad - self.s_good) > xtol:
+            self.probe(0.5 * (self.s_good + self.s_bad))
+
+    def edge(self, kind_of: Callable[[PeriodicOrbit | None, int], str] | None) -> Edge:
+        """The edge at the bracket's midpoint (a number the bisection produced, not a march point,
+        which could be a guide's edge), with its kind."""
+        s_good, s_bad, o_good, o_bad, M = self.s_good, self.s_bad, self.o_good, self.o_bad, self.M
         if kind_of is not None:
             n_iter = -1
             if o_bad is None or not o_bad.converged:
-                _, n_iter = smap.iterate(s_bad, _rotate_to_impact(o_good, M), M)
-            edges.append(Edge(0.5 * (s_good + s_bad), kind_of(o_bad, n_iter), abs(s_bad - s_good),
-                              o_good.multipliers, float(s_good), float(s_bad)))
-            continue
-        kind = edge_kind(o_bad) if o_bad is not None else "lost"
-        if kind == "lost":
-            # Newton found no orbit beyond the edge: iterate the last good orbit there and
-            # look at its contacts (an extra one in a non-impacting period: a graze)
-            _, n = smap.iterate(s_bad, _rotate_to_impact(o_good, M), M)
-            kind = "graze" if n > 1 else ("no-impact" if n == 0 else "lost")
-        # the edge lies in [s_good, s_bad] (either order): report the bracket's midpoint, a
-        # number the bisection produced, not a march point (which could be a guide's edge)
-        edges.append(Edge(0.5 * (s_good + s_bad), kind, abs(s_bad - s_good), o_good.multipliers,
-                          float(s_good), float(s_bad)))
-    return edges[0], edges[1]
+                _, n_iter = self.smap.iterate(s_bad, _rotate_to_impact(o_good, M), M)
+            kind = kind_of(o_bad, n_iter)
+        else:
+            kind = edge_kind(o_bad) if o_bad is not None else "lost"
+            if kind == "lost":
+                # Newton found no orbit beyond the edge: iterate the last good orbit there and
+                # look at its contacts (an extra one in a non-impacting period: a graze)
+                _, n = self.smap.iterate(s_bad, _rotate_to_impact(o_good, M), M)
+                kind = "graze" if n > 1 else ("no-impact" if n == 0 else "lost")
+        return Edge(0.5 * (s_good + s_bad), kind, abs(s_bad - s_good), o_good.multipliers,
+                    float(s_good), float(s_bad))
 
 
 def newton_for(sigma: float) -> dict[str, Any]:

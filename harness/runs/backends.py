@@ -201,7 +201,7 @@ class DaskBackend:
             try:
                 self.client = Client(address, timeout="10s")
             except (OSError, TimeoutError) as exc:
-                raise HarnessInputError("--scheduler", f"cannot connect to the Dask scheduler at {address}: {exc}") from None
+                raise HarnessInputError("scheduler", f"cannot connect to the Dask scheduler at {address}: {exc}") from None
             self._owns_client = True
 
     @property
@@ -279,6 +279,6 @@ def make_backend(backend: Any = None, workers: int | None = None, scheduler: str
         return ProcessBackend(workers or default_workers())
     if name == "dask":
         if not scheduler:
-            raise HarnessInputError("--scheduler", "the dask backend needs a scheduler address (tcp://HOST:PORT) or a Client")
+            raise HarnessInputError("scheduler", "the dask backend needs a scheduler address (tcp://HOST:PORT) or a Client")
         return DaskBackend(scheduler)
-    raise HarnessInputError("--backend", f"unknown backend {name!r}; choose from serial, processes, dask")
+    raise HarnessInputError("backend", f"unknown backend {name!r}; choose from serial, processes, dask")

@@ -68,16 +68,16 @@ def run_basins(fmu: Any, u0: Sequence[float], v0: Sequence[float], params: Mappi
     v0 = np.asarray(v0, dtype=float)
     for name, grid in (("u0", u0), ("v0", v0)):
         if grid.ndim != 1 or grid.size < 1 or not np.all(np.isfinite(grid)):
-            raise HarnessInputError(f"--{name}", "expected one or more finite values")
+            raise HarnessInputError(name, "expected one or more finite values")
         if np.unique(grid).size != grid.size:
-            raise HarnessInputError(f"--{name}", "values must be distinct")
+            raise HarnessInputError(name, "values must be distinct")
     spec = SweepSpec("u0", u0, ("fresh",), "v0", v0)
     ds = run_sweep(fmu, spec, params, (float(u0[0]), float(v0[0])), sampling, backend=backend, workers=workers,
                    scheduler=scheduler, checkpoint=checkpoint, progress=progress, settings=settings, stats=stats)
     ds = ds.isel(direction=0, drop=True)
     tol = default_match_tol(ds, sampling.tol) if match_tol is None else float(match_tol)
     if not (np.isfinite(tol) and tol > 0):
-        raise HarnessInputError("--match-tol", f"must be a finite number > 0, got {match_tol!r}")
+        raise HarnessInputError("match_tol", f"must be a finite number > 0, got {match_tol!r}")
     labels, attractors = identify_attractors(ds["u"].values, ds["v"].values, ds["period"].values,
                                              ds["orbit_impacts"].values, tol)
     return with_attractors(ds, labels, attractors, tol)

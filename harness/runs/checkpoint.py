@@ -83,10 +83,10 @@ class Checkpoint:
     run_fingerprint : str
         Identifies the run; an existing checkpoint with another fingerprint is an error.
     argument : str
-        Name used in error messages (``"--checkpoint"``).
+        Name used in error messages (``"checkpoint"``, the argument of :func:`harness.run_sweep`).
     """
 
-    def __init__(self, directory: str | os.PathLike, run_fingerprint: str, argument: str = "--checkpoint",
+    def __init__(self, directory: str | os.PathLike, run_fingerprint: str, argument: str = "checkpoint",
                  identity: Any = None) -> None:
         self.directory = Path(directory)
         self.fingerprint = run_fingerprint

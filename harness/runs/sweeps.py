@@ -23,11 +23,8 @@ that process's reused FMU instance.
 """
 from __future__ import annotations
 
-import dataclasses
 import pickle
-import threading
 import time
-from dataclasses import dataclass
 from typing import Any, Mapping
 
 import numpy as np
@@ -35,10 +32,10 @@ import xarray as xr
 
 from .backends import Backend, make_backend
 from .checkpoint import Checkpoint, fingerprint
+from .sweep_collect import SweepCollector, SweepStats
 from ..config import SamplingSpec, SweepSpec, sweep_directions
 from ..errors import HarnessInputError
 from ..fmu.fmi import INITIAL_STATE, FmuModel
-from ..io.progress import progress_bar
 from ..io.results import ORBIT_IMPACTS_ATTRS, PERIOD_ATTRS, provenance
 from .tasks import RESULT_FIELDS, SweepTask, execute, run_task
 
@@ -52,7 +49,7 @@ def plan_tasks(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, 
     """All tasks of a sweep, keyed by a stable key."""
     if {spec.param, spec.scan_param} & set(INITIAL_STATE) and any(m != "fresh" for m in spec.modes):
         name = spec.param if spec.param in INITIAL_STATE else spec.scan_param
-        raise HarnessInputError("--mode", f"the initial state {name!r} can only be swept with fresh starts")
+        raise HarnessInputError("spec.modes", f"the initial state {name!r} can only be swept with fresh starts")
     grid = np.sort(np.asarray(spec.values, dtype=float))
     scan = [None] if spec.scan_param is None else list(np.asarray(spec.scan_values, dtype=float))
     tasks: dict[str, SweepTask] = {}
@@ -79,10 +76,6 @@ def plan_tasks(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, 
                 tasks[key] = SweepTask(key, mode, spec.param, tuple(float(x) for x in chain), base, start, sampling)
     return tasks
 
-
-#: What a checkpoint keeps of each finished point of an unfinished chain: its results and
-#: ``end`` = (t, u, v), the state the chain went on from.
-PARTIAL_FIELDS = (*RESULT_FIELDS, "end")
 
 #: Mode of the task that runs a hysteresis loop: its first half is the up scan, its
 #: second half the down scan from the state the up scan ended in.
@@ -197,21 +190,6 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
 # ----------------------------------------------------------------------------------------
 # Driver
 # ----------------------------------------------------------------------------------------
-@dataclass
-class SweepStats:
-    """What a sweep did: tasks computed now, tasks taken from the checkpoint, wall time."""
-
-    computed: int = 0
-    resumed: int = 0
-    wall_time: float = 0.0
-    #: points of unfinished chains taken from the checkpoint (not recomputed)
-    resumed_points: int = 0
-    #: points on disk in the checkpoint now (whole tasks and leading points of chains)
-    kept_points: int = 0
-    #: points of the whole sweep (directions x grid [x second axis])
-    total_points: int = 0
-
-
 def run_sweep(
     fmu: FmuModel | str | Any,
     spec: SweepSpec,
@@ -268,52 +246,56 @@ def run_sweep(
     """
     t_start = time.perf_counter()
     sampling = sampling or SamplingSpec()  # checked on creation
+    model, base, source, sha = _resolve_fmu(fmu, spec, params)
+    tasks = plan_tasks(spec, base, state0, sampling)
+    store = None
+    if checkpoint is not None:
+        identity = sweep_identity(spec, base, state0, sampling, sha)
+        store = Checkpoint(checkpoint, fingerprint(identity), identity=identity)
+    stats = stats if stats is not None else SweepStats()
+    collect = SweepCollector(tasks, store, stats)
+    be, source = _open_backend(backend, workers, scheduler, model, source)
+    collect.open_bar(f"sweep {spec.param}", progress)
+    try:
+        # reports drive the progress bar and the checkpoint inside chains
+        be.run(run_task, collect.todo, source, collect.on_result,
+               collect.on_progress if (progress or store is not None) else None)
+        description = be.describe()
+    finally:
+        collect.bar.close()
+        if backend is None or isinstance(backend, str):
+            be.close()  # a backend or client passed in stays open for the caller
+    stats.wall_time = time.perf_counter() - t_start
+    record = _sweep_record(spec, sampling, state0, base, settings, stats, collect)
+    attrs = provenance(record, model=model, backend=description, wall_time=stats.wall_time)
+    return assemble(spec, tasks, collect.results, sampling, attrs)
+
+
+def _resolve_fmu(fmu: FmuModel | str | Any, spec: SweepSpec,
+                 params: Mapping[str, Any] | None) -> tuple[FmuModel | None, dict[str, Any], Any, str]:
+    """(model or None, the FMU parameters of every task, what the workers open, the FMU's
+    identity for checkpoints) of an FMU given as a path, an FmuModel or a simulator."""
     model: FmuModel | None = None
     if isinstance(fmu, (str,)) or hasattr(fmu, "__fspath__"):
         model = FmuModel(fmu)
     elif isinstance(fmu, FmuModel):
         model = fmu
-    if model is not None:
-        model.check_settable(spec.param, "--param")
-        if spec.scan_param is not None:
-            model.check_settable(spec.scan_param, "--scan")
-        base = model.defaults()
-        for name, value in (params or {}).items():
-            base[name] = model.coerce(name, value, name)
-        for name in INITIAL_STATE:
-            base.pop(name, None)
-        source: Any = model.source()
-        sha = model.sha256
-    else:
-        base = dict(params or {})
-        source = fmu
-        sha = f"simulator:{type(fmu).__name__}"
-    tasks = plan_tasks(spec, base, state0, sampling)
+    if model is None:
+        return None, dict(params or {}), fmu, f"simulator:{type(fmu).__name__}"
+    model.check_settable(spec.param, "spec.param")
+    if spec.scan_param is not None:
+        model.check_settable(spec.scan_param, "spec.scan_param")
+    base = model.defaults()
+    for name, value in (params or {}).items():
+        base[name] = model.coerce(name, value, name)
+    for name in INITIAL_STATE:
+        base.pop(name, None)
+    return model, base, model.source(), model.sha256
 
-    store = None
-    if checkpoint is not None:
-        identity = sweep_identity(spec, base, state0, sampling, sha)
-        store = Checkpoint(checkpoint, fingerprint(identity), identity=identity)
-    results: dict[str, dict[str, np.ndarray]] = {}
-    todo: dict[str, SweepTask] = {}
-    # leading points of chains: from the checkpoint, then as the chains report them
-    partial: dict[str, dict[str, list]] = {}
-    stats = stats if stats is not None else SweepStats()
-    for key, task in tasks.items():
-        if store is not None and store.has(key):
-            results[key] = store.load(key)
-            continue
-        rows = store.load_partial(key) if store is not None else None
-        if rows is not None and "end" in rows and 0 < len(rows["period"]) < len(task.values):
-            done = len(rows["period"])
-            partial[key] = {name: list(rows[name]) for name in PARTIAL_FIELDS}
-            t_last, u_last, v_last = rows["end"][-1]  # the state after the last finished point
-            task = dataclasses.replace(task, resume=(done, float(t_last), float(u_last), float(v_last)))
-            stats.resumed_points += done
-        todo[key] = task
-    stats.resumed = len(results)
-    stats.kept_points = sum(len(tasks[k].values) for k in results) + stats.resumed_points
 
+def _open_backend(backend: Any, workers: int | None, scheduler: str | None, model: FmuModel | None,
+                  source: Any) -> tuple[Backend, Any]:
+    """The backend, and the FMU source as its workers need it."""
     be: Backend = make_backend(backend, workers, scheduler)
     if model is None and be.name != "serial":
         try:  # a user simulator travels to the workers by pickle
@@ -326,69 +308,13 @@ def run_sweep(
                 "define its map at module level or use backend='serial'") from None
     if be.name == "dask" and model is not None:
         source = model.source(embed=True)  # remote workers may not share the file system
-    first_of = {key: (task.resume[0] if task.resume else 0) for key, task in todo.items()}
-    total_points = stats.total_points = sum(len(t.values) for t in tasks.values())
-    finished = {"points": stats.kept_points}
-    in_flight: dict[str, int] = {}  # points reported by tasks still running
-    lock = threading.Lock()
-    bar = progress_bar(total=total_points, initial=finished["points"], desc=f"sweep {spec.param}", unit="pt",
-                       disable=not progress)
+    return be, source
 
-    last_draw = [0.0]
 
-    def show(force: bool = False) -> None:
-        # Called from the result loop and from progress threads; a task rerun after a lost
-        # worker reports from 1 again, so the count is recomputed, never accumulated.
-        bar.n = min(total_points, finished["points"] + sum(in_flight.values()))
-        now = time.monotonic()
-        if force or now - last_draw[0] > 0.2:  # redraw at most 5 times a second
-            bar.refresh()
-            last_draw[0] = now
-
-    def on_progress(key: str, points: int, row: Mapping[str, Any] | None = None) -> None:
-        with lock:
-            if key in results:
-                return  # a late report of a task already finished
-            rows = partial.setdefault(key, {name: [] for name in PARTIAL_FIELDS})
-            if row is not None and points == len(rows["period"]) + 1:  # the next point, in order
-                for name in PARTIAL_FIELDS:
-                    rows[name].append(row[name])
-                if store is not None:
-                    store.save_partial(key, {name: np.asarray(rows[name]) for name in PARTIAL_FIELDS})
-                    stats.kept_points += 1
-            in_flight[key] = points - first_of[key]  # points computed in this run
-            show()
-
-    def on_result(key: str, arrays: dict[str, np.ndarray]) -> None:
-        rows = partial.get(key)
-        first = first_of[key]
-        if first:  # the leading points came from the checkpoint
-            for name in RESULT_FIELDS:
-                if name in rows:  # a checkpoint written before a field existed lacks it
-                    arrays[name][:first] = np.asarray(rows[name][:first])
-        if store is not None:
-            store.save(key, arrays)
-            store.remove_partial(key)
-        with lock:
-            results[key] = arrays
-            partial.pop(key, None)
-            in_flight.pop(key, None)
-            finished["points"] += len(tasks[key].values) - first
-            if store is not None:  # the whole task is on disk now, its partial rows replaced
-                stats.kept_points += len(tasks[key].values) - (len(rows["period"]) if rows else 0)
-            stats.computed += 1
-            show(force=finished["points"] == total_points)
-
-    try:
-        # reports drive the progress bar and the checkpoint inside chains
-        be.run(run_task, todo, source, on_result, on_progress if (progress or store is not None) else None)
-        description = be.describe()
-    finally:
-        bar.close()
-        if backend is None or isinstance(backend, str):
-            be.close()  # a backend or client passed in stays open for the caller
-    stats.wall_time = time.perf_counter() - t_start
-    record = {
+def _sweep_record(spec: SweepSpec, sampling: SamplingSpec, state0: tuple[float, float], base: Mapping[str, Any],
+                  settings: Mapping[str, Any] | None, stats: SweepStats, collect: SweepCollector) -> dict[str, Any]:
+    """The settings and counts a sweep's Dataset records in its attributes."""
+    return {
         # the caller's record first: the values actually used below win over it
         **dict(settings or {}),
         "sweep.param": spec.param,
@@ -410,7 +336,5 @@ def run_sweep(
         "tasks_computed": stats.computed,
         "tasks_resumed": stats.resumed,
         # CPU seconds of the tasks computed in this run, summed over workers
-        "tasks_cpu_time_s": float(sum(float(results[k].get("cpu_s", 0.0)) for k in todo)),
+        "tasks_cpu_time_s": float(sum(float(collect.results[k].get("cpu_s", 0.0)) for k in collect.todo)),
     }
-    attrs = provenance(record, model=model, backend=description, wall_time=stats.wall_time)
-    return assemble(spec, tasks, results, sampling, attrs)

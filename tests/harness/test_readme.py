@@ -6,7 +6,7 @@ import re
 from collections import Counter
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent / "harness"
+ROOT = Path(__file__).resolve().parents[2] / "harness"
 #: A list item naming a module (``cli/main.py``) or a package (``cli/``), relative to harness/.
 ITEM = re.compile(r"^\s*- `((?:[A-Za-z0-9_]+/)*(?:[A-Za-z0-9_]+\.py|[A-Za-z0-9_]+/))`: \S")
 
