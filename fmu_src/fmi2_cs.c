@@ -254,7 +254,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Rea
     if (!core_allowed(c, "fmi2GetRealStatus")) return fmi2Error;
     if (s != fmi2LastSuccessfulTime || !value)
         return S(core_fail(c, "fmi2GetRealStatus", "only fmi2LastSuccessfulTime is available"));
-    *value = solver_time(&c->s);
+    *value = core_time(c);
     return fmi2OK;
 }
 
