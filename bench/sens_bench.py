@@ -11,7 +11,7 @@ per period:
   they are on -- and getInteger of impacts), CVODE mode (solver = 0) and closed-form mode
   (solver = 1), each with sensitivities off and on;
 - the FMU driven from C through its FMI 2.0 functions (bench/c_driver.c), both modes;
-- the closed form driven from C directly, no FMI (bench/cf_driver.c: closed_form_advance, the
+- the closed form driven from C directly, no FMI (bench/cf_driver.c: STEPPER_CLOSED_FORM, the
   code the FMU runs with solver = 1) -- the "bare C closed form";
 and each method's one-period map error against mapcheck.exact from its own states.
 The ratio (closed form through fmpy) / (bare C closed form) is the issue's goal (<= 5).
@@ -52,7 +52,8 @@ def build(workdir: Path) -> dict[str, Path]:
     src = ROOT / "fmu_src"
     cf = workdir / "cf_driver"
     subprocess.run([cc, "-O2", "-I", str(src), str(ROOT / "bench" / "cf_driver.c"),
-                    *(str(src / f) for f in ("closed_form.c", "sens.c", "model.c")), "-lm", "-o", str(cf)],
+                    *(str(src / f) for f in ("closed_form.c", "stepper.c", "sens.c", "model.c")),
+                    "-lm", "-o", str(cf)],
                    check=True)
     fd = workdir / "c_driver"
     subprocess.run([cc, "-O2", "-I", str(src / "include" / "fmi2"), str(ROOT / "bench" / "c_driver.c"),

@@ -4,4 +4,4 @@
 # steppers (stepper.h) and the model.
 set(IMPACT_MODEL_SOURCES
   fmu_core.c fmu_states.c fmu_vars.c fmu_snapshot.c fmu_cs.c fmu_me.c
-  stepper.c solver_cvode.c closed_form.c sens.c model.c)
+  stepper.c steppers.c solver_cvode.c closed_form.c sens.c model.c)

@@ -1,40 +1,13 @@
 /*
- * The stepper interface (stepper.h): the table of methods by the model's `solver` parameter, the
- * calls the FMI core makes, and the clock's operations the methods share (solver_cvode.c,
- * closed_form.c).
+ * The stepper interface (stepper.h): the calls the FMI core makes, and the clock's operations the
+ * methods share (solver_cvode.c, closed_form.c). The table of methods is steppers.c.
  */
 #include "stepper.h"
 
 #include <math.h>
 #include <stdio.h>
 
-#include "closed_form.h"
 #include "sens.h"
-#include "solver.h"
-
-/* The methods, by the value of the parameter `solver` (model.h, SolverKind). */
-static const StepperOps *const METHODS[] = {
-    [SOLVER_CVODE] = &STEPPER_CVODE,
-    [SOLVER_CLOSED_FORM] = &STEPPER_CLOSED_FORM,
-};
-#define N_METHODS (sizeof METHODS / sizeof METHODS[0])
-
-int stepper_select(Stepper *st, ModelData *m) {
-    const StepperOps *ops = m->solver >= 0 && (size_t)m->solver < N_METHODS ? METHODS[m->solver]
-                                                                              : NULL;
-    if (!ops) {
-        snprintf(st->clk.msg, sizeof st->clk.msg, "no integration method solver = %d", m->solver);
-        return -1;
-    }
-    if (st->ops == ops) return 0;
-    stepper_free(st);
-    st->ops = ops;
-    if (ops->create(st, m) != 0) {
-        stepper_free(st);
-        return -1;
-    }
-    return 0;
-}
 
 void stepper_free(Stepper *st) {
     if (st->ops) st->ops->free(st);
