@@ -1,7 +1,7 @@
 /*
  * FMI 2.0 Co-Simulation and Model Exchange glue: translates the fmi2 calls to the shared core
- * (fmu_core.c), which holds the instance, its state machine, the variables, the snapshots and
- * the stepping loop. No physics here (model.c), no rules either (fmu_core.c).
+ * (fmu_core.h), which holds the instance, its state machine, the variables, the snapshots and
+ * the stepping loop. No physics here (model.c), no rules either (the core's units).
  */
 #include <stdio.h>
 #include <stdlib.h>
