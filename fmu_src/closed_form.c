@@ -357,6 +357,37 @@ static void stuck_state(ModelData *m, double tau) {
     m->v = W1;
 }
 
+/* A mass sticking on the wall from the clock's time on: held there to tau_end (returns 0, the
+ * clock at tau_end), or released where the wall stops pushing: 1 with the release pending
+ * (stop_at_event), else 2 with it applied. */
+static int stick_until_release(StepClock *s, ModelData *m, double tau_end, int stop_at_event) {
+    const double tr = release_time(m, s->tau, tau_end);
+    if (tr >= tau_end && model_wall_force(m, tau_end) > 0.0) {
+        s->tau = tau_end;
+        stuck_state(m, tau_end); /* carried along by the wall */
+        return 0;
+    }
+    s->tau = tr;
+    if (stop_at_event) {
+        s->pending = 1;
+        return 1;
+    }
+    double y[2] = {m->u, m->v};
+    sens_event_update(m, tr, y);
+    m->u = y[0];
+    m->v = y[1];
+    s->events++;
+    return 2;
+}
+
+/* The wall events one advance over `span` (local time) may take: an error, never a hang. */
+static long event_bound(const ModelData *m, double span) {
+    const double units = fmax(1.0, ceil(span));
+    const double per_time = m->max_events_per_time > 0.0 ? m->max_events_per_time
+                                                         : MAX_EVENTS_PER_UNIT_TIME;
+    return (long)(per_time * units);
+}
+
 /* J <- P J; S <- P S + (q_sigma(tau) - q_sigma(tau_a)) - (P - I) q_sigma(tau_a): the sensitivities
  * over the smooth stretch from the segment's anchor to p. */
 static void propagate_sensitivities(ModelData *m, const Mode *md, const Seg *sg, const Pt *p) {
@@ -384,10 +415,7 @@ static int cf_advance_to(Stepper *st, ModelData *m, double t_end, int stop_at_ev
         snprintf(s->msg, sizeof s->msg, "cannot integrate backwards to t = %.17g", t_end);
         return -1;
     }
-    const double span = fmax(1.0, ceil(tau_end - s->tau));
-    const double per_time = m->max_events_per_time > 0.0 ? m->max_events_per_time
-                                                         : MAX_EVENTS_PER_UNIT_TIME;
-    const long max_events = (long)(per_time * span);
+    const long max_events = event_bound(m, tau_end - s->tau);
     long events = 0;
     Mode modes[2];
     mode_init(&modes[0], m, 0);
@@ -399,22 +427,9 @@ static int cf_advance_to(Stepper *st, ModelData *m, double t_end, int stop_at_ev
     }
     while (s->tau < tau_end) {
         if (m->mode == MODE_STICK) {
-            const double tr = release_time(m, s->tau, tau_end);
-            if (tr >= tau_end && model_wall_force(m, tau_end) > 0.0) {
-                s->tau = tau_end;
-                stuck_state(m, tau_end); /* carried along by the wall */
-                break;
-            }
-            s->tau = tr;
-            if (stop_at_event) {
-                s->pending = 1;
-                return 1;
-            }
-            double y[2] = {m->u, m->v};
-            sens_event_update(m, tr, y);
-            m->u = y[0];
-            m->v = y[1];
-            s->events++;
+            const int rc = stick_until_release(s, m, tau_end, stop_at_event);
+            if (rc == 0) break;
+            if (rc == 1) return 1;
             released = 1;
             continue;
         }

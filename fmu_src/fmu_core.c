@@ -1,8 +1,9 @@
 /*
- * The FMI core's instance (fmu_core.h): its life cycle (core_instantiate, core_setup, core_enter_init,
- * core_exit_init, core_terminate, core_reset, core_free), logging, and core_allowed, the state
- * check every entry point makes first (the table itself is fmu_states.c). Called by the glue
- * (fmi2_cs.c, fmi3.c); the other concerns are fmu_vars.c, fmu_snapshot.c, fmu_cs.c and fmu_me.c.
+ * The FMI core's instance (fmu_core.h): its life cycle (core_instantiate, core_setup,
+ * core_enter_init, core_exit_init, core_terminate, core_reset, core_free), logging, and
+ * core_allowed, the state check every entry point makes first (the table itself is
+ * fmu_states.c). Called by the glue (fmi2_cs.c, fmi3.c); the other concerns are fmu_vars.c,
+ * fmu_snapshot.c, fmu_cs.c and fmu_me.c.
  */
 #include "fmu_core.h"
 

@@ -70,9 +70,8 @@ static void snapshot_take(CoreInstance *c, Snapshot *s) {
 
 static int finite_within(double x, double bound) { return isfinite(x) && fabs(x) <= bound; }
 
-/* NULL if the snapshot may be restored into c, else why not (in buf). */
-static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char *buf,
-                                  size_t n) {
+/* The header: this FMU's format, intact, of c's interface, taken in a state c can be in. */
+static const char *check_header(const CoreInstance *c, const Snapshot *s, char *buf, size_t n) {
     if (s->magic != SNAPSHOT_MAGIC) return "not a state of this FMU (bad magic word)";
     if (s->version != SNAPSHOT_VERSION || s->size != sizeof *s) {
         snprintf(buf, n, "state format version %u, size %u: this FMU reads version %u, size %zu",
@@ -95,6 +94,11 @@ static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char
         snprintf(buf, n, "FMI state word %d is not a state this instance can be restored to", st);
         return buf;
     }
+    return NULL;
+}
+
+/* The model's data: every settable variable in its range, then the model's own checks. */
+static const char *check_model(const CoreInstance *c, const Snapshot *s, char *buf, size_t n) {
     size_t n_vars;
     const VarDef *vars = vars_table(&n_vars);
     for (size_t i = 0; i < n_vars; ++i) {
@@ -108,37 +112,43 @@ static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char
             return buf;
         }
     }
-    const ModelData *m = &s->m;
     ModelData trial;
-    memcpy(&trial, m, sizeof trial);
+    memcpy(&trial, &s->m, sizeof trial);
     model_update_derived(&trial);
     if (model_check_derived(&trial, buf, n)) return buf;
-    const char *why = model_check_restored(m, c->is_me, CORE_MAX_STATE, CORE_MAX_TIME);
-    if (why) return why;
-    if (s->events < 0 || s->guard_hits < 0) return "negative event counter";
-    if (model_has_ramps(m)) {
-        /* Ramps: the inputs they give at the state's own time must lie in the inputs' ranges, as
-         * a value set there would (each field within its bound still allows a slope of 1e6 from
-         * a reference time 2e9 away). The inputs' getters read them at the clock's time. */
-        CoreInstance view;
-        memcpy(&view, c, sizeof view);
-        memcpy(&view.m, m, sizeof view.m);
-        view.st.clk.tau = s->tau;
-        size_t n_vars;
-        const VarDef *vars = vars_table(&n_vars);
-        for (size_t i = 0; i < n_vars; ++i) {
-            const VarDef *d = &vars[i];
-            if (d->kind != K_INPUT) continue;
-            const double x = d->get(&view);
-            const char *bad = vars_check_value(d, x, buf, n);
-            if (bad) {
-                char tmp[200];
-                snprintf(tmp, sizeof tmp, "ramped input %s = %g at the state's time %s", d->name, x, bad);
-                snprintf(buf, n, "%s", tmp);
-                return buf;
-            }
+    return model_check_restored(&s->m, c->is_me, CORE_MAX_STATE, CORE_MAX_TIME);
+}
+
+/* Ramped inputs: the values they give at the state's own time must lie in the inputs' ranges,
+ * as a value set there would (each field within its bound still allows a slope of 1e6 from a
+ * reference time 2e9 away). The inputs' getters read them at the clock's time. */
+static const char *check_ramped_inputs(const CoreInstance *c, const Snapshot *s, char *buf,
+                                       size_t n) {
+    if (!model_has_ramps(&s->m)) return NULL;
+    CoreInstance view;
+    memcpy(&view, c, sizeof view);
+    memcpy(&view.m, &s->m, sizeof view.m);
+    view.st.clk.tau = s->tau;
+    size_t n_vars;
+    const VarDef *vars = vars_table(&n_vars);
+    for (size_t i = 0; i < n_vars; ++i) {
+        const VarDef *d = &vars[i];
+        if (d->kind != K_INPUT) continue;
+        const double x = d->get(&view);
+        const char *bad = vars_check_value(d, x, buf, n);
+        if (bad) {
+            char tmp[200];
+            snprintf(tmp, sizeof tmp, "ramped input %s = %g at the state's time %s", d->name, x,
+                     bad);
+            snprintf(buf, n, "%s", tmp);
+            return buf;
         }
     }
+    return NULL;
+}
+
+/* The clock's times and the instance's flags. */
+static const char *check_clock(const CoreInstance *c, const Snapshot *s) {
     if (!finite_within(s->start_time, CORE_MAX_TIME) ||
         !finite_within(s->me_time, 2 * CORE_MAX_TIME))
         return "start or Model Exchange time not finite or beyond 1e9";
@@ -146,11 +156,22 @@ static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char
         !(s->tau >= 0.0) || !finite_within(s->tau, 2 * CORE_MAX_TIME))
         return "solver time (origin, local time) not finite, out of range or not integral";
     /* the model's time origin follows the solver's while a Co-Simulation runs (model.h) */
-    if (!c->is_me && (st & (CS_STEP | CS_EVENT | CS_TERMINATED)) && m->origin != s->origin)
+    if (!c->is_me && (s->state & (CS_STEP | CS_EVENT | CS_TERMINATED)) && s->m.origin != s->origin)
         return "the model's and the solver's time origins differ";
     if (s->pending != 0 && (s->pending != 1 || c->is_me)) return "bad pending-event flag";
     if (s->inputs_changed != 0 && s->inputs_changed != 1) return "bad input flag";
     return NULL;
+}
+
+/* NULL if the snapshot may be restored into c, else why not (in buf). */
+static const char *snapshot_check(const CoreInstance *c, const Snapshot *s, char *buf,
+                                  size_t n) {
+    const char *why = check_header(c, s, buf, n);
+    if (!why) why = check_model(c, s, buf, n);
+    if (!why && (s->events < 0 || s->guard_hits < 0)) why = "negative event counter";
+    if (!why) why = check_ramped_inputs(c, s, buf, n);
+    if (!why) why = check_clock(c, s);
+    return why;
 }
 
 static void snapshot_restore(CoreInstance *c, const Snapshot *s) {

@@ -420,7 +420,8 @@ const char *model_check_restored(const ModelData *m, int is_me, double max_state
     for (int i = 0; i < 6; ++i)
         if (!isfinite(i < 4 ? m->sJ[i / 2][i % 2] : m->sS[i - 4]))
             return "sensitivities (J_uu ... S_v) not finite";
-    if (!finite_within(m->dF_ext, MODEL_MAX_DF_EXT) || !finite_within(m->du_wall, MODEL_MAX_DU_WALL) ||
+    if (!finite_within(m->dF_ext, MODEL_MAX_DF_EXT) ||
+        !finite_within(m->du_wall, MODEL_MAX_DU_WALL) ||
         !finite_within(m->in_tau, 2 * max_time) || !isfinite(m->v_impact) ||
         !finite_within(m->t_impact, 2 * max_time))
         return "input derivatives or impact record not finite or out of range";

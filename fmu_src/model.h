@@ -61,7 +61,8 @@ typedef struct {
     double F_ext, u_wall, dF_ext, du_wall, in_tau;
     /* The last wall entry: velocity relative to the wall before the jump, and absolute time. */
     double v_impact, t_impact;
-    /* Integer origin of local time (absolute t = origin + tau), kept equal to the stepper clock's. */
+    /* Integer origin of local time (absolute t = origin + tau), kept equal to the stepper's
+     * clock's (stepper.h). */
     double origin;
     /* Bounds on the work of one doStep, per unit of time advanced (at least one unit; issue
      * 13.3); the solver also caps a doStep at SOLVER_MAX_STEPS_PER_CALL steps (solver.h). */

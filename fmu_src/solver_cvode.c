@@ -370,6 +370,51 @@ static int take_event(Cvode *s, ModelData *m, int stop_at_event) {
     return reinit(s, m);
 }
 
+/* One CVODE step (counted against the budget), and what its end tells: a located crossing (the
+ * next event), the re-origin stop, or a point on the wrong side of the wall (rescued). */
+static int one_step(Cvode *s, ModelData *m) {
+    StepClock *k = s->k;
+    k->steps_used += 1.0;
+    if (over_budget(s, m, 0)) return -1;
+    realtype tret, tn;
+    /* tout only sets the first step size after a restart: keep it off the grid too */
+    const int flag = CVode(CV(s), s->tn + 1.0, YV(s), &tret, CV_ONE_STEP);
+    if (flag < 0) {
+        if (!k->msg[0]) snprintf(k->msg, sizeof k->msg, "CVode failed with flag %d", flag);
+        return -1;
+    }
+    CVodeGetCurrentTime(CV(s), &tn);
+    s->tn = tn;
+    const double *y = N_VGetArrayPointer(YV(s));
+    if (flag == CV_TSTOP_RETURN) { /* y = y(tstop), tn within round-off of it */
+        s->at_stop = 1;
+        s->t_stop = tret;
+        copy_state(s, s->y_stop, y);
+    }
+    if (!isfinite(y[0]) || !isfinite(y[1])) {
+        snprintf(k->msg, sizeof k->msg, "the state is no longer finite at t = %.17g",
+                 k->origin + tret);
+        return -1;
+    }
+    if (flag == CV_ROOT_RETURN) {
+        int info[MODEL_N_EVENTS];
+        CVodeGetRootInfo(CV(s), info);
+        if (info[0] != 0) { /* CVODE located the crossing: y is on the far side */
+            s->has_next = 1;
+            s->t_next = tret;
+            copy_state(s, s->y_next, y);
+            return 0;
+        }
+        if (wrong_side(m, tret, y)) return rescue(s, m, tret); /* a turning point beyond the wall */
+        s->tau_good = tret; /* a turning point on the right side of the wall */
+        return 0;
+    }
+    /* a step end: CVODE's root finding may not see a crossing of a few ulps */
+    if (wrong_side(m, tret, y)) return rescue(s, m, tret);
+    s->tau_good = tret;
+    return 0;
+}
+
 static int cvode_advance_to(Stepper *st, ModelData *m, double t_end, int stop_at_event) {
     Cvode *s = (Cvode *)st->impl;
     StepClock *k = &st->clk;
@@ -416,48 +461,7 @@ static int cvode_advance_to(Stepper *st, ModelData *m, double t_end, int stop_at
             if (reinit(s, m) != 0) return -1;
             continue;
         }
-        k->steps_used += 1.0;
-        if (over_budget(s, m, 0)) return -1;
-        realtype tret, tn;
-        /* tout only sets the first step size after a restart: keep it off the grid too */
-        const int flag = CVode(CV(s), s->tn + 1.0, YV(s), &tret, CV_ONE_STEP);
-        if (flag < 0) {
-            if (!k->msg[0]) snprintf(k->msg, sizeof k->msg, "CVode failed with flag %d", flag);
-            return -1;
-        }
-        CVodeGetCurrentTime(CV(s), &tn);
-        s->tn = tn;
-        const double *y = N_VGetArrayPointer(YV(s));
-        if (flag == CV_TSTOP_RETURN) { /* y = y(tstop), tn within round-off of it */
-            s->at_stop = 1;
-            s->t_stop = tret;
-            copy_state(s, s->y_stop, y);
-        }
-        if (!isfinite(y[0]) || !isfinite(y[1])) {
-            snprintf(k->msg, sizeof k->msg, "the state is no longer finite at t = %.17g",
-                     k->origin + tret);
-            return -1;
-        }
-        if (flag == CV_ROOT_RETURN) {
-            int info[MODEL_N_EVENTS];
-            CVodeGetRootInfo(CV(s), info);
-            if (info[0] != 0) { /* CVODE located the crossing: y is on the far side */
-                s->has_next = 1;
-                s->t_next = tret;
-                copy_state(s, s->y_next, y);
-            } else if (wrong_side(m, tret, y)) { /* a turning point beyond the wall */
-                if (rescue(s, m, tret) != 0) return -1;
-            } else {
-                s->tau_good = tret; /* a turning point on the right side of the wall */
-            }
-            continue;
-        }
-        /* a step end: CVODE's root finding may not see a crossing of a few ulps */
-        if (wrong_side(m, tret, y)) {
-            if (rescue(s, m, tret) != 0) return -1;
-        } else {
-            s->tau_good = tret;
-        }
+        if (one_step(s, m) != 0) return -1;
     }
 }
 
