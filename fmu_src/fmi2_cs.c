@@ -281,7 +281,7 @@ fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2S
 
 /* ---------------------------------------------------------------------------------------- */
 /* Model Exchange: the importer integrates (u, v); the FMU gives derivatives, the wall
- * indicator g0 and the jumps (fmu_core.c). */
+ * indicator g0 and the jumps (fmu_me.c). */
 
 fmi2Status fmi2EnterEventMode(fmi2Component comp) {
     return S(core_enter_event_mode(C(comp), "fmi2EnterEventMode"));

@@ -418,7 +418,7 @@ fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n) {
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n) {
     CHECK("fmi3GetNumberOfContinuousStates");
     if (!n) return S(core_fail(c, "fmi3GetNumberOfContinuousStates", "NULL argument"));
-    *n = 2;
+    *n = MODEL_N_STATES;
     return fmi3OK;
 }
 

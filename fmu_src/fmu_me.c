@@ -84,28 +84,29 @@ int core_set_time(CoreInstance *c, const char *fn, double t) {
 
 int core_set_states(CoreInstance *c, const char *fn, const double x[], size_t n) {
     ME_ONLY(c, fn);
-    if (n != 2 || !x) return core_fail(c, fn, "expected 2 states, got %zu", n);
+    if (n != MODEL_N_STATES || !x)
+        return core_fail(c, fn, "expected %d states, got %zu", MODEL_N_STATES, n);
     if (!finite_within(x[0], CORE_MAX_STATE) || !finite_within(x[1], CORE_MAX_STATE))
         return core_fail(c, fn, "states (%g, %g) rejected: must be finite with |x| <= %g (state "
                          "kept)", x[0], x[1], CORE_MAX_STATE);
-    c->m.u = x[0];
-    c->m.v = x[1];
+    model_set_states(&c->m, x);
     return CORE_OK;
 }
 
-
 int core_get_states(CoreInstance *c, const char *fn, double x[], size_t n) {
     ME_ONLY(c, fn);
-    if (n != 2 || !x) return core_fail(c, fn, "expected 2 states, got %zu", n);
-    x[0] = c->m.u;
-    x[1] = c->m.v;
+    if (n != MODEL_N_STATES || !x)
+        return core_fail(c, fn, "expected %d states, got %zu", MODEL_N_STATES, n);
+    model_get_states(&c->m, x);
     return CORE_OK;
 }
 
 int core_get_derivatives(CoreInstance *c, const char *fn, double dx[], size_t n) {
     ME_ONLY(c, fn);
-    if (n != 2 || !dx) return core_fail(c, fn, "expected 2 states, got %zu", n);
-    const double y[2] = {c->m.u, c->m.v};
+    if (n != MODEL_N_STATES || !dx)
+        return core_fail(c, fn, "expected %d states, got %zu", MODEL_N_STATES, n);
+    double y[MODEL_N_STATES];
+    model_get_states(&c->m, y);
     model_derivatives(&c->m, core_local_tau(c), y, dx);
     if (!isfinite(dx[0]) || !isfinite(dx[1]))
         return core_fail(c, fn, "derivatives not finite at u = %g, v = %g", y[0], y[1]);
@@ -122,7 +123,8 @@ int core_get_event_indicators(CoreInstance *c, const char *fn, double g[], size_
 
 int core_get_nominals(CoreInstance *c, const char *fn, double x[], size_t n) {
     ME_ONLY(c, fn);
-    if (n != 2 || !x) return core_fail(c, fn, "expected 2 states, got %zu", n);
+    if (n != MODEL_N_STATES || !x)
+        return core_fail(c, fn, "expected %d states, got %zu", MODEL_N_STATES, n);
     x[0] = x[1] = 1.0;
     return CORE_OK;
 }

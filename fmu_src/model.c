@@ -358,6 +358,16 @@ int model_input_jump(ModelData *m, double tau, double y[2]) {
     return m->mode != mode || y[0] != y0 || y[1] != y1;
 }
 
+void model_get_states(const ModelData *m, double x[MODEL_N_STATES]) {
+    x[0] = m->u;
+    x[1] = m->v;
+}
+
+void model_set_states(ModelData *m, const double x[MODEL_N_STATES]) {
+    m->u = x[0];
+    m->v = x[1];
+}
+
 int model_me_event_update(ModelData *m, double tau, double y[2]) {
     if (model_release_now(m, tau)) { /* sticking: the holding force has gone */
         y[0] = model_wall_position(m, tau);

@@ -115,6 +115,10 @@ int model_release_now(ModelData *m, double tau);
  * (importer found a sign change of g0, state y at local time tau), applies what the mode's
  * sign of g0 calls for; returns 1 if the mode or the state changed. */
 #define MODEL_N_ME_EVENTS 1
+/* Model Exchange's continuous states: (u, v). */
+#define MODEL_N_STATES 2
+void model_get_states(const ModelData *m, double x[MODEL_N_STATES]);
+void model_set_states(ModelData *m, const double x[MODEL_N_STATES]);
 int model_me_event_update(ModelData *m, double tau, double y[2]);
 /* Contact force of the compliant wall at depth d = u - w (> 0) and velocity d' relative to the
  * wall (0 for d <= 0 with the Hertz laws). */
