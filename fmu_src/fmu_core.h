@@ -62,7 +62,7 @@ typedef struct CoreInstance {
 /* Bound on continuous states (u, v) set by an importer or restored from a snapshot. */
 #define CORE_MAX_STATE 1e15
 
-/* -- life cycle -------------------------------------------------------------------------- */
+/* -- life cycle (fmu_core.c) ----------------------------------------------------------- */
 CoreInstance *core_instantiate(const char *name, CoreInterface iface, void *env, CoreLogFn log,
                                CoreCallocFn calloc_fn, CoreFreeFn free_fn, int logging);
 void core_free(CoreInstance *c);
@@ -87,7 +87,7 @@ int core_exit_init(CoreInstance *c, const char *fn);
 int core_terminate(CoreInstance *c, const char *fn);
 int core_reset(CoreInstance *c, const char *fn);
 
-/* -- variables --------------------------------------------------------------------------- */
+/* -- variables (fmu_vars.c) ------------------------------------------------------------ */
 typedef enum { VT_REAL = 0, VT_INTEGER = 1, VT_BOOLEAN = 2 } CoreVarType;
 int core_get(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[], size_t n,
              double out[]);
@@ -98,7 +98,7 @@ int core_set_input_derivatives(CoreInstance *c, const char *fn, const unsigned v
                                const int order[], const double value[]);
 const char *core_variable_name(unsigned vr);
 
-/* -- FMU state ---------------------------------------------------------------------------- */
+/* -- FMU state (fmu_snapshot.c) -------------------------------------------------------- */
 int core_get_state(CoreInstance *c, const char *fn, void **state);
 int core_set_state(CoreInstance *c, const char *fn, const void *state);
 int core_free_state(CoreInstance *c, const char *fn, void **state);
@@ -108,7 +108,7 @@ int core_serialize(CoreInstance *c, const char *fn, const void *state, unsigned 
 int core_deserialize(CoreInstance *c, const char *fn, const unsigned char *bytes, size_t size,
                      void **state);
 
-/* -- Co-Simulation ---------------------------------------------------------------------------
+/* -- Co-Simulation (fmu_cs.c) ---------------------------------------------------------------
  * One communication step from t to t + h. stop_at_event: return at the first wall event (the
  * jump left pending, *event_needed = 1). intermediate, if not NULL, is called at each wall event
  * (before its jump) and returns nonzero to request an early return there. */
@@ -118,7 +118,7 @@ int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_a
                  double *last_time);
 double core_time(const CoreInstance *c);
 
-/* -- Model Exchange (and FMI 3.0 CS event mode) ---------------------------------------- */
+/* -- Model Exchange and FMI 3.0 CS event mode (fmu_me.c) ------------------------------ */
 int core_enter_event_mode(CoreInstance *c, const char *fn);
 /* The discrete-state update: ME applies the wall event the importer stopped at; CS applies the
  * jump of an early return. *values_changed: the continuous state changed. */
@@ -133,7 +133,7 @@ int core_get_event_indicators(CoreInstance *c, const char *fn, double g[], size_
 int core_get_nominals(CoreInstance *c, const char *fn, double x[], size_t n);
 int core_completed_step(CoreInstance *c, const char *fn, int *enter_event, int *terminate);
 
-/* -- shared by the core's units ------------------------------------------------------------- */
+/* -- shared by the core's units (fmu_core.c) ---------------------------------------------- */
 /* The model's local time now: the stepper's (Co-Simulation) or the importer's (Model Exchange). */
 double core_local_tau(const CoreInstance *c);
 /* The importer's allocator (or calloc/free). */
