@@ -1,12 +1,14 @@
 /*
  * Bare C driver of the closed-form solver (fmu_src/closed_form.c): the same code the FMU runs
- * with solver = 1, called directly, without FMI or Python. One closed_form_advance of one period
- * per period, as the FMU's doStep does, with the sensitivities optional.
+ * with solver = 1, called directly, without FMI or Python. One advance_to of one period per
+ * period through the stepper interface (fmu_src/stepper.h), as the FMU's doStep does, with the
+ * sensitivities optional.
  *
  * Built by bench/sens_bench.py (and the tests):
- *   cc -O2 -I fmu_src bench/cf_driver.c fmu_src/closed_form.c fmu_src/sens.c fmu_src/model.c -lm
- * With -DWITH_CVODE (and fmu_src/solver_cvode.c and SUNDIALS linked) it runs the FMU's CVODE
- * driver instead, solver = 0 (or the closed form through it, solver = 1).
+ *   cc -O2 -I fmu_src bench/cf_driver.c fmu_src/closed_form.c fmu_src/stepper.c fmu_src/sens.c
+ *      fmu_src/model.c -lm
+ * With -DWITH_CVODE (and fmu_src/steppers.c, fmu_src/solver_cvode.c and SUNDIALS linked) it
+ * runs the stepper the FMU chooses for `solver`: CVODE with solver=0 given, else the closed form.
  * Usage:
  *   cf_driver T0 PERIODS REPEAT SENS OUT.bin [NAME=VALUE]...
  * NAME is nu, Omega, sigma, r, Gamma, wall, u0, v0. The timed loop is run REPEAT times from the
@@ -23,7 +25,7 @@
 #include "closed_form.h"
 #include "model.h"
 #include "sens.h"
-#include "solver.h"
+#include "stepper.h"
 
 static double now(clockid_t clock) {
     struct timespec ts;
@@ -74,28 +76,24 @@ int main(int argc, char **argv) {
     for (int run = 0; run < repeat; ++run) {
         static ModelData m; /* static: CVODE keeps a pointer to it */
         m = m0;
-        Solver s;
+        Stepper st;
+        memset(&st, 0, sizeof st);
 #ifdef WITH_CVODE
-        if (solver_create(&s, &m) != 0) {
-            fprintf(stderr, "%s\n", s.msg);
+        if (stepper_select(&st, &m) != 0) {
+#else
+        st.ops = &STEPPER_CLOSED_FORM;
+        if (st.ops->create(&st, &m) != 0) {
+#endif
+            fprintf(stderr, "%s\n", st.clk.msg);
             return 1;
         }
-        solver_start(&s, t0);
-#else
-        memset(&s, 0, sizeof s);
-        s.origin = floor(t0);
-        s.tau = t0 - s.origin;
-#endif
-        model_initialize_state(&m, s.tau);
+        stepper_start(&st, t0);
+        model_initialize_state(&m, st.clk.tau);
         const double w0 = now(CLOCK_MONOTONIC), c0 = now(CLOCK_PROCESS_CPUTIME_ID);
         for (long k = 0; k < periods; ++k) {
             if (sens) sens_reset(&m);
-#ifdef WITH_CVODE
-            if (solver_advance(&s, &m, t0 + (double)(k + 1)) != 0) {
-#else
-            if (closed_form_advance(&s, &m, t0 + (double)(k + 1), 0) != 0) {
-#endif
-                fprintf(stderr, "period %ld: %s\n", k, s.msg);
+            if (stepper_advance_to(&st, &m, t0 + (double)(k + 1), 0) != 0) {
+                fprintf(stderr, "period %ld: %s\n", k, st.clk.msg);
                 free(out);
                 return 1;
             }
@@ -112,9 +110,7 @@ int main(int argc, char **argv) {
         }
         const double w1 = now(CLOCK_MONOTONIC), c1 = now(CLOCK_PROCESS_CPUTIME_ID);
         printf("run %.9f %.9f\n", w1 - w0, c1 - c0);
-#ifdef WITH_CVODE
-        solver_free(&s);
-#endif
+        stepper_free(&st);
     }
     FILE *f = fopen(outpath, "wb");
     if (!f || fwrite(out, sizeof(double) * 9, (size_t)periods, f) != (size_t)periods) {

@@ -357,43 +357,65 @@ static void stuck_state(ModelData *m, double tau) {
     m->v = W1;
 }
 
-static void reorigin(Solver *s, ModelData *m) {
-    const double k = floor(s->tau);
-    s->origin += k;
-    s->tau -= k;
-    model_shift_time(m, k); /* the input ramps and impact times follow the origin */
-}
-
-/* The jump of a pending event (FMI 3.0 early return), with its saltation matrix. */
-static void apply_pending(Solver *s, ModelData *m) {
-    if (!s->pending) return;
+/* A mass sticking on the wall from the clock's time on: held there to tau_end (returns 0, the
+ * clock at tau_end), or released where the wall stops pushing: 1 with the release pending
+ * (stop_at_event), else 2 with it applied. */
+static int stick_until_release(StepClock *s, ModelData *m, double tau_end, int stop_at_event) {
+    const double tr = release_time(m, s->tau, tau_end);
+    if (tr >= tau_end && model_wall_force(m, tau_end) > 0.0) {
+        s->tau = tau_end;
+        stuck_state(m, tau_end); /* carried along by the wall */
+        return 0;
+    }
+    s->tau = tr;
+    if (stop_at_event) {
+        s->pending = 1;
+        return 1;
+    }
     double y[2] = {m->u, m->v};
-    sens_event_update(m, s->tau, y);
+    sens_event_update(m, tr, y);
     m->u = y[0];
     m->v = y[1];
     s->events++;
-    s->pending = 0;
+    return 2;
 }
 
-int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event) {
+/* The wall events one advance over `span` (local time) may take: an error, never a hang. */
+static long event_bound(const ModelData *m, double span) {
+    const double units = fmax(1.0, ceil(span));
+    const double per_time = m->max_events_per_time > 0.0 ? m->max_events_per_time
+                                                         : MAX_EVENTS_PER_UNIT_TIME;
+    return (long)(per_time * units);
+}
+
+/* J <- P J; S <- P S + (q_sigma(tau) - q_sigma(tau_a)) - (P - I) q_sigma(tau_a): the sensitivities
+ * over the smooth stretch from the segment's anchor to p. */
+static void propagate_sensitivities(ModelData *m, const Mode *md, const Seg *sg, const Pt *p) {
+    const double P[2][2] = {{p->E[0][0] + 1.0, p->E[0][1]}, {p->E[1][0], p->E[1][1] + 1.0}};
+    const double qu = md->gr * sg->ca - md->gi * sg->sa;
+    const double qv = TWO_PI * (-md->gr * sg->sa - md->gi * sg->ca);
+    const double ds[2] = {
+        md->gr * p->dcos - md->gi * p->dsin - (p->E[0][0] * qu + p->E[0][1] * qv),
+        TWO_PI * (-md->gr * p->dsin - md->gi * p->dcos) - (p->E[1][0] * qu + p->E[1][1] * qv)};
+    sens_propagate(m, P, ds);
+}
+
+static int cf_advance_to(Stepper *st, ModelData *m, double t_end, int stop_at_event) {
+    StepClock *s = &st->clk;
     s->msg[0] = '\0';
     const char *why = closed_form_unsupported(m);
     if (why) {
         snprintf(s->msg, sizeof s->msg, "%s", why);
         return -1;
     }
-    apply_pending(s, m);
-    reorigin(s, m);
-    s->needs_reinit = 1; /* CVODE, if used next, restarts from here */
+    clock_apply_pending(s, m);
+    clock_reorigin(s, m);
     double tau_end = t_end - s->origin;
     if (tau_end < s->tau) {
         snprintf(s->msg, sizeof s->msg, "cannot integrate backwards to t = %.17g", t_end);
         return -1;
     }
-    const double span = fmax(1.0, ceil(tau_end - s->tau));
-    const double per_time = m->max_events_per_time > 0.0 ? m->max_events_per_time
-                                                         : MAX_EVENTS_PER_UNIT_TIME;
-    const long max_events = (long)(per_time * span);
+    const long max_events = event_bound(m, tau_end - s->tau);
     long events = 0;
     Mode modes[2];
     mode_init(&modes[0], m, 0);
@@ -405,22 +427,9 @@ int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event
     }
     while (s->tau < tau_end) {
         if (m->mode == MODE_STICK) {
-            const double tr = release_time(m, s->tau, tau_end);
-            if (tr >= tau_end && model_wall_force(m, tau_end) > 0.0) {
-                s->tau = tau_end;
-                stuck_state(m, tau_end); /* carried along by the wall */
-                break;
-            }
-            s->tau = tr;
-            if (stop_at_event) {
-                s->pending = 1;
-                return 1;
-            }
-            double y[2] = {m->u, m->v};
-            sens_event_update(m, tr, y);
-            m->u = y[0];
-            m->v = y[1];
-            s->events++;
+            const int rc = stick_until_release(s, m, tau_end, stop_at_event);
+            if (rc == 0) break;
+            if (rc == 1) return 1;
             released = 1;
             continue;
         }
@@ -434,16 +443,7 @@ int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event
             hit = first_crossing(&sg, m->mode == MODE_CONTACT ? -1.0 : 1.0, s_end, released, &p);
         released = 0;
         if (!hit) seg_eval(&sg, s_end, &p);
-        if (m->sensitivities) {
-            /* J <- P J; S <- P S + (q_sigma(tau) - q_sigma(tau_a)) - (P - I) q_sigma(tau_a) */
-            const double P[2][2] = {{p.E[0][0] + 1.0, p.E[0][1]}, {p.E[1][0], p.E[1][1] + 1.0}};
-            const double qu = md->gr * sg.ca - md->gi * sg.sa;
-            const double qv = TWO_PI * (-md->gr * sg.sa - md->gi * sg.ca);
-            const double ds[2] = {
-                md->gr * p.dcos - md->gi * p.dsin - (p.E[0][0] * qu + p.E[0][1] * qv),
-                TWO_PI * (-md->gr * p.dsin - md->gi * p.dcos) - (p.E[1][0] * qu + p.E[1][1] * qv)};
-            sens_propagate(m, P, ds);
-        }
+        if (m->sensitivities) propagate_sensitivities(m, md, &sg, &p);
         m->u = p.u;
         m->v = p.v;
         if (!hit) {
@@ -468,7 +468,7 @@ int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event
         }
         const double k = floor(s->tau);
         if (k > 0.0) {
-            reorigin(s, m);
+            clock_reorigin(s, m);
             tau_end -= k;
             mode_init(&modes[0], m, 0); /* tref moves with the origin (the ports) */
             mode_init(&modes[1], m, 1);
@@ -476,3 +476,20 @@ int closed_form_advance(Solver *s, ModelData *m, double t_end, int stop_at_event
     }
     return 0;
 }
+
+/* The closed form keeps nothing between calls: its memory is empty. */
+static int cf_create(Stepper *st, ModelData *m) {
+    (void)m;
+    st->impl = NULL;
+    return 0;
+}
+
+static void cf_free(Stepper *st) { st->impl = NULL; }
+
+static void cf_start(Stepper *st, double t) { clock_start(&st->clk, t); }
+
+static int cf_apply_pending(Stepper *st, ModelData *m) { return clock_apply_pending(&st->clk, m); }
+
+const StepperOps STEPPER_CLOSED_FORM = {
+    "closed form", cf_create, cf_free, cf_start, cf_advance_to, cf_apply_pending,
+};

@@ -1,7 +1,7 @@
 /*
  * FMI 2.0 Co-Simulation and Model Exchange glue: translates the fmi2 calls to the shared core
- * (fmu_core.c), which holds the instance, its state machine, the variables, the snapshots and
- * the stepping loop. No physics here (model.c), no rules either (fmu_core.c).
+ * (fmu_core.h), which holds the instance, its state machine, the variables, the snapshots and
+ * the stepping loop. No physics here (model.c), no rules either (the core's units).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -254,7 +254,7 @@ fmi2Status fmi2GetRealStatus(fmi2Component comp, const fmi2StatusKind s, fmi2Rea
     if (!core_allowed(c, "fmi2GetRealStatus")) return fmi2Error;
     if (s != fmi2LastSuccessfulTime || !value)
         return S(core_fail(c, "fmi2GetRealStatus", "only fmi2LastSuccessfulTime is available"));
-    *value = solver_time(&c->s);
+    *value = core_time(c);
     return fmi2OK;
 }
 
@@ -281,7 +281,7 @@ fmi2Status fmi2GetStringStatus(fmi2Component comp, const fmi2StatusKind s, fmi2S
 
 /* ---------------------------------------------------------------------------------------- */
 /* Model Exchange: the importer integrates (u, v); the FMU gives derivatives, the wall
- * indicator g0 and the jumps (fmu_core.c). */
+ * indicator g0 and the jumps (fmu_me.c). */
 
 fmi2Status fmi2EnterEventMode(fmi2Component comp) {
     return S(core_enter_event_mode(C(comp), "fmi2EnterEventMode"));

@@ -1,8 +1,8 @@
 /*
  * FMI 3.0 Co-Simulation and Model Exchange glue for the impact oscillator (a separate shared
- * library from the FMI 2.0 one, same model.c and solver_cvode.c).
+ * library from the FMI 2.0 one, same core, model.c and steppers).
  *
- * Co-Simulation: fmi3DoStep integrates with CVODE as fmi2DoStep does. With eventModeUsed and
+ * Co-Simulation: fmi3DoStep integrates with the stepper as fmi2DoStep does. With eventModeUsed and
  * earlyReturnAllowed it stops at each located wall event instead: earlyReturn = true,
  * lastSuccessfulTime = the event time, eventHandlingNeeded = true, outputs = the state at the
  * crossing before the jump; the jump is applied in fmi3UpdateDiscreteStates (after
@@ -14,7 +14,7 @@
  * Model Exchange: as the FMI 2.0 ME interface (fmi2_cs.c): 2 states, 1 event indicator (the
  * wall), the jumps in fmi3UpdateDiscreteStates; the grazing guard is the importer's business.
  *
- * Everything but the type translation lives in the shared core, fmu_core.c.
+ * Everything but the type translation lives in the shared core (fmu_core.h).
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -418,7 +418,7 @@ fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *n) {
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *n) {
     CHECK("fmi3GetNumberOfContinuousStates");
     if (!n) return S(core_fail(c, "fmi3GetNumberOfContinuousStates", "NULL argument"));
-    *n = 2;
+    *n = MODEL_N_STATES;
     return fmi3OK;
 }
 

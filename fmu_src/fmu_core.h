@@ -1,43 +1,33 @@
 /*
  * The FMI core shared by the FMI 2.0 (fmi2_cs.c) and FMI 3.0 (fmi3.c) glue, Co-Simulation and
- * Model Exchange alike (the counterpart of the Reference FMUs' cosimulation.c): the instance and
- * its state machine, logging, argument checks, the variable table (get/set by value reference,
- * with each value's valid range), FMU-state snapshots (versioned, tagged with the interface,
- * checksummed and validated field by field), the Co-Simulation stepping loop and the Model
- * Exchange calls. The glue files only translate types and status codes.
+ * Model Exchange alike (the counterpart of the Reference FMUs' cosimulation.c). One instance type
+ * and one API, implemented by one unit per concern:
+ *   fmu_states.c    the state machine (STATE_TABLE; shared with the twin's C front)
+ *   fmu_core.c      the instance's life cycle, logging, core_allowed
+ *   fmu_vars.c      the variable table (get/set by value reference, each value's valid range)
+ *   fmu_snapshot.c  FMU-state snapshots (versioned, tagged with the interface, checksummed and
+ *                   validated field by field)
+ *   fmu_cs.c        the Co-Simulation stepping loop
+ *   fmu_me.c        the Model Exchange calls and the event mode of FMI 3.0 Co-Simulation
+ * The physics is the model's (model.h: its checks, derived quantities and outputs are calls
+ * into model.c) and the integration the stepper's (stepper.h). The glue files only translate
+ * types and status codes.
  *
- * Adding a variable is one entry in VARS[] (fmu_core.c), plus its field in ModelData if it is
+ * Adding a variable is one entry in VARS[] (fmu_vars.c), plus its field in ModelData if it is
  * stored there, plus its XML in both modelDescription files (FMI 2.0: 1-based ModelStructure
- * indices). Snapshots: see the comment above Snapshot in fmu_core.c.
+ * indices). Snapshots: see the comment above Snapshot in fmu_snapshot.c.
  */
 #ifndef IMPACT_FMU_CORE_H
 #define IMPACT_FMU_CORE_H
 
 #include <stddef.h>
 
+#include "fmu_states.h"
 #include "model.h"
-#include "solver.h"
+#include "stepper.h"
 
 /* Status codes: the same numbers as fmi2Status and fmi3Status. */
 typedef enum { CORE_OK = 0, CORE_WARNING = 1, CORE_DISCARD = 2, CORE_ERROR = 3 } CoreStatus;
-
-/* Instance states (bit flags, so that a set of allowed states is one mask). */
-enum {
-    CS_INSTANTIATED = 1 << 0,
-    CS_INIT = 1 << 1,
-    CS_STEP = 1 << 2,
-    CS_EVENT = 1 << 3,
-    CS_CONT = 1 << 4,
-    CS_TERMINATED = 1 << 5,
-    CS_ERROR = 1 << 6,
-    CS_INTERMEDIATE = 1 << 7, /* FMI 3.0 Co-Simulation: inside the intermediateUpdate callback */
-    CS_FATAL = 1 << 8,        /* never entered: no call of this FMU answers Fatal */
-};
-#define CS_ANY 0x1ff
-#define CS_RUN (CS_STEP | CS_EVENT | CS_CONT) /* initialised, not terminated */
-
-/* Which interface an instance (and its snapshots) belongs to. */
-typedef enum { IF_FMI2_CS = 1, IF_FMI2_ME = 2, IF_FMI3_CS = 3, IF_FMI3_ME = 4 } CoreInterface;
 
 /* The glue's logger: status as above, message already formatted. */
 typedef void (*CoreLogFn)(void *env, const char *instance_name, int status,
@@ -63,7 +53,7 @@ typedef struct CoreInstance {
     double me_time; /* Model Exchange: the time set by the importer */
     int inputs_changed; /* an input jumped since the last step: apply model_input_jump */
     ModelData m;
-    Solver s;
+    Stepper st; /* the integration method chosen by m.solver, and its clock */
 } CoreInstance;
 
 /* Bounds on times the FMU accepts: |t| <= CORE_MAX_TIME (beyond, one period is below the
@@ -72,7 +62,7 @@ typedef struct CoreInstance {
 /* Bound on continuous states (u, v) set by an importer or restored from a snapshot. */
 #define CORE_MAX_STATE 1e15
 
-/* -- life cycle -------------------------------------------------------------------------- */
+/* -- life cycle (fmu_core.c) ----------------------------------------------------------- */
 CoreInstance *core_instantiate(const char *name, CoreInterface iface, void *env, CoreLogFn log,
                                CoreCallocFn calloc_fn, CoreFreeFn free_fn, int logging);
 void core_free(CoreInstance *c);
@@ -80,13 +70,10 @@ void core_free(CoreInstance *c);
 void core_log(CoreInstance *c, int status, const char *category, const char *fmt, ...);
 /* Logs an error "fn: message" and returns CORE_ERROR. */
 int core_fail(CoreInstance *c, const char *fn, const char *fmt, ...);
-/* The state machine (fmu_core.c, STATE_TABLE): 1 if the FMI function named fn may be called in
+/* The state machine (fmu_states.c, STATE_TABLE): 1 if the FMI function named fn may be called in
  * the instance's state, else 0 (c NULL), or logs, moves the instance to its error state and
  * returns 0. Every entry point calls it first. */
 int core_allowed(CoreInstance *c, const char *fn);
-/* The states in which fn may be called by an instance of interface iface (event_mode: FMI 3.0
- * Co-Simulation instantiated with eventModeUsed); -1 for a function the table does not know. */
-int core_allowed_states(CoreInterface iface, int event_mode, const char *fn);
 /* The state an instance enters when a call returns Error (FMI 2.0: Error; FMI 3.0: Terminated). */
 int core_error_state(const CoreInstance *c);
 
@@ -100,7 +87,7 @@ int core_exit_init(CoreInstance *c, const char *fn);
 int core_terminate(CoreInstance *c, const char *fn);
 int core_reset(CoreInstance *c, const char *fn);
 
-/* -- variables --------------------------------------------------------------------------- */
+/* -- variables (fmu_vars.c) ------------------------------------------------------------ */
 typedef enum { VT_REAL = 0, VT_INTEGER = 1, VT_BOOLEAN = 2 } CoreVarType;
 int core_get(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[], size_t n,
              double out[]);
@@ -111,7 +98,7 @@ int core_set_input_derivatives(CoreInstance *c, const char *fn, const unsigned v
                                const int order[], const double value[]);
 const char *core_variable_name(unsigned vr);
 
-/* -- FMU state ---------------------------------------------------------------------------- */
+/* -- FMU state (fmu_snapshot.c) -------------------------------------------------------- */
 int core_get_state(CoreInstance *c, const char *fn, void **state);
 int core_set_state(CoreInstance *c, const char *fn, const void *state);
 int core_free_state(CoreInstance *c, const char *fn, void **state);
@@ -121,7 +108,7 @@ int core_serialize(CoreInstance *c, const char *fn, const void *state, unsigned 
 int core_deserialize(CoreInstance *c, const char *fn, const unsigned char *bytes, size_t size,
                      void **state);
 
-/* -- Co-Simulation ---------------------------------------------------------------------------
+/* -- Co-Simulation (fmu_cs.c) ---------------------------------------------------------------
  * One communication step from t to t + h. stop_at_event: return at the first wall event (the
  * jump left pending, *event_needed = 1). intermediate, if not NULL, is called at each wall event
  * (before its jump) and returns nonzero to request an early return there. */
@@ -131,7 +118,7 @@ int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_a
                  double *last_time);
 double core_time(const CoreInstance *c);
 
-/* -- Model Exchange (and FMI 3.0 CS event mode) ---------------------------------------- */
+/* -- Model Exchange and FMI 3.0 CS event mode (fmu_me.c) ------------------------------ */
 int core_enter_event_mode(CoreInstance *c, const char *fn);
 /* The discrete-state update: ME applies the wall event the importer stopped at; CS applies the
  * jump of an early return. *values_changed: the continuous state changed. */
@@ -145,5 +132,14 @@ int core_get_derivatives(CoreInstance *c, const char *fn, double dx[], size_t n)
 int core_get_event_indicators(CoreInstance *c, const char *fn, double g[], size_t n);
 int core_get_nominals(CoreInstance *c, const char *fn, double x[], size_t n);
 int core_completed_step(CoreInstance *c, const char *fn, int *enter_event, int *terminate);
+
+/* -- shared by the core's units (fmu_core.c) ---------------------------------------------- */
+/* The model's local time now: the stepper's (Co-Simulation) or the importer's (Model Exchange). */
+double core_local_tau(const CoreInstance *c);
+/* The importer's allocator (or calloc/free). */
+void *core_alloc(CoreInstance *c, size_t n);
+void core_release(CoreInstance *c, void *p);
+/* The stepper for the instance's m.solver (fmu_core.c): CORE_OK, or the error of fn. */
+int core_select_stepper(CoreInstance *c, const char *fn);
 
 #endif

@@ -7,6 +7,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -357,6 +358,16 @@ int model_input_jump(ModelData *m, double tau, double y[2]) {
     return m->mode != mode || y[0] != y0 || y[1] != y1;
 }
 
+void model_get_states(const ModelData *m, double x[MODEL_N_STATES]) {
+    x[0] = m->u;
+    x[1] = m->v;
+}
+
+void model_set_states(ModelData *m, const double x[MODEL_N_STATES]) {
+    m->u = x[0];
+    m->v = x[1];
+}
+
 int model_me_event_update(ModelData *m, double tau, double y[2]) {
     if (model_release_now(m, tau)) { /* sticking: the holding force has gone */
         y[0] = model_wall_position(m, tau);
@@ -371,4 +382,102 @@ int model_me_event_update(ModelData *m, double tau, double y[2]) {
     if (!crossed) return 0;
     model_event_update(m, tau, y, 0);
     return 1;
+}
+
+/* --- what the FMI core asks of the model ---------------------------------------------------- */
+/* The core (fmu_vars.c, fmu_snapshot.c, fmu_cs.c, fmu_core.c) knows variables, states and
+ * snapshots; what they mean physically is decided here. */
+
+const char *model_check_derived(const ModelData *m, char *buf, size_t n) {
+    if (!(m->kappa <= 1e8)) {
+        snprintf(buf, n, "kappa = sqrt(Gamma) Omega = %g would exceed 1e8", m->kappa);
+        return buf;
+    }
+    const double amp = (1.0 + m->sigma) * m->F_g;
+    if (!isfinite(m->phi) || !(fabs(amp) <= 1e15)) {
+        snprintf(buf, n, "the forcing amplitude (1 + sigma) F_g = %g would exceed 1e15", amp);
+        return buf;
+    }
+    return NULL;
+}
+
+void model_rebase_inputs(ModelData *m, double tau) {
+    if (m->dF_ext != 0.0) m->F_ext = model_external_force(m, tau);
+    if (m->du_wall != 0.0) m->u_wall = model_wall_position(m, tau);
+    m->in_tau = tau;
+}
+
+int model_has_ramps(const ModelData *m) { return m->dF_ext != 0.0 || m->du_wall != 0.0; }
+
+int model_end_ramps(ModelData *m, double tau) {
+    if (m->dF_ext == 0.0 && m->du_wall == 0.0) return 0;
+    model_rebase_inputs(m, tau);
+    m->dF_ext = m->du_wall = 0.0;
+    return 1;
+}
+
+static int finite_within(double x, double bound) { return isfinite(x) && fabs(x) <= bound; }
+
+const char *model_check_restored(const ModelData *m, int is_me, double max_state,
+                                 double max_time) {
+    if (m->mode < MODE_FREE || m->mode > MODE_STICK ||
+        (m->mode == MODE_CONTACT && m->wall != WALL_COMPLIANT) ||
+        (m->mode == MODE_STICK && m->wall != WALL_RIGID))
+        return "contact mode inconsistent with the wall model";
+    if (m->impacts < 0) return "negative event counter";
+    if (!finite_within(m->u, max_state) || !finite_within(m->v, max_state))
+        return "continuous state (u, v) not finite or beyond 1e15";
+    for (int i = 0; i < 6; ++i)
+        if (!isfinite(i < 4 ? m->sJ[i / 2][i % 2] : m->sS[i - 4]))
+            return "sensitivities (J_uu ... S_v) not finite";
+    if (!finite_within(m->dF_ext, MODEL_MAX_DF_EXT) ||
+        !finite_within(m->du_wall, MODEL_MAX_DU_WALL) ||
+        !finite_within(m->in_tau, 2 * max_time) || !isfinite(m->v_impact) ||
+        !finite_within(m->t_impact, 2 * max_time))
+        return "input derivatives or impact record not finite or out of range";
+    /* only Co-Simulation takes input derivatives */
+    if (model_has_ramps(m) && is_me) return "input derivatives in a Model Exchange state";
+    return NULL;
+}
+
+double model_in_contact(const ModelData *m) { return m->mode != MODE_FREE; }
+
+/* J = I, S = 0 (as set at initialisation) when they are not computed, so that every output stays
+ * finite. */
+double model_sensitivity(const ModelData *m, int i) {
+    return i < 4 ? m->sJ[i / 2][i % 2] : m->sS[i - 4];
+}
+
+double model_derivative(const ModelData *m, double tau, int i) {
+    const double y[2] = {m->u, m->v};
+    double dy[2];
+    model_derivatives(m, tau, y, dy);
+    return dy[i];
+}
+
+double model_wall_indicator(const ModelData *m, double tau) {
+    const double y[2] = {m->u, m->v};
+    double g[MODEL_N_EVENTS];
+    model_event_indicators(m, tau, y, g);
+    return g[0];
+}
+
+double model_contact_output_now(const ModelData *m, double tau, int inputs_jumped) {
+    if (inputs_jumped) {
+        /* F_contact feeds through from u_wall (ModelStructure): with a new wall position not
+         * yet stepped over, report the force of the state the wall-jump rule gives now. */
+        ModelData t;
+        memcpy(&t, m, sizeof t);
+        double y[2] = {t.u, t.v};
+        model_input_jump(&t, tau, y);
+        t.u = y[0];
+        t.v = y[1];
+        return model_contact_output(&t, tau);
+    }
+    return model_contact_output(m, tau);
+}
+
+int model_outputs_finite(const ModelData *m, double tau, int inputs_jumped, double max_state) {
+    return finite_within(m->u, max_state) && finite_within(m->v, max_state) &&
+           isfinite(model_contact_output_now(m, tau, inputs_jumped)) && isfinite(m->v_impact);
 }

@@ -8,8 +8,13 @@
  *
  * with F_g, phi from (5) so that the wall-free periodic orbit grazes u = 0 at t = n for sigma = 0.
  *
- * Everything the model knows lives in model.c (parameters, derivatives, Jacobian, event
- * indicators, event update, get/set); solver_cvode.c integrates it and fmi2_cs.c is the FMI glue.
+ * Everything the model knows lives in model.c: parameters and derived quantities, derivatives,
+ * Jacobian, event indicators, the jumps at the wall and after input jumps, and what the FMI core
+ * asks of it (the checks of a parameter set or a restored state, the input ramps, the computed
+ * outputs: the last block below). The steppers (stepper.h: solver_cvode.c, closed_form.c)
+ * integrate it and sens.c carries its derivatives; the FMI core (fmu_core.h) calls the model
+ * for everything physical and holds no physics itself; fmi2_cs.c and fmi3.c are type glue.
+ * The value references (the variable table's side) are in fmu_vars.h.
  * Time inside the model is *local*: tau = t - origin with an integer origin, so the forcing
  * phase cos(2 pi tau + phi) keeps full precision after 10^6 periods.
  */
@@ -20,53 +25,6 @@
 
 #define MODEL_IDENTIFIER ImpactOscillator
 #define MODEL_GUID "{6c1f8a52-3d0e-4b8e-9a57-1e0f0b7c2a11}"
-
-/* Value references: the names in modelDescription.xml are the interface, these numbers its
- * implementation. Keep both in step. */
-typedef enum {
-    VR_NU = 0,
-    VR_OMEGA = 1,
-    VR_SIGMA = 2,
-    VR_R = 3,
-    VR_GAMMA = 4,
-    VR_WALL = 5,
-    VR_U0 = 6,
-    VR_V0 = 7,
-    VR_RTOL = 8,
-    VR_ATOL = 9,
-    VR_F_G = 10,
-    VR_PHI = 11,
-    VR_KAPPA = 12,
-    VR_U = 13,
-    VR_V = 14,
-    VR_IMPACTS = 15,
-    VR_IN_CONTACT = 16,
-    /* added after the FMI 2.0 CS interface was fixed: contact laws, Model Exchange */
-    VR_CONTACT = 17,       /* Integer: 0 linear, 1 Hertz, 2 Hunt-Crossley */
-    VR_HC_ALPHA = 18,      /* Hunt-Crossley damping factor */
-    VR_DER_U = 19,         /* der(u) (Model Exchange) */
-    VR_DER_V = 20,         /* der(v) (Model Exchange) */
-    VR_WALL_INDICATOR = 21, /* the event indicator g0 (FMI 3.0 Model Exchange) */
-    VR_TIME = 22,          /* FMI 3.0 independent variable (handled by the FMI glue) */
-    /* ports (issue 14) and limits (issue 13) */
-    VR_F_EXT = 23,         /* input: external force added to the right-hand side */
-    VR_U_WALL = 24,        /* input: wall position (contact when u > u_wall) */
-    VR_F_CONTACT = 25,     /* output: the wall's force on the mass, repulsive positive */
-    VR_V_IMPACT = 26,      /* output: relative velocity at the last wall entry, before the jump */
-    VR_T_IMPACT = 27,      /* output: time of the last wall entry */
-    VR_MAX_EVENTS = 28,    /* parameter: wall events allowed per unit of time */
-    VR_MAX_STEPS = 29,     /* parameter: CVODE steps allowed per unit of time */
-    /* issue 11: sensitivities and the closed-form solver (23..29: ports and limits, fmu_core) */
-    VR_SENSITIVITIES = 30, /* Boolean parameter */
-    VR_SOLVER = 31,        /* Integer parameter: 0 CVODE, 1 closed form */
-    VR_J_UU = 32,          /* outputs: d(u, v)(end of doStep)/d(u, v)(its start) */
-    VR_J_UV = 33,
-    VR_J_VU = 34,
-    VR_J_VV = 35,
-    VR_S_U = 36,           /* outputs: d(u, v)(end of doStep)/d sigma */
-    VR_S_V = 37,
-    VR_COUNT
-} ValueReference;
 
 typedef enum { WALL_NONE = 0, WALL_COMPLIANT = 1, WALL_RIGID = 2 } WallKind;
 
@@ -103,12 +61,13 @@ typedef struct {
     double F_ext, u_wall, dF_ext, du_wall, in_tau;
     /* The last wall entry: velocity relative to the wall before the jump, and absolute time. */
     double v_impact, t_impact;
-    /* Integer origin of local time (absolute t = origin + tau), kept equal to the solver's. */
+    /* Integer origin of local time (absolute t = origin + tau), kept equal to the stepper's
+     * clock's (stepper.h). */
     double origin;
     /* Bounds on the work of one doStep, per unit of time advanced (at least one unit; issue
      * 13.3); the solver also caps a doStep at SOLVER_MAX_STEPS_PER_CALL steps (solver.h). */
     double max_events_per_time, max_steps_per_time;
-    /* Sensitivities (sens.h) and the solver (closed_form.h), issue 11: parameters, and the
+    /* Sensitivities (sens.h) and the solver (stepper.h), issue 11: parameters, and the
      * derivatives of the state w.r.t. the state at the start of the current doStep (sJ) and
      * w.r.t. sigma (sS). Part of the FMU state. */
     int sensitivities; /* Boolean: integrate sJ, sS */
@@ -156,6 +115,10 @@ int model_release_now(ModelData *m, double tau);
  * (importer found a sign change of g0, state y at local time tau), applies what the mode's
  * sign of g0 calls for; returns 1 if the mode or the state changed. */
 #define MODEL_N_ME_EVENTS 1
+/* Model Exchange's continuous states: (u, v). */
+#define MODEL_N_STATES 2
+void model_get_states(const ModelData *m, double x[MODEL_N_STATES]);
+void model_set_states(ModelData *m, const double x[MODEL_N_STATES]);
 int model_me_event_update(ModelData *m, double tau, double y[2]);
 /* Contact force of the compliant wall at depth d = u - w (> 0) and velocity d' relative to the
  * wall (0 for d <= 0 with the Hertz laws). */
@@ -168,10 +131,43 @@ double model_external_force(const ModelData *m, double tau);
 /* The wall's force on the mass (output F_contact), repulsive positive: the spring (contact law)
  * inside the compliant wall, the holding force while sticking on the rigid wall, 0 in flight. */
 double model_contact_output(const ModelData *m, double tau);
-/* Moves the local-time origin by k (an integer): the solver calls this when it re-origins. */
+/* Moves the local-time origin by k (an integer): the stepper's clock calls this when it
+ * re-origins (stepper.c, clock_reorigin). */
 void model_shift_time(ModelData *m, double k);
 /* Applies the documented rule after the inputs jumped between steps (state y at local time tau,
  * updated in place): see model.c. Returns 1 if the mode or the state changed. */
 int model_input_jump(ModelData *m, double tau, double y[2]);
+
+/* -- what the FMI core asks of the model (fmu_vars.c, fmu_snapshot.c, fmu_cs.c, fmu_core.c) -- */
+/* Bounds on the input derivatives (slopes per unit time). */
+#define MODEL_MAX_DF_EXT 1e12
+#define MODEL_MAX_DU_WALL 1e6
+/* Checks the quantities derived from several parameters (kappa, the forcing amplitude) of a
+ * parameter set that is in use (after initialisation); returns NULL if fine, else buf. */
+const char *model_check_derived(const ModelData *m, char *buf, size_t n);
+/* Why a restored model state cannot be used (NULL: it can): contact mode against the wall
+ * model, counters, finite and bounded states (|u|, |v| <= max_state), sensitivities, ramps and
+ * impact record (times within 2 max_time); is_me: a Model Exchange state (no ramps). */
+const char *model_check_restored(const ModelData *m, int is_me, double max_state,
+                                 double max_time);
+/* Folds the input ramps into the input values at local time tau (the reference point moves
+ * to tau; the values there are unchanged). */
+void model_rebase_inputs(ModelData *m, double tau);
+/* 1 while an input is ramped (a nonzero input derivative). */
+int model_has_ramps(const ModelData *m);
+/* After a step: the ramps end at tau (the inputs hold their values there until set again);
+ * returns 1 if there were any (the right-hand side changed). */
+int model_end_ramps(ModelData *m, double tau);
+/* Computed outputs at local time tau: in_contact, the sensitivities (0..5: J_uu, J_uv, J_vu,
+ * J_vv, S_u, S_v), der(u) and der(v) (i = 0, 1), the wall indicator g0, and F_contact -- with
+ * inputs_jumped, that of the state the input-jump rule gives now (F_contact feeds through from
+ * u_wall). */
+double model_in_contact(const ModelData *m);
+double model_sensitivity(const ModelData *m, int i);
+double model_derivative(const ModelData *m, double tau, int i);
+double model_wall_indicator(const ModelData *m, double tau);
+double model_contact_output_now(const ModelData *m, double tau, int inputs_jumped);
+/* The state and the outputs after a step are finite (|u|, |v| <= max_state). */
+int model_outputs_finite(const ModelData *m, double tau, int inputs_jumped, double max_state);
 
 #endif

@@ -1,5 +1,6 @@
 /*
- * CVODE driver for the impact oscillator (SUNDIALS 6).
+ * CVODE driver for the impact oscillator (SUNDIALS 6): the stepper STEPPER_CVODE (solver.h,
+ * stepper.h), called by the FMI core through stepper.c when solver = 0.
  *
  * Between events the model is smooth (the contact mode is a discrete state, so the right-hand
  * side never switches inside a CVODE segment). Events are found by CVODE's root finding on two
@@ -22,11 +23,11 @@
  */
 #include "solver.h"
 
-#include "closed_form.h"
 #include "sens.h"
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include <cvode/cvode.h>
@@ -53,7 +54,31 @@ static const double ROOT_FLOOR = 1e-150;
 static const double ROOT_FLOOR = 0.0;
 #endif
 
-_Static_assert(SENS_NEQ <= 8, "Solver.y_next and y_stop hold SENS_NEQ components");
+_Static_assert(SENS_NEQ <= 8, "Cvode.y_next and y_stop hold SENS_NEQ components");
+
+/* CVODE's memory and the driver's own state (the stepper's impl); the time, the pending jump,
+ * the counters and the budget are the stepper's clock (stepper.h). */
+typedef struct {
+    StepClock *k; /* the clock of the stepper this memory belongs to */
+    void *cvode;
+    void *ctx;  /* SUNContext */
+    void *y;    /* N_Vector */
+    void *tmp;  /* N_Vector: interpolation */
+    void *A;    /* SUNMatrix */
+    void *LS;   /* SUNLinearSolver */
+    int n;      /* equations: 2, or SENS_NEQ with the sensitivities (sens.h) */
+    /* CVODE's own (local) time: the end of its last step, >= tau. The state at tau is taken
+     * from CVODE's interpolant of the step [tn - hu, tn]. */
+    double tn;
+    /* Latest local time in [tn - hu, tn] at which the wall indicator was seen on its mode's
+     * side (a step end, a turning point, the restart point). */
+    double tau_good;
+    int at_stop;     /* CVODE stopped at the re-origin time t_stop, with state y_stop */
+    double t_stop, y_stop[8];
+    /* A crossing located ahead of tau (inside CVODE's last step), its jump not applied yet. */
+    int has_next;
+    double t_next, y_next[8]; /* 8: room for SENS_NEQ (sens.h) */
+} Cvode;
 
 #define CV(s) ((s)->cvode)
 #define YV(s) ((N_Vector)(s)->y)
@@ -105,12 +130,12 @@ static int roots(realtype t, N_Vector y, realtype *g, void *user_data) {
 
 static void error_handler(int code, const char *module, const char *function, char *msg,
                           void *data) {
-    Solver *s = (Solver *)data;
-    snprintf(s->msg, sizeof s->msg, "%s/%s (flag %d): %s", module, function, code, msg);
+    Cvode *s = (Cvode *)data;
+    snprintf(s->k->msg, sizeof s->k->msg, "%s/%s (flag %d): %s", module, function, code, msg);
 }
 
 /* Allocates CVODE for n equations in the existing context. */
-static int create_cvode(Solver *s, ModelData *m, int n) {
+static int create_cvode(Cvode *s, ModelData *m, int n) {
     SUNContext ctx = (SUNContext)s->ctx;
     s->n = n;
     s->y = N_VNew_Serial(n, ctx);
@@ -131,13 +156,13 @@ static int create_cvode(Solver *s, ModelData *m, int n) {
     CVodeSetUserData(CV(s), m);
     CVodeSetMaxStep(CV(s), MAX_STEP);
     CVodeSetNoInactiveRootWarn(CV(s));
-    s->needs_reinit = 1;
+    s->k->restart = 1;
     return 0;
 fail:
     return -1;
 }
 
-static void free_cvode(Solver *s) {
+static void free_cvode(Cvode *s) {
     if (s->cvode) CVodeFree(&s->cvode);
     if (s->LS) SUNLinSolFree((SUNLinearSolver)s->LS);
     if (s->A) SUNMatDestroy((SUNMatrix)s->A);
@@ -146,35 +171,37 @@ static void free_cvode(Solver *s) {
     s->cvode = s->LS = s->A = s->y = s->tmp = NULL;
 }
 
-int solver_create(Solver *s, ModelData *m) {
-    memset(s, 0, sizeof *s);
-    SUNContext ctx;
-    if (SUNContext_Create(NULL, &ctx) != 0 || (s->ctx = ctx, create_cvode(s, m, 2) != 0)) {
-        if (!s->msg[0]) snprintf(s->msg, sizeof s->msg, "could not allocate CVODE");
-        solver_free(s);
-        return -1;
-    }
-    return 0;
-}
-
-void solver_free(Solver *s) {
+static void cvode_free(Stepper *st) {
+    Cvode *s = (Cvode *)st->impl;
+    if (!s) return;
     free_cvode(s);
     if (s->ctx) {
         SUNContext ctx = (SUNContext)s->ctx;
         SUNContext_Free(&ctx);
     }
-    s->cvode = s->LS = s->A = s->y = s->tmp = s->ctx = NULL;
+    free(s);
+    st->impl = NULL;
 }
 
-void solver_start(Solver *s, double t) {
-    s->origin = floor(t);
-    s->tau = t - s->origin;
-    s->needs_reinit = 1;
-    s->pending = 0;
-    s->continuing = 0;
+static int cvode_create(Stepper *st, ModelData *m) {
+    Cvode *s = calloc(1, sizeof *s);
+    st->impl = s;
+    st->clk.msg[0] = '\0';
+    if (!s) {
+        snprintf(st->clk.msg, sizeof st->clk.msg, "could not allocate CVODE");
+        return -1;
+    }
+    s->k = &st->clk;
+    SUNContext ctx;
+    if (SUNContext_Create(NULL, &ctx) != 0 || (s->ctx = ctx, create_cvode(s, m, 2) != 0)) {
+        if (!st->clk.msg[0]) snprintf(st->clk.msg, sizeof st->clk.msg, "could not allocate CVODE");
+        cvode_free(st);
+        return -1;
+    }
+    return 0;
 }
 
-double solver_time(const Solver *s) { return s->origin + s->tau; }
+static void cvode_start(Stepper *st, double t) { clock_start(&st->clk, t); }
 
 /* True where the wall indicator at (tau, y) lies on the far side of its mode's root direction:
  * the model must not be left there (a free mass inside the rigid wall, ...). */
@@ -189,45 +216,43 @@ static int wrong_side(const ModelData *m, double tau, const double y[2]) {
 
 /* Restarts CVODE at (tau, m->u, m->v) in the model's current mode, moving the integer time
  * origin up to the current period first. */
-static int reinit(Solver *s, ModelData *m) {
+static int reinit(Cvode *s, ModelData *m) {
+    StepClock *k = s->k;
     /* the variational equations ride along only when asked for (no cost otherwise) */
     const int n = m->sensitivities ? SENS_NEQ : 2;
     if (n != s->n) {
         free_cvode(s);
         if (create_cvode(s, m, n) != 0) {
-            snprintf(s->msg, sizeof s->msg, "could not allocate CVODE for %d equations", n);
+            snprintf(k->msg, sizeof k->msg, "could not allocate CVODE for %d equations", n);
             return -1;
         }
     }
-    const double k = floor(s->tau);
-    s->origin += k;
-    s->tau -= k;
-    model_shift_time(m, k); /* the model's input ramps and impact times follow the origin */
-    if (model_release_now(m, s->tau)) s->events++;
+    clock_reorigin(k, m);
+    if (model_release_now(m, k->tau)) k->events++;
     if (s->n == SENS_NEQ) {
         sens_pack(m, N_VGetArrayPointer(YV(s)));
     } else {
         NV_Ith_S(YV(s), 0) = m->u;
         NV_Ith_S(YV(s), 1) = m->v;
     }
-    if (CVodeReInit(CV(s), s->tau, YV(s)) != CV_SUCCESS ||
+    if (CVodeReInit(CV(s), k->tau, YV(s)) != CV_SUCCESS ||
         CVodeSStolerances(CV(s), m->rtol, m->atol) != CV_SUCCESS ||
         CVodeSetStopTime(CV(s), REORIGIN_AT) != CV_SUCCESS) {
-        if (!s->msg[0]) snprintf(s->msg, sizeof s->msg, "could not restart CVODE");
+        if (!k->msg[0]) snprintf(k->msg, sizeof k->msg, "could not restart CVODE");
         return -1;
     }
     int dir[MODEL_N_EVENTS];
     model_root_directions(m, dir);
     CVodeSetRootDirection(CV(s), dir);
-    s->tn = s->tau_good = s->tau;
+    s->tn = s->tau_good = k->tau;
     s->has_next = 0;
     s->at_stop = 0;
-    s->needs_reinit = 0;
+    k->restart = 0;
     return 0;
 }
 
 /* The state on CVODE's interpolant of its last step, at local time t (all s->n components). */
-static int interpolate(Solver *s, double t, double y[SENS_NEQ]) {
+static int interpolate(Cvode *s, double t, double y[SENS_NEQ]) {
     N_Vector tmp = (N_Vector)s->tmp;
     if (CVodeGetDky(CV(s), t, 0, tmp) != CV_SUCCESS) return -1;
     for (int i = 0; i < s->n; ++i) y[i] = NV_Ith_S(tmp, i);
@@ -235,12 +260,12 @@ static int interpolate(Solver *s, double t, double y[SENS_NEQ]) {
 }
 
 /* Copies the s->n components of a state. */
-static void copy_state(const Solver *s, double *dst, const double *src) {
+static void copy_state(const Cvode *s, double *dst, const double *src) {
     memcpy(dst, src, sizeof(double) * (size_t)s->n);
 }
 
 /* Puts the state y (s->n components) into the model. */
-static void set_model_state(const Solver *s, ModelData *m, const double *y) {
+static void set_model_state(const Cvode *s, ModelData *m, const double *y) {
     if (s->n == SENS_NEQ) sens_unpack(m, y);
     m->u = y[0];
     m->v = y[1];
@@ -249,7 +274,7 @@ static void set_model_state(const Solver *s, ModelData *m, const double *y) {
          * CVODE's u' = w' gathers rounding: an ulp below the wall's own position, the next input
          * change (even the master writing the wall's current value) read as a wall that went
          * away, released the mass at rest and counted a new impact on every other step. */
-        m->u = model_wall_position(m, s->tau);
+        m->u = model_wall_position(m, s->k->tau);
         m->v = m->du_wall;
     }
 }
@@ -258,7 +283,7 @@ static void set_model_state(const Solver *s, ModelData *m, const double *y) {
  * last step). Locates the crossing by Illinois regula falsi on the interpolant, deciding by
  * signs (never by products, which underflow); stores it as the next event, on the far side of
  * the wall so that the event applies. */
-static int locate_crossing(Solver *s, const ModelData *m, double lo, double hi) {
+static int locate_crossing(Cvode *s, const ModelData *m, double lo, double hi) {
     double ylo[SENS_NEQ], yhi[SENS_NEQ], g[MODEL_N_EVENTS];
     if (interpolate(s, lo, ylo) != 0 || interpolate(s, hi, yhi) != 0) return -1;
     if (!wrong_side(m, hi, yhi)) return -1; /* not bracketed */
@@ -293,179 +318,153 @@ static int locate_crossing(Solver *s, const ModelData *m, double lo, double hi) 
 }
 
 /* The latest point known to be on the right side, in CVODE's last step and not after t. */
-static double last_good_before(Solver *s, double t) {
+static double last_good_before(Cvode *s, double t) {
     realtype hu = 0.0;
     CVodeGetLastStep(CV(s), &hu);
     const double start = s->tn - hu;
     return (s->tau_good <= t && s->tau_good >= start) ? s->tau_good : start;
 }
 
-static int over_budget(Solver *s, const ModelData *m, int events);
+static int over_budget(Cvode *s, const ModelData *m, int events) {
+    return clock_over_budget(s->k, m, events, SOLVER_MAX_STEPS_PER_CALL, "CVODE steps", s->tn);
+}
 
 /* A rescue counts as a step against the doStep's budget: a rescue that never located its
  * crossing (a bug) would otherwise repeat without end instead of failing. */
-static int rescue(Solver *s, const ModelData *m, double t) {
-    s->steps_used += 1.0;
+static int rescue(Cvode *s, const ModelData *m, double t) {
+    StepClock *k = s->k;
+    k->steps_used += 1.0;
     if (over_budget(s, m, 0)) return -1;
     if (locate_crossing(s, m, last_good_before(s, t), t) != 0) {
-        snprintf(s->msg, sizeof s->msg,
+        snprintf(k->msg, sizeof k->msg,
                  "could not locate a wall crossing stepped over before t = %.17g",
-                 s->origin + t);
+                 k->origin + t);
         return -1;
     }
-    s->guard_hits++;
+    k->guard_hits++;
     return 0;
 }
 
-int solver_apply_pending(Solver *s, ModelData *m) {
-    if (!s->pending) return 0;
-    double y[2] = {m->u, m->v};
-    sens_event_update(m, s->tau, y);
-    m->u = y[0];
-    m->v = y[1];
-    s->events++;
-    s->pending = 0;
-    s->needs_reinit = 1;
-    return 1;
-}
-
-int solver_advance(Solver *s, ModelData *m, double t_end) {
-    return solver_advance_ex(s, m, t_end, 0);
-}
-
-/* Sets the work bound of a doStep from `now` to t_end, in double (a span of 1e300 must not
- * overflow a long: the bound saturates at the per-call cap). */
-static void begin_budget(Solver *s, const ModelData *m, double t_end) {
-    const double per = fmax(1.0, t_end - solver_time(s));
-    s->budget_end = t_end;
-    s->steps_bound = fmin(SOLVER_MAX_STEPS_PER_CALL, m->max_steps_per_time * per);
-    s->events_bound = fmin(SOLVER_MAX_STEPS_PER_CALL, m->max_events_per_time * per);
-    s->steps_used = s->events_used = 0.0;
-}
-
-static int over_budget(Solver *s, const ModelData *m, int events) {
-    if (events ? s->events_used <= s->events_bound : s->steps_used <= s->steps_bound) return 0;
-    const double bound = events ? s->events_bound : s->steps_bound;
-    const char *what = events ? "wall events" : "CVODE steps";
-    if (bound >= SOLVER_MAX_STEPS_PER_CALL)
-        snprintf(s->msg, sizeof s->msg,
-                 "more than %.0f %s in this doStep (before t = %.17g): the cap of %.0f per doStep "
-                 "(split the step)", bound, what, s->origin + s->tn, SOLVER_MAX_STEPS_PER_CALL);
-    else
-        snprintf(s->msg, sizeof s->msg,
-                 "more than %.0f %s in this doStep (before t = %.17g): the limit %s = %g per unit "
-                 "time%s", bound, what, s->origin + s->tn,
-                 events ? "max_events_per_time" : "max_steps_per_time",
-                 events ? m->max_events_per_time : m->max_steps_per_time,
-                 events ? " (chatter that does not end?)" : " (a stiff or extreme parameter?)");
-    return 1;
+static int cvode_apply_pending(Stepper *st, ModelData *m) {
+    return clock_apply_pending(&st->clk, m);
 }
 
 /* Applies the event stored by locate_crossing or CVODE's root return, at its time. */
-static int take_event(Solver *s, ModelData *m, int stop_at_event) {
-    s->tau = s->t_next;
+static int take_event(Cvode *s, ModelData *m, int stop_at_event) {
+    StepClock *k = s->k;
+    k->tau = s->t_next;
     set_model_state(s, m, s->y_next); /* J, S at the crossing too */
     s->has_next = 0;
-    s->needs_reinit = 1;
-    s->events_used += 1.0; /* counted once, whoever applies the jump */
+    k->restart = 1;
+    k->events_used += 1.0; /* counted once, whoever applies the jump */
     if (over_budget(s, m, 1)) return -1;
     if (stop_at_event) { /* FMI 3.0 early return: the jump is the importer's event mode */
-        s->pending = 1;
+        k->pending = 1;
         return 1;
     }
     double y[2] = {m->u, m->v};
-    sens_event_update(m, s->tau, y);
+    sens_event_update(m, k->tau, y);
     m->u = y[0];
     m->v = y[1];
-    s->events++;
+    k->events++;
     return reinit(s, m);
 }
 
-int solver_advance_ex(Solver *s, ModelData *m, double t_end, int stop_at_event) {
-    s->msg[0] = '\0';
-    if (m->solver == SOLVER_CLOSED_FORM) return closed_form_advance(s, m, t_end, stop_at_event);
-    if (!(s->continuing && t_end == s->budget_end)) begin_budget(s, m, t_end);
-    s->continuing = 0;
-    solver_apply_pending(s, m);
-    if (t_end < solver_time(s)) {
-        snprintf(s->msg, sizeof s->msg, "cannot integrate backwards to t = %.17g", t_end);
+/* One CVODE step (counted against the budget), and what its end tells: a located crossing (the
+ * next event), the re-origin stop, or a point on the wrong side of the wall (rescued). */
+static int one_step(Cvode *s, ModelData *m) {
+    StepClock *k = s->k;
+    k->steps_used += 1.0;
+    if (over_budget(s, m, 0)) return -1;
+    realtype tret, tn;
+    /* tout only sets the first step size after a restart: keep it off the grid too */
+    const int flag = CVode(CV(s), s->tn + 1.0, YV(s), &tret, CV_ONE_STEP);
+    if (flag < 0) {
+        if (!k->msg[0]) snprintf(k->msg, sizeof k->msg, "CVode failed with flag %d", flag);
         return -1;
     }
-    if (s->needs_reinit && reinit(s, m) != 0) return -1;
+    CVodeGetCurrentTime(CV(s), &tn);
+    s->tn = tn;
+    const double *y = N_VGetArrayPointer(YV(s));
+    if (flag == CV_TSTOP_RETURN) { /* y = y(tstop), tn within round-off of it */
+        s->at_stop = 1;
+        s->t_stop = tret;
+        copy_state(s, s->y_stop, y);
+    }
+    if (!isfinite(y[0]) || !isfinite(y[1])) {
+        snprintf(k->msg, sizeof k->msg, "the state is no longer finite at t = %.17g",
+                 k->origin + tret);
+        return -1;
+    }
+    if (flag == CV_ROOT_RETURN) {
+        int info[MODEL_N_EVENTS];
+        CVodeGetRootInfo(CV(s), info);
+        if (info[0] != 0) { /* CVODE located the crossing: y is on the far side */
+            s->has_next = 1;
+            s->t_next = tret;
+            copy_state(s, s->y_next, y);
+            return 0;
+        }
+        if (wrong_side(m, tret, y)) return rescue(s, m, tret); /* a turning point beyond the wall */
+        s->tau_good = tret; /* a turning point on the right side of the wall */
+        return 0;
+    }
+    /* a step end: CVODE's root finding may not see a crossing of a few ulps */
+    if (wrong_side(m, tret, y)) return rescue(s, m, tret);
+    s->tau_good = tret;
+    return 0;
+}
+
+static int cvode_advance_to(Stepper *st, ModelData *m, double t_end, int stop_at_event) {
+    Cvode *s = (Cvode *)st->impl;
+    StepClock *k = &st->clk;
+    k->msg[0] = '\0';
+    if (!(k->continuing && t_end == k->budget_end))
+        clock_begin_budget(k, m, t_end, SOLVER_MAX_STEPS_PER_CALL);
+    k->continuing = 0;
+    clock_apply_pending(k, m);
+    if (t_end < stepper_time(st)) {
+        snprintf(k->msg, sizeof k->msg, "cannot integrate backwards to t = %.17g", t_end);
+        return -1;
+    }
+    if (k->restart && reinit(s, m) != 0) return -1;
 
     for (;;) {
-        const double tau_end = t_end - s->origin; /* the origin moves at restarts */
+        const double tau_end = t_end - k->origin; /* the origin moves at restarts */
         if (s->has_next && s->t_next <= tau_end) { /* an event before the end */
             const int rc = take_event(s, m, stop_at_event);
             if (rc != 0) {
-                s->continuing = rc == 1;
+                k->continuing = rc == 1;
                 return rc;
             }
             continue;
         }
-        if (tau_end <= s->tau) return 0; /* h = 0, or below the resolution of t */
+        if (tau_end <= k->tau) return 0; /* h = 0, or below the resolution of t */
         /* CVODE's last step covers the end: interpolate */
         if (s->tn >= tau_end || (s->at_stop && tau_end < s->t_stop)) {
             double y[SENS_NEQ];
             if (interpolate(s, tau_end, y) != 0) {
-                snprintf(s->msg, sizeof s->msg, "could not interpolate at t = %.17g", t_end);
+                snprintf(k->msg, sizeof k->msg, "could not interpolate at t = %.17g", t_end);
                 return -1;
             }
             if (wrong_side(m, tau_end, y)) { /* never returned: find the crossing before it */
                 if (rescue(s, m, tau_end) != 0) return -1;
                 continue;
             }
-            s->tau = tau_end;
+            k->tau = tau_end;
             set_model_state(s, m, y);
             return 0;
         }
         if (s->at_stop) { /* the re-origin time: restart there, the same for every grid */
-            s->tau = s->t_stop;
+            k->tau = s->t_stop;
             set_model_state(s, m, s->y_stop);
             if (reinit(s, m) != 0) return -1;
             continue;
         }
-        s->steps_used += 1.0;
-        if (over_budget(s, m, 0)) return -1;
-        realtype tret, tn;
-        /* tout only sets the first step size after a restart: keep it off the grid too */
-        const int flag = CVode(CV(s), s->tn + 1.0, YV(s), &tret, CV_ONE_STEP);
-        if (flag < 0) {
-            if (!s->msg[0]) snprintf(s->msg, sizeof s->msg, "CVode failed with flag %d", flag);
-            return -1;
-        }
-        CVodeGetCurrentTime(CV(s), &tn);
-        s->tn = tn;
-        const double *y = N_VGetArrayPointer(YV(s));
-        if (flag == CV_TSTOP_RETURN) { /* y = y(tstop), tn within round-off of it */
-            s->at_stop = 1;
-            s->t_stop = tret;
-            copy_state(s, s->y_stop, y);
-        }
-        if (!isfinite(y[0]) || !isfinite(y[1])) {
-            snprintf(s->msg, sizeof s->msg, "the state is no longer finite at t = %.17g",
-                     s->origin + tret);
-            return -1;
-        }
-        if (flag == CV_ROOT_RETURN) {
-            int info[MODEL_N_EVENTS];
-            CVodeGetRootInfo(CV(s), info);
-            if (info[0] != 0) { /* CVODE located the crossing: y is on the far side */
-                s->has_next = 1;
-                s->t_next = tret;
-                copy_state(s, s->y_next, y);
-            } else if (wrong_side(m, tret, y)) { /* a turning point beyond the wall */
-                if (rescue(s, m, tret) != 0) return -1;
-            } else {
-                s->tau_good = tret; /* a turning point on the right side of the wall */
-            }
-            continue;
-        }
-        /* a step end: CVODE's root finding may not see a crossing of a few ulps */
-        if (wrong_side(m, tret, y)) {
-            if (rescue(s, m, tret) != 0) return -1;
-        } else {
-            s->tau_good = tret;
-        }
+        if (one_step(s, m) != 0) return -1;
     }
 }
+
+const StepperOps STEPPER_CVODE = {
+    "CVODE", cvode_create, cvode_free, cvode_start, cvode_advance_to, cvode_apply_pending,
+};

@@ -139,12 +139,12 @@ MUTANTS: tuple[Mutant, ...] = (
        "return g;", f"{GUARD} {EVENTS}", "root values not floored (SUNDIALS' glo*ghi underflow loses shallow crossings)"),
     _m("M26", "fmu_src/solver_cvode.c", "return dir[0] > 0 ? g[0] > 0.0 : g[0] < 0.0;", "return 0;",
        f"{GUARD} {EVENTS} {PHYS}", "a step ending on the wrong side of the wall is never rescued"),
-    _m("M27", "fmu_src/solver_cvode.c", "if (model_release_now(m, s->tau)) s->events++;",
-       "if (0) s->events++;", f"{EVENTS} {FMU_PORTS}", "a sticking mass is not released at a restart"),
-    # -- fmu_src/fmu_core.c: bookkeeping ---------------------------------------------------------
-    _m("M28", "fmu_src/fmu_core.c",
-       "    if (c->m.dF_ext == 0.0 && c->m.du_wall == 0.0) return;\n    rebase_inputs(&c->m, c->s.tau);\n",
-       "    if (c->m.dF_ext == 0.0 && c->m.du_wall == 0.0) return;\n", FMU_PORTS,
+    _m("M27", "fmu_src/solver_cvode.c", "if (model_release_now(m, k->tau)) k->events++;",
+       "if (0) k->events++;", f"{EVENTS} {FMU_PORTS}", "a sticking mass is not released at a restart"),
+    # -- fmu_src/model.c: the core's bookkeeping of the inputs (model_end_ramps, after each doStep) --
+    _m("M28", "fmu_src/model.c",
+       "    if (m->dF_ext == 0.0 && m->du_wall == 0.0) return 0;\n    model_rebase_inputs(m, tau);\n",
+       "    if (m->dF_ext == 0.0 && m->du_wall == 0.0) return 0;\n", FMU_PORTS,
        "after a ramp the inputs snap back to their start-of-step values instead of holding the end values"),
     # -- harness: classification, Lyapunov exponents, sampling, sweeps ---------------------------
     _m("M29", "harness/dynamics/classify.py", "    threshold = tol * (1.0 + amplitude)\n", "    threshold = tol\n",
@@ -200,8 +200,8 @@ MUTANTS: tuple[Mutant, ...] = (
     _m("M46", "mapcheck/linear.py", "disc = np.sqrt(complex(nu * nu - 4.0 * Omega * Omega))",
        "disc = np.sqrt(complex(nu * nu - 2.0 * Omega * Omega))", "tests/mapcheck/test_linear.py",
        "free-flight eigenvalues from the wrong discriminant"),
-    # -- found by tests/fmu/test_inputs_truth.py (issue 22): CVODE on a moving wall ---------------
-    _m("M47", "fmu_src/solver_cvode.c", "        m->u = model_wall_position(m, s->tau);\n        m->v = m->du_wall;\n",
+    # -- found by tests/fmu/test_inputs_truth.py: CVODE on a moving wall ---------------
+    _m("M47", "fmu_src/solver_cvode.c", "        m->u = model_wall_position(m, s->k->tau);\n        m->v = m->du_wall;\n",
        "", TRUTH, "a sticking mass integrated by CVODE drifts an ulp off the moving wall (released at rest, "
        "an impact counted every other step)"),
     _m("M48", "fmu_src/model.c", "if (m->wall == WALL_RIGID && y[1] - dw <= 0.0 && model_wall_force(m, tau) <= 0.0) {",

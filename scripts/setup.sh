@@ -68,11 +68,12 @@ cmake --build build/fmu -j 2 >/dev/null
 log "FMU ready: build/fmu/ImpactOscillator.fmu"
 
 # The pythonfmu twin (same model in Python, CVODE through scikit-sundae, behind a C front that
-# keeps the FMI state machine); rebuilt only when its sources are newer than the FMU.
+# keeps the FMI state machine with the C FMU's state table, fmu_src/fmu_states.[ch]); rebuilt only
+# when its sources are newer than the FMU.
 twin_src=fmu_src/pytwin
 twin_fmu=build/fmu/ImpactOscillatorPy.fmu
 if [[ -f $twin_src/build.py ]]; then
-    if [[ ! -f $twin_fmu ]] || [[ -n $(find "$twin_src" -newer "$twin_fmu" \( -name '*.py' -o -name '*.c' \) -print -quit) ]]; then
+    if [[ ! -f $twin_fmu ]] || [[ -n $(find "$twin_src" fmu_src/fmu_states.c fmu_src/fmu_states.h -newer "$twin_fmu" \( -name '*.py' -o -name '*.c' -o -name '*.h' \) -print -quit) ]]; then
         .venv/bin/python "$twin_src/build.py" --out "$twin_fmu" >/dev/null
         log "twin FMU ready: $twin_fmu"
     fi

@@ -1,4 +1,4 @@
-"""Renders docs/fmi-state-machine.md from the state table in fmu_src/fmu_core.c (issue 19).
+"""Renders docs/fmi-state-machine.md from the state table in fmu_src/fmu_states.c (issue 19).
 
 ``python scripts/state_table_doc.py`` rewrites the file; ``--check`` exits 1 if it differs from
 what the C table gives (tests/fmu/test_fmi_state_doc.py runs that check, scripts/docs.sh the
@@ -11,7 +11,7 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-CORE = ROOT / "fmu_src" / "fmu_core.c"
+CORE = ROOT / "fmu_src" / "fmu_states.c"
 DOC = ROOT / "docs" / "fmi-state-machine.md"
 
 LETTERS = {"I": "Instantiated", "N": "Initialization Mode", "S": "Step Mode",
@@ -23,8 +23,10 @@ INTRO = """# The FMI state machine of the C FMU
 
 Every FMI function of the C FMU (fmu_src/) checks, before anything else, that its instance is
 not NULL and that the call is allowed in the instance's state; the states in which each function
-is allowed are one table, `STATE_TABLE` in fmu_src/fmu_core.c, taken from FMI 2.0.4 sections
-3.2.3 and 4.2.4 and FMI 3.0 sections 3.2 and 4.2. This page is generated from that table
+is allowed are one table, `STATE_TABLE` in fmu_src/fmu_states.c, taken from FMI 2.0.4 sections
+3.2.3 and 4.2.4 and FMI 3.0 sections 3.2 and 4.2. The pythonfmu twin's C front
+(fmu_src/pytwin/twin_export.c) checks its calls against the same table, its FMI 2.0
+Co-Simulation column. This page is generated from that table
 (`python scripts/state_table_doc.py`; a test fails when they differ), and
 tests/fmu/test_fmi_conformance.py checks every (state, function) pair of the built FMUs against a
 second table written from the standards' text (tests/fmi_standard.py).
@@ -67,7 +69,7 @@ def parse(text: str) -> list[tuple[str, str, str, str]]:
         if m:
             rows.append(tuple(g.strip() for g in m.groups()))
     if not rows:
-        raise SystemExit("no STATE_TABLE rows found in fmu_core.c")
+        raise SystemExit("no STATE_TABLE rows found in fmu_states.c")
     return rows
 
 
@@ -101,7 +103,7 @@ def main(argv: list[str]) -> int:
     page = render(parse(CORE.read_text()))
     if "--check" in argv:
         if not DOC.is_file() or DOC.read_text() != page:
-            print(f"{DOC.relative_to(ROOT)} differs from fmu_core.c's STATE_TABLE: run "
+            print(f"{DOC.relative_to(ROOT)} differs from fmu_states.c's STATE_TABLE: run "
                   "python scripts/state_table_doc.py", file=sys.stderr)
             return 1
         return 0

@@ -1,7 +1,7 @@
 """The FMI 2.0.4 and FMI 3.0 state machines, written from the standards' text.
 
 This table is the conformance suite's reference. It is written from the standards, not from
-fmu_src/fmu_core.c's STATE_TABLE, so that the two can be compared: tests/fmu/test_fmi_conformance.py
+fmu_src/fmu_states.c's STATE_TABLE, so that the two can be compared: tests/fmu/test_fmi_conformance.py
 drives every (state, function) pair of the built FMUs and checks them against this module.
 
 Sources, section by section:

@@ -21,7 +21,7 @@ ROOT = Path(__file__).resolve().parents[1]
 FMU_PATH = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
 
 WALLS = {"none": 0, "compliant": 1, "rigid": 2}
-# the per-doStep line the FMU logs under logEvents (fmu_core.c, core_do_step)
+# the per-doStep line the FMU logs under logEvents (fmu_cs.c, core_do_step)
 EVENTS_LOG = re.compile(r"(\d+) wall events in .*, (\d+) of them recovered by the rescue of a stepped-over crossing")
 
 

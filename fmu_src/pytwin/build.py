@@ -28,6 +28,9 @@ HERE = Path(__file__).resolve().parent
 SCRIPT = HERE / "ImpactOscillatorPy.py"
 PROJECT_FILES = [HERE / "impact_twin_model.py"]
 FRONT = HERE / "twin_export.c"
+#: The C FMU's state table (which FMI call is allowed in which state), compiled into the front so
+#: that the twin and the C FMU refuse the same calls from one table.
+STATES = HERE.parent / "fmu_states.c"
 FMI2_INCLUDE = HERE.parent / "include" / "fmi2"
 LINUX_BINARY = "binaries/linux64/ImpactOscillatorPy.so"
 PYTHONFMU_BINARY = "binaries/linux64/ImpactOscillatorPy_pythonfmu.so"
@@ -118,7 +121,8 @@ def variable_table(model_description: bytes) -> str:
 
 
 def add_front(fmu: Path) -> None:
-    """Put the state-keeping front (``twin_export.c``) in place of pythonfmu's linux64 binary.
+    """Put the state-keeping front (``twin_export.c`` with the C FMU's ``fmu_states.c``) in place
+    of pythonfmu's linux64 binary.
 
     pythonfmu's binary moves to ``ImpactOscillatorPy_pythonfmu.so`` next to it (the front loads
     it), and ``resources/python_runtime.txt`` records this build's Python (see README.md).
@@ -133,8 +137,9 @@ def add_front(fmu: Path) -> None:
         lib = Path(tmp) / "front.so"
         # -z nodelete: pythonfmu's exit handler is registered through this library, which must
         # stay mapped until exit even if the host dlcloses it.
-        cmd = [cc, "-O2", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror", "-I", tmp,
-               "-I", str(FMI2_INCLUDE), str(FRONT), "-o", str(lib), "-ldl", "-Wl,-z,nodelete"]
+        cmd = [cc, "-O2", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror",
+               "-I", tmp, "-I", str(FMI2_INCLUDE), "-I", str(STATES.parent), str(FRONT), str(STATES),
+               "-o", str(lib), "-ldl", "-Wl,-z,nodelete"]
         run = subprocess.run(cmd, capture_output=True, text=True)
         if run.returncode:
             raise RuntimeError(f"compiling {FRONT.name} failed:\n{run.stderr}")

@@ -81,7 +81,7 @@ class ModelError(ValueError):
     """A parameter value or combination the model rejects (message names the variable)."""
 
 
-#: Valid ranges (lo, hi, lo excluded) of the Real parameters: the C FMU's (fmu_core.c, VARS).
+#: Valid ranges (lo, hi, lo excluded) of the Real parameters: the C FMU's (fmu_vars.c, VARS).
 RANGES = {
     "nu": (0.0, 1e6, False),
     "Omega": (1e-6, 1e4, False),

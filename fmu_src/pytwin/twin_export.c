@@ -13,7 +13,9 @@
  *    starts (only while it starts, and only when the caller set none);
  *  - keeps the FMI 2.0.4 Co-Simulation state (section 4.2.4's table; Error after any fmi2Error)
  *    and refuses illegal calls, unknown value references and forbidden setters with fmi2Error
- *    through the logger, before pythonfmu sees them;
+ *    through the logger, before pythonfmu sees them; which call is allowed in which state is the
+ *    C FMU's own table (../fmu_states.c, compiled in by build.py), its FMI 2.0 Co-Simulation
+ *    column;
  *  - turns pythonfmu's fmi2Fatal (a Python exception, i.e. a rejected value or a failed step) into
  *    fmi2Error and the Error state, and forwards every error message whatever the logging setting;
  *  - never calls pythonfmu again for an instance in Error except fmi2Reset, fmi2SetFMUstate, the
@@ -29,19 +31,17 @@
 #include <string.h>
 
 #include "fmi2Functions.h"
+#include "fmu_states.h" /* the state table shared with the C FMU */
 enum { T_REAL, T_INTEGER, T_BOOLEAN, T_STRING };
 enum { C_PARAMETER, C_CALCULATED, C_INPUT, C_OUTPUT, C_OTHER };
 enum { V_TUNABLE, V_OTHER };
 #include "twin_vars.h" /* TWIN_VARS: {vr, type, causality, variability, name} */
 
 
+/* The twin's states (their numbers are the first byte of a serialised state) and the state
+ * table's flag of each. */
 typedef enum { S_INSTANTIATED, S_INIT, S_STEP, S_TERMINATED, S_ERROR } TwinState;
-static const char *const STATE_NAMES[] = {"Instantiated", "Initialization Mode", "Step Mode",
-                                          "Terminated", "Error"};
-#define B(s) (1u << (s))
-#define ANY (B(S_INSTANTIATED) | B(S_INIT) | B(S_STEP) | B(S_TERMINATED) | B(S_ERROR))
-#define INITIALISED (B(S_INIT) | B(S_STEP) | B(S_TERMINATED) | B(S_ERROR))
-#define SETTABLE (B(S_INSTANTIATED) | B(S_INIT) | B(S_STEP))
+static const int STATE_FLAGS[] = {CS_INSTANTIATED, CS_INIT, CS_STEP, CS_TERMINATED, CS_ERROR};
 
 /* pythonfmu's functions, resolved once. */
 #define INNER_FUNCTIONS(X)                                                                      \
@@ -189,11 +189,20 @@ static int load_inner(const fmi2CallbackFunctions *cb, const char *name) {
 }
 
 /* ---- checks ---------------------------------------------------------------------------- */
-static Twin *check(fmi2Component c, const char *fn, unsigned allowed) {
+static const char *state_name(TwinState s) { return core_state_name(STATE_FLAGS[s]); }
+
+/* The instance, if fn may be called in its state (the shared table's FMI 2.0 Co-Simulation
+ * column); else NULL, the call refused. */
+static Twin *check(fmi2Component c, const char *fn) {
     Twin *t = (Twin *)c;
     if (!t) return NULL;
-    if (!(B(t->state) & allowed)) {
-        refuse(t, "%s: not allowed in %s (FMI 2.0.4, 4.2.4)", fn, STATE_NAMES[t->state]);
+    const int allowed = core_allowed_states(IF_FMI2_CS, 0, fn);
+    if (allowed < 0) {
+        refuse(t, "%s: not in the FMU's state table (an FMU bug)", fn);
+        return NULL;
+    }
+    if (!(STATE_FLAGS[t->state] & allowed)) {
+        refuse(t, "%s: not allowed in %s (FMI 2.0.4, 4.2.4)", fn, state_name(t->state));
         return NULL;
     }
     return t;
@@ -238,7 +247,7 @@ static int check_refs(Twin *t, const char *fn, const fmi2ValueReference vr[], si
                           "after initialisation", fn, TWIN_VARS[i].name, vr[k], tunable_names()), 0;
         if (!ok)
             return refuse(t, "%s: %s (value reference %u) cannot be set in %s", fn,
-                          TWIN_VARS[i].name, vr[k], STATE_NAMES[t->state]), 0;
+                          TWIN_VARS[i].name, vr[k], state_name(t->state)), 0;
     }
     return 1;
 }
@@ -313,7 +322,7 @@ void fmi2FreeInstance(fmi2Component c) {
 }
 
 fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n, const fmi2String cats[]) {
-    Twin *t = check(c, "fmi2SetDebugLogging", ANY);
+    Twin *t = check(c, "fmi2SetDebugLogging");
     if (!t) return fmi2Error;
     if (n > 0 && !cats) return refuse(t, "fmi2SetDebugLogging: categories is NULL");
     for (size_t k = 0; k < n; ++k)
@@ -326,31 +335,31 @@ fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean on, size_t n, const 
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, fmi2Real tol, fmi2Real t0,
                                fmi2Boolean stopDef, fmi2Real t1) {
-    Twin *t = check(c, "fmi2SetupExperiment", B(S_INSTANTIATED));
+    Twin *t = check(c, "fmi2SetupExperiment");
     if (!t) return fmi2Error;
     return after(t, inner.fmi2SetupExperiment(t->comp, tolDef, tol, t0, stopDef, t1), S_INSTANTIATED);
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
-    Twin *t = check(c, "fmi2EnterInitializationMode", B(S_INSTANTIATED));
+    Twin *t = check(c, "fmi2EnterInitializationMode");
     if (!t) return fmi2Error;
     return after(t, inner.fmi2EnterInitializationMode(t->comp), S_INIT);
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
-    Twin *t = check(c, "fmi2ExitInitializationMode", B(S_INIT));
+    Twin *t = check(c, "fmi2ExitInitializationMode");
     if (!t) return fmi2Error;
     return after(t, inner.fmi2ExitInitializationMode(t->comp), S_STEP);
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
-    Twin *t = check(c, "fmi2Terminate", B(S_STEP));
+    Twin *t = check(c, "fmi2Terminate");
     if (!t) return fmi2Error;
     return after(t, inner.fmi2Terminate(t->comp), S_TERMINATED);
 }
 
 fmi2Status fmi2Reset(fmi2Component c) {
-    Twin *t = check(c, "fmi2Reset", ANY);
+    Twin *t = check(c, "fmi2Reset");
     if (!t) return fmi2Error;
     fmi2Status s = inner.fmi2Reset(t->comp);
     if (s == fmi2OK || s == fmi2Warning) {
@@ -363,7 +372,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
 
 #define GETTER(F, CT, TYPE)                                                                       \
     fmi2Status F(fmi2Component c, const fmi2ValueReference vr[], size_t n, CT value[]) {          \
-        Twin *t = check(c, #F, INITIALISED);                                                      \
+        Twin *t = check(c, #F);                                                                   \
         if (!t) return fmi2Error;                                                                 \
         if (n > 0 && !value) return refuse(t, #F ": value is NULL");                              \
         if (!check_refs(t, #F, vr, n, TYPE, 0)) return fmi2Error;                                 \
@@ -377,7 +386,7 @@ GETTER(fmi2GetString, fmi2String, T_STRING)
 
 #define SETTER(F, CT, TYPE)                                                                       \
     fmi2Status F(fmi2Component c, const fmi2ValueReference vr[], size_t n, const CT value[]) {    \
-        Twin *t = check(c, #F, SETTABLE);                                                         \
+        Twin *t = check(c, #F);                                                                   \
         if (!t) return fmi2Error;                                                                 \
         if (n > 0 && !value) return refuse(t, #F ": value is NULL");                              \
         if (!check_refs(t, #F, vr, n, TYPE, 1)) return fmi2Error;                                 \
@@ -390,7 +399,7 @@ SETTER(fmi2SetBoolean, fmi2Boolean, T_BOOLEAN)
 SETTER(fmi2SetString, fmi2String, T_STRING)
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s) {
-    Twin *t = check(c, "fmi2GetFMUstate", ANY);
+    Twin *t = check(c, "fmi2GetFMUstate");
     if (!t) return fmi2Error;
     if (!s) return refuse(t, "fmi2GetFMUstate: FMUstate is NULL");
     TwinSnapshot *box = (TwinSnapshot *)*s; /* non-NULL: overwrite that snapshot */
@@ -408,7 +417,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s) {
 }
 
 fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s) {
-    Twin *t = check(c, "fmi2SetFMUstate", ANY);
+    Twin *t = check(c, "fmi2SetFMUstate");
     if (!t) return fmi2Error;
     if (!s) return refuse(t, "fmi2SetFMUstate: FMUstate is NULL");
     TwinSnapshot *box = (TwinSnapshot *)s;
@@ -416,7 +425,7 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s) {
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s) {
-    Twin *t = check(c, "fmi2FreeFMUstate", ANY);
+    Twin *t = check(c, "fmi2FreeFMUstate");
     if (!t) return fmi2Error;
     if (!s || !*s) return fmi2OK;
     TwinSnapshot *box = (TwinSnapshot *)*s;
@@ -428,7 +437,7 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s) {
 
 /* Serialised form: one byte of machine state, then pythonfmu's bytes. */
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *size) {
-    Twin *t = check(c, "fmi2SerializedFMUstateSize", ANY);
+    Twin *t = check(c, "fmi2SerializedFMUstateSize");
     if (!t) return fmi2Error;
     if (!s || !size) return refuse(t, "fmi2SerializedFMUstateSize: NULL argument");
     fmi2Status r = inner.fmi2SerializedFMUstateSize(t->comp, ((TwinSnapshot *)s)->inner, size);
@@ -437,7 +446,7 @@ fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *s
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte bytes[], size_t size) {
-    Twin *t = check(c, "fmi2SerializeFMUstate", ANY);
+    Twin *t = check(c, "fmi2SerializeFMUstate");
     if (!t) return fmi2Error;
     if (!s || !bytes || size < 1) return refuse(t, "fmi2SerializeFMUstate: bad argument");
     bytes[0] = (fmi2Byte)((TwinSnapshot *)s)->state;
@@ -447,7 +456,7 @@ fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte bytes
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size,
                                    fmi2FMUstate *s) {
-    Twin *t = check(c, "fmi2DeSerializeFMUstate", ANY);
+    Twin *t = check(c, "fmi2DeSerializeFMUstate");
     if (!t) return fmi2Error;
     if (!bytes || size < 1 || !s || (unsigned char)bytes[0] > S_ERROR)
         return refuse(t, "fmi2DeSerializeFMUstate: not a serialised state of this FMU");
@@ -464,7 +473,7 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size
 }
 
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real tc, fmi2Real h, fmi2Boolean noSetPrior) {
-    Twin *t = check(c, "fmi2DoStep", B(S_STEP));
+    Twin *t = check(c, "fmi2DoStep");
     if (!t) return fmi2Error;
     if (!(h > 0.0)) /* FMI 2.0.4, 4.2.2: communicationStepSize > 0; also NaN */
         return refuse(t, "fmi2DoStep: communicationStepSize must be > 0 (got %g)", h);
@@ -475,31 +484,31 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real tc, fmi2Real h, fmi2Boolean noSe
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,
                                         const fmi2ValueReference z[], size_t nz,
                                         const fmi2Real dv[], fmi2Real dz[]) {
-    Twin *t = check(c, "fmi2GetDirectionalDerivative", INITIALISED);
+    Twin *t = check(c, "fmi2GetDirectionalDerivative");
     (void)u, (void)nu, (void)z, (void)nz, (void)dv, (void)dz;
     return t ? refuse(t, "fmi2GetDirectionalDerivative: not provided by the twin") : fmi2Error;
 }
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                                        const fmi2Integer order[], const fmi2Real value[]) {
-    Twin *t = check(c, "fmi2SetRealInputDerivatives", SETTABLE);
+    Twin *t = check(c, "fmi2SetRealInputDerivatives");
     (void)vr, (void)n, (void)order, (void)value;
     return t ? refuse(t, "fmi2SetRealInputDerivatives: the twin has no inputs") : fmi2Error;
 }
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                                         const fmi2Integer order[], fmi2Real value[]) {
-    Twin *t = check(c, "fmi2GetRealOutputDerivatives", B(S_STEP) | B(S_TERMINATED) | B(S_ERROR));
+    Twin *t = check(c, "fmi2GetRealOutputDerivatives");
     (void)vr, (void)n, (void)order, (void)value;
     return t ? refuse(t, "fmi2GetRealOutputDerivatives: not provided by the twin") : fmi2Error;
 }
 fmi2Status fmi2CancelStep(fmi2Component c) {
-    Twin *t = check(c, "fmi2CancelStep", 0); /* stepInProgress is never entered */
+    Twin *t = check(c, "fmi2CancelStep"); /* stepInProgress is never entered */
     (void)t;
     return fmi2Error;
 }
 
 #define STATUS_GETTER(F, CT)                                                                      \
     fmi2Status F(fmi2Component c, const fmi2StatusKind k, CT *v) {                                \
-        Twin *t = check(c, #F, B(S_STEP) | B(S_TERMINATED));                                      \
+        Twin *t = check(c, #F);                                                                   \
         (void)k, (void)v;                                                                         \
         return t ? fmi2Discard : fmi2Error; /* 4.2.3: Discard when the status is not provided */ \
     }

@@ -188,7 +188,7 @@ def test_bare_c_driver_runs_the_fmus_code(tmp_path, fmu2):
     src = ROOT / "fmu_src"
     exe = tmp_path / "cf_driver"
     subprocess.run([cc, "-O2", "-I", str(src), str(ROOT / "bench" / "cf_driver.c"),
-                    *(str(src / f) for f in ("closed_form.c", "sens.c", "model.c")), "-lm", "-o",
+                    *(str(src / f) for f in ("closed_form.c", "stepper.c", "sens.c", "model.c")), "-lm", "-o",
                     str(exe)], check=True)
     p = dict(UNDERDAMPED, wall=2, sigma=0.05)
     x0 = {"u0": -0.5, "v0": 1.0}

@@ -1,6 +1,6 @@
 """The ranges and start values the modelDescription files declare are the ones the FMU enforces.
 
-The FMU checks its values against a table in C (fmu_src/fmu_core.c); the importer reads
+The FMU checks its values against a table in C (fmu_src/fmu_vars.c); the importer reads
 min/max/start from modelDescription.xml (FMI 2.0) and modelDescription3.xml (FMI 3.0).  Three
 copies that nothing ties together at build time, so here: both files declare the same, every
 declared start is the FMU's default, each bound is accepted and the next double (integer)

@@ -3,7 +3,7 @@
 For each interface (FMI 2.0 CS, FMI 2.0 ME, FMI 3.0 CS without and with eventModeUsed, FMI 3.0
 ME), each state of its state machine and each function of its version, a fresh instance of the
 real built FMU is driven into the state and the function called once with valid arguments. The
-reference is tests/fmi_standard.py, written from the standards' text (not from fmu_core.c):
+reference is tests/fmi_standard.py, written from the standards' text (not from fmu_states.c):
 
 * allowed there: the call is not refused for its state (no "not allowed in" in the log; OK or
   Warning, except for the functions this FMU does not provide, which fail for that reason);

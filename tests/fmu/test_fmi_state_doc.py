@@ -1,4 +1,4 @@
-"""docs/fmi-state-machine.md is fmu_core.c's STATE_TABLE, and that table is the standards' one.
+"""docs/fmi-state-machine.md is fmu_states.c's STATE_TABLE, and that table is the standards' one.
 
 The page is generated (scripts/state_table_doc.py, run by scripts/docs.sh); this test fails when
 the C table changed without the page. It also compares the C table, row by row, with

@@ -2,7 +2,7 @@
 checksummed and validated field by field. A bad state is refused with a message and leaves the
 instance exactly as it was; nothing non-finite ever comes back with OK.
 
-The serialised layout is the core's Snapshot struct (fmu_core.c): a 16-byte header (magic,
+The serialised layout is the core's Snapshot struct (fmu_snapshot.c): a 16-byte header (magic,
 version, interface, size), the FMI state word at byte 16, ..., and a 64-bit FNV-1a checksum of
 all preceding bytes in the last 8 bytes. Tests that corrupt a field on purpose re-seal the
 checksum (as a careless or hostile importer could) to reach the field-by-field checks.
