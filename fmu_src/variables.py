@@ -17,7 +17,6 @@ strings written there, so that a generated file spells them as the hand-written 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Optional
 
 #: FMI 2.0 and 3.0 causalities the table uses
 CAUSALITIES = ("parameter", "calculatedParameter", "input", "output", "local", "independent")
@@ -91,33 +90,33 @@ class Variable:
     type: str
     causality: str
     variability: str
-    initial: Optional[str]
+    initial: str | None
     description: str
-    start: Optional[str] = None
-    min: Optional[str] = None
-    max: Optional[str] = None
+    start: str | None = None
+    min: str | None = None
+    max: str | None = None
     min_open: bool = False
-    field: Optional[str] = None
-    getter: Optional[str] = None
-    c_start: Optional[str] = None
+    field: str | None = None
+    getter: str | None = None
+    c_start: str | None = None
     fmi2: bool = True
     fmi3_only: bool = False
-    description_fmi3: Optional[str] = None
-    unit: Optional[str] = None
-    derivative_of: Optional[str] = None
-    dependencies: Optional[tuple[str, ...]] = None
-    dependencies_fmi3: Optional[tuple[str, ...]] = None
-    initial_dependencies: Optional[tuple[str, ...]] = None
+    description_fmi3: str | None = None
+    unit: str | None = None
+    derivative_of: str | None = None
+    dependencies: tuple[str, ...] | None = None
+    dependencies_fmi3: tuple[str, ...] | None = None
+    initial_dependencies: tuple[str, ...] | None = None
     event_indicator: bool = False
     twin: bool = False
-    description_twin: Optional[str] = None
+    description_twin: str | None = None
     doc_kind: str = ""
     doc_meaning: str = ""
     doc_valid_note: str = ""
 
 
 def _parameter(name: str, vr: int, enum: str, type_: str, description: str, start: str,
-               lo: Optional[str], hi: Optional[str], **more) -> Variable:
+               lo: str | None, hi: str | None, **more) -> Variable:
     """A fixed parameter stored in ModelData under its own name."""
     return Variable(name, vr, enum, type_, "parameter", more.pop("variability", "fixed"),
                     "exact", description, start=start, min=lo, max=hi, field=name, **more)
