@@ -22,7 +22,8 @@ else()
   set(interface_c fmi3.c)
 endif()
 set(model_c ${interface_c} ${IMPACT_MODEL_SOURCES})
-file(GLOB model_h RELATIVE ${FMU_SRC} ${FMU_SRC}/*.h)
+# *.inc: the generated variable table and defaults (fmu_src/generate_variables.py)
+file(GLOB model_h RELATIVE ${FMU_SRC} ${FMU_SRC}/*.h ${FMU_SRC}/*.inc)
 foreach(f ${model_c} ${model_h})
   file(COPY ${FMU_SRC}/${f} DESTINATION ${src})
 endforeach()
@@ -52,7 +53,7 @@ file(MAKE_DIRECTORY ${OUT}/documentation/licenses)
 configure_file(${SUNDIALS_SRC}/LICENSE ${OUT}/documentation/licenses/SUNDIALS-LICENSE.txt COPYONLY)
 configure_file(${SUNDIALS_SRC}/NOTICE ${OUT}/documentation/licenses/SUNDIALS-NOTICE.txt COPYONLY)
 file(WRITE ${OUT}/documentation/licenses/license.txt
-  "The model (sources/*.c, *.h at the top of sources/) is part of impact-grazing.\n"
+  "The model (sources/*.c, *.h, *.inc at the top of sources/) is part of impact-grazing.\n"
   "sources/cvode, sundials, nvector, sunmatrix, sunlinsol, sunnonlinsol and the sundials_*.h files\n"
   "at the top of sources/ are SUNDIALS 6.4.1 (Debian's source package), BSD-3-Clause:\n"
   "see SUNDIALS-LICENSE.txt and SUNDIALS-NOTICE.txt. The binaries link the same CVODE statically.\n")

@@ -13,9 +13,11 @@
  * into model.c) and the integration the stepper's (stepper.h). The glue files only translate
  * types and status codes.
  *
- * Adding a variable is one entry in VARS[] (fmu_vars.c), plus its field in ModelData if it is
- * stored there, plus its XML in both modelDescription files (FMI 2.0: 1-based ModelStructure
- * indices). Snapshots: see the comment above Snapshot in fmu_snapshot.c.
+ * Adding a variable is one entry in fmu_src/variables.py, then `python
+ * fmu_src/generate_variables.py` (it writes the VR enum, the rows of VARS[], the defaults, both
+ * modelDescription files, the docs' tables and the twin's declarations), plus its field in
+ * ModelData if it is stored there (or its getter in fmu_vars.c). Snapshots: see the comment
+ * above Snapshot in fmu_snapshot.c.
  */
 #ifndef IMPACT_FMU_CORE_H
 #define IMPACT_FMU_CORE_H

@@ -27,33 +27,15 @@ static const double STICK_ULPS = 16.0;
 static const double ON_WALL = 1e-300;
 
 void model_set_defaults(ModelData *m) {
-    /* The paper's Figure 9 case: (alpha, gamma) = (0.99, 0.01), r = 0.9, Gamma = 10. */
-    m->nu = 4.605170185988091;
-    m->Omega = 0.3059238689620112;
-    m->sigma = 0.2;
-    m->r = 0.9;
-    m->Gamma = 10.0;
-    m->wall = WALL_COMPLIANT;
-    /* Start at rest, u = -1: valid for every wall model. */
-    m->u0 = -1.0;
-    m->v0 = 0.0;
-    m->rtol = 1e-12;
-    m->atol = 1e-14;
-    m->contact = CONTACT_LINEAR;
-    /* Hunt-Crossley: an impact at speed v_in leaves roughly r ~ 1 - (2/3) alpha v_in, so 0.15
-     * gives r ~ 0.9 at v_in ~ 1 */
-    m->alpha_hc = 0.15;
+    /* Every declared start value (the modelDescription's start), from fmu_src/variables.py. */
+#include "model_defaults.inc"
+    /* What no variable declares: the discrete state, the input ramps and the origin of local
+     * time, the last impact (0 before the first). */
     m->mode = MODE_FREE;
     m->impacts = 0;
-    m->F_ext = m->u_wall = m->dF_ext = m->du_wall = m->in_tau = 0.0;
+    m->dF_ext = m->du_wall = m->in_tau = 0.0;
     m->v_impact = m->t_impact = 0.0;
     m->origin = 0.0;
-    /* CVODE needs >= 20 steps per unit time (its maximal step 0.05) and ~100-1000 at the
-     * defaults; chatter ends in sticking after ~100 impacts. */
-    m->max_events_per_time = 1e5;
-    m->max_steps_per_time = 2e5;
-    m->sensitivities = 0;
-    m->solver = SOLVER_CVODE;
     m->sJ[0][0] = m->sJ[1][1] = 1.0; /* J = I, S = 0: nothing integrated yet */
     m->sJ[0][1] = m->sJ[1][0] = m->sS[0] = m->sS[1] = 0.0;
     model_update_derived(m);

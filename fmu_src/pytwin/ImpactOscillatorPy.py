@@ -56,57 +56,11 @@ from pythonfmu.enums import Fmi2Initial, Fmi2Status
 from pythonfmu.variables import Boolean, Integer, Real
 
 from impact_twin_model import MODE_FREE, CvodeDriver, ModelError, OscillatorModel
+# generated from fmu_src/variables.py (fmu_src/generate_variables.py), as the C FMU's declarations
+from twin_variables import INITIAL_UNKNOWNS, VARIABLES
 
-# (name, description, extra attributes of the type element) in value-reference order 0..16:
-# copied from the C FMU's modelDescription.xml, which is the reference.
-_PARAMETERS_REAL = {
-    "nu": ("damping nu = 2 pi c/(m omega), eq (3)", {"min": "0", "max": "1e6"}),
-    "Omega": (
-        "natural frequency over drive frequency, times 2 pi (Omega^2 = 4 pi^2 k/(m omega^2))",
-        {"min": "1e-6", "max": "1e4"},
-    ),
-    "sigma": (
-        "bifurcation parameter sigma = (F - F_g)/F_g, eq (5); tunable between steps",
-        {"min": "-1", "max": "1e6"},
-    ),
-    "r": (
-        "restitution coefficient: rigid v -> -r v; compliant v -> r v on entering (footnote 2)",
-        {"min": "0", "max": "1"},
-    ),
-    "Gamma": ("wall stiffness ratio Gamma = kappa^2/Omega^2 (compliant wall)",
-              {"min": "0", "max": "1e16"}),
-}
-_WALL_DESC = "wall model: 0 none, 1 compliant, 2 rigid"
-_START_REAL = {
-    "u0": ("position at the start time (rest position -1, wall at 0)",
-           {"min": "-1e6", "max": "1e6"}),
-    "v0": ("velocity at the start time", {"min": "-1e6", "max": "1e6"}),
-    "rtol": ("CVODE relative tolerance", {"min": "1e-15", "max": "0.1"}),
-    "atol": ("CVODE absolute tolerance", {"min": "1e-30", "max": "0.01"}),
-}
-_CALCULATED = {
-    "F_g": ("grazing forcing amplitude, eq (5)", {}),
-    "phi": ("forcing phase, eq (5)", {"unit": "rad"}),
-    "kappa": ("wall frequency kappa = sqrt(Gamma) Omega, eq (40)", {}),
-}
-_OUTPUTS_REAL = {
-    "u": "position (wall at u = 0)",
-    "v": "velocity",
-}
-_IMPACTS_DESC = "wall entries (impacts) since the start time"
-_IN_CONTACT_DESC = "true while inside the compliant wall or sticking on the rigid one"
-
-#: InitialUnknowns with the C FMU's dependencies (1-based indices of ModelVariables).
-#: pythonfmu writes none by default, which ``fmpy validate`` rejects.
-_INITIAL_UNKNOWNS = (
-    (11, "1 2"),  # F_g <- nu, Omega
-    (12, "1 2"),  # phi <- nu, Omega
-    (13, "2 5"),  # kappa <- Omega, Gamma
-    (14, "7"),  # u <- u0
-    (15, "8"),  # v <- v0
-    (16, ""),  # impacts
-    (17, "1 2 3 6 7 8"),  # in_contact <- nu, Omega, sigma, wall, u0, v0
-)
+#: pythonfmu's variable classes by the FMI type names of twin_variables.VARIABLES
+_TYPES = {"Real": Real, "Integer": Integer, "Boolean": Boolean}
 
 
 #: Binaries of this FMU whose exit-time clean-up is already arranged (one per loaded copy).
@@ -205,87 +159,34 @@ class ImpactOscillatorPy(Fmi2Slave):
         self.start_time = 0.0
         self.initialized = False
         self.failed = False  # a doStep failed: only fmi2Reset helps (the C FMU's error state)
-        # The order of registration is the value reference: keep it equal to model.h's enum.
-        for name, (desc, _) in _PARAMETERS_REAL.items():
-            self._register_real_parameter(name, desc, tunable=(name == "sigma"))
-        self.register_variable(
-            Integer(
-                "wall",
-                causality=Fmi2Causality.parameter,
-                variability=Fmi2Variability.fixed,
-                initial=Fmi2Initial.exact,
-                description=_WALL_DESC,
-                getter=lambda: self.model.wall,
-                setter=self._set_wall,
-            )
-        )
-        for name, (desc, _) in _START_REAL.items():
-            self._register_real_parameter(name, desc, tunable=False)
-        for name, (desc, _) in _CALCULATED.items():
+        # The order of registration is the value reference: VARIABLES is in the C FMU's order.
+        for name, type_, causality, variability, initial, desc, _ in VARIABLES:
+            getter, setter = self._accessors(name, causality)
             self.register_variable(
-                Real(
+                _TYPES[type_](
                     name,
-                    causality=Fmi2Causality.calculatedParameter,
-                    variability=Fmi2Variability.fixed,
-                    initial=Fmi2Initial.calculated,
+                    causality=Fmi2Causality[causality],
+                    variability=Fmi2Variability[variability],
+                    initial=Fmi2Initial[initial],
                     description=desc,
-                    getter=(lambda n=name: getattr(self.model, n)),
+                    getter=getter,
+                    setter=setter,
                 )
             )
-        self.register_variable(
-            Real(
-                "u",
-                causality=Fmi2Causality.output,
-                variability=Fmi2Variability.continuous,
-                initial=Fmi2Initial.calculated,
-                description=_OUTPUTS_REAL["u"],
-                getter=lambda: self.model.u if self.initialized else self.model.u0,
-            )
-        )
-        self.register_variable(
-            Real(
-                "v",
-                causality=Fmi2Causality.output,
-                variability=Fmi2Variability.continuous,
-                initial=Fmi2Initial.calculated,
-                description=_OUTPUTS_REAL["v"],
-                getter=lambda: self.model.v if self.initialized else self.model.v0,
-            )
-        )
-        self.register_variable(
-            Integer(
-                "impacts",
-                causality=Fmi2Causality.output,
-                variability=Fmi2Variability.discrete,
-                initial=Fmi2Initial.calculated,
-                description=_IMPACTS_DESC,
-                getter=lambda: self.model.impacts,
-            )
-        )
-        self.register_variable(
-            Boolean(
-                "in_contact",
-                causality=Fmi2Causality.output,
-                variability=Fmi2Variability.discrete,
-                initial=Fmi2Initial.calculated,
-                description=_IN_CONTACT_DESC,
-                getter=lambda: self.model.mode != MODE_FREE,
-            )
-        )
 
     # -- registration helpers --------------------------------------------------------------
-    def _register_real_parameter(self, name: str, desc: str, tunable: bool) -> None:
-        self.register_variable(
-            Real(
-                name,
-                causality=Fmi2Causality.parameter,
-                variability=Fmi2Variability.tunable if tunable else Fmi2Variability.fixed,
-                initial=Fmi2Initial.exact,
-                description=desc,
-                getter=(lambda: getattr(self.model, name)),
-                setter=(lambda x: self._set_real(name, x)),
-            )
-        )
+    def _accessors(self, name: str, causality: str) -> tuple[Any, Any]:
+        """The getter and setter (None: read-only) of the variable ``name``."""
+        if name == "wall":
+            return (lambda: self.model.wall), self._set_wall
+        if causality == "parameter":
+            return (lambda: getattr(self.model, name)), (lambda x: self._set_real(name, x))
+        if name in ("u", "v"):
+            # before initialisation the state is the start value (u0, v0)
+            return (lambda: getattr(self.model, name if self.initialized else name + "0")), None
+        if name == "in_contact":
+            return (lambda: self.model.mode != MODE_FREE), None
+        return (lambda: getattr(self.model, name)), None
 
     def _vr(self, name: str) -> int:
         """Value reference of a registered variable (for messages)."""
@@ -344,13 +245,10 @@ class ImpactOscillatorPy(Fmi2Slave):
         """
         root = super().to_xml(model_options)
         root.set("variableNamingConvention", "flat")
-        extras = {**_PARAMETERS_REAL, **_START_REAL, **_CALCULATED}
+        declared = {name: (type_, attrs) for name, type_, *_, attrs in VARIABLES}
         for sv in root.iter("ScalarVariable"):
-            name = sv.get("name")
-            if name == "wall":
-                sv.find("Integer").attrib.update({"min": "0", "max": "2"})
-            elif name in extras:
-                sv.find("Real").attrib.update(extras[name][1])
+            type_, attrs = declared[sv.get("name")]
+            sv.find(type_).attrib.update(attrs)
         # UnitDefinitions must precede LogCategories (FMI 2.0 schema order).
         units = Element("UnitDefinitions")
         SubElement(units, "Unit", {"name": "rad"})
@@ -359,7 +257,7 @@ class ImpactOscillatorPy(Fmi2Slave):
         root.insert(pos, units)
         structure = root.find("ModelStructure")
         initial = SubElement(structure, "InitialUnknowns")
-        for index, deps in _INITIAL_UNKNOWNS:
+        for index, deps in INITIAL_UNKNOWNS:
             SubElement(initial, "Unknown", {"index": str(index), "dependencies": deps})
         return root
 

@@ -26,7 +26,8 @@ from xml.etree import ElementTree
 
 HERE = Path(__file__).resolve().parent
 SCRIPT = HERE / "ImpactOscillatorPy.py"
-PROJECT_FILES = [HERE / "impact_twin_model.py"]
+# twin_variables.py: generated from fmu_src/variables.py (fmu_src/generate_variables.py)
+PROJECT_FILES = [HERE / "impact_twin_model.py", HERE / "twin_variables.py"]
 FRONT = HERE / "twin_export.c"
 #: The C FMU's state table (which FMI call is allowed in which state), compiled into the front so
 #: that the twin and the C FMU refuse the same calls from one table.

@@ -1,10 +1,12 @@
 """The ranges and start values the modelDescription files declare are the ones the FMU enforces.
 
 The FMU checks its values against a table in C (fmu_src/fmu_vars.c); the importer reads
-min/max/start from modelDescription.xml (FMI 2.0) and modelDescription3.xml (FMI 3.0).  Three
-copies that nothing ties together at build time, so here: both files declare the same, every
-declared start is the FMU's default, each bound is accepted and the next double (integer)
-beyond it is refused -- the one documented exception is sigma's open lower bound, -1.
+min/max/start from modelDescription.xml (FMI 2.0) and modelDescription3.xml (FMI 3.0).  All three,
+and the C defaults, are generated from one spec (fmu_src/variables.py; tests/fmu/test_generated.py
+checks that they are up to date).  This test is the independent check of the result: it asks
+the built binary, not the generator -- both files declare the same, every declared start is the
+FMU's default, each bound is accepted and the next double (integer) beyond it is refused -- the
+one documented exception is sigma's open lower bound, -1.
 """
 from __future__ import annotations
 
