@@ -33,7 +33,7 @@ from scipy.optimize import brentq
 
 from .arclength import ArclengthCorrector, BranchPoint
 from .jacobian import free_propagator
-from .periodic_map import PeriodMap, wall_free_offset
+from .periodic_map import PeriodMap, refine_orbit, wall_free_offset
 
 __all__ = ["GrazeLocation", "locate_graze", "entry_velocity", "period_quantities"]
 
@@ -52,6 +52,10 @@ GAP_FLOOR = 1e-9
 #: The defining values sampled lie in [q0, SPREAD q0], q0 the nearest usable one (a narrow
 #: spread: the extrapolation to q = 0 from [q0, 4 q0] errs by ~q0^5 with degree 4).
 SPREAD = 4.0
+
+#: Residual max |F^M(w) - w| of the orbits fitted (the corrector's 1e-10 would make the gap
+#: uncertain to ~1e-10, carried through the extrapolation).
+SAMPLE_TOL = 1e-13
 
 #: Degrees of the polynomials p(q) compared: their zeros' difference bounds the truncation.
 DEGREES = (3, 4)
@@ -193,6 +197,7 @@ def _sample(cont: ArclengthCorrector, a: BranchPoint, good: BranchPoint, k: int,
         if pt is None or not np.array_equal(pt.ev.contacts, good.ev.contacts):
             cap, fails = back / 2.0, fails + 1
             continue
+        pt = _refined(cont, pt)
         if pt.tangent @ good.tangent < 0:
             pt.tangent = -pt.tangent
         q = _quantity(pmap, pt, k)
@@ -204,6 +209,15 @@ def _sample(cont: ArclengthCorrector, a: BranchPoint, good: BranchPoint, k: int,
             continue
         out.append(_with_error(pmap, pt, q, k))
     return out
+
+
+def _refined(cont: ArclengthCorrector, pt: BranchPoint) -> BranchPoint:
+    """The orbit at ``pt.p`` to a residual of :data:`SAMPLE_TOL` (Newton at fixed p from the
+    corrector's orbit, good to its tolerance only), or ``pt`` where that Newton fails."""
+    w, ev, ok, _ = refine_orbit(cont.pmap, pt.w, pt.p, cont.M, tol=SAMPLE_TOL, max_iter=4)
+    if ok and np.array_equal(ev.contacts, pt.ev.contacts):
+        return BranchPoint(w, pt.p, ev)
+    return pt
 
 
 def _with_error(pmap: PeriodMap, pt: BranchPoint, q: float, k: int) -> tuple[float, float, float]:
