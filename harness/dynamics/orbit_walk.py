@@ -33,6 +33,11 @@ GRAZE_GAP = 1e-5
 #: A multiplier above this at a corrector failure: a contact of the orbit is grazing.
 GRAZE_MULTIPLIER = 1e3
 
+#: A located flip (fold) is kept only with a multiplier within this of -1 (+1): det(D + I) also
+#: changes sign where a multiplier passes through infinity (the 1/v of a grazing impact's
+#: saltation), which is a pole of the test function, not a bifurcation.
+POLE_TOL = 1e-2
+
 
 def _growth(iterations: int) -> float:
     """Step growth after a corrector that took ``iterations``: longer after an easy step,
@@ -217,6 +222,8 @@ class OrbitWalk:
                 pt, bracket = self.cont.locate_root(a, self.control.size, lambda q, k=kind: q.tests()[k], fa, fb)
                 if kind == "ns" and abs(pt.mult[0].imag) < 1e-12:
                     continue  # a real pair with product 1: a neutral saddle, not a bifurcation
+                if kind != "ns" and float(np.min(np.abs(pt.mult - (1.0 if kind == "fold" else -1.0)))) > POLE_TOL:
+                    continue  # the test changed sign through a pole (a multiplier through infinity), not a zero
                 if pt.tangent @ a.tangent < 0:
                     pt.tangent = -pt.tangent
                 self.record(kind, pt, bracket)

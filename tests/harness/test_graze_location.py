@@ -92,3 +92,24 @@ def test_compliant_wall_free_orbit_grazes_at_sigma_zero(sim, model, gamma_w: flo
     i = graze.index
     assert np.max(np.abs(br.points[i, 0] - wall_free_offset(br.values[i], 0.5))) < 1e-9
     assert math.isfinite(graze.bracket) and graze.bracket < 1e-10
+
+
+def test_a_test_function_through_a_pole_is_not_a_flip() -> None:
+    """det(D + I) and det(D - I) change sign where a multiplier passes through infinity as well as
+    through -1 and +1 (COCO's hybrid toolbox reports period doublings at a graze for that reason,
+    the saltation's 1/v).  On u -> m(sigma) u with m = 1 / (sigma - 1/2) - 1/2 (its multiplier,
+    exactly), the flip at m = -1 (sigma = -3/2) is located, and neither a flip nor a fold is
+    reported at the pole sigma = 1/2 (without the check both were, at 0.5074)."""
+    from harness.fmu.simulator import MappingSimulator
+
+    def m(s: float) -> float:
+        return 1.0 / (s - 0.5) - 0.5
+
+    sim = MappingSimulator(lambda u, v, t, p: (m(p["sigma"]) * u, 0.5 * v, 1), {"sigma": 0.0},
+                           lambda u, v, t, p: (np.array([[m(p["sigma"]), 0.0], [0.0, 0.5]]),
+                                               np.array([-u / (p["sigma"] - 0.5) ** 2, 0.0])))
+    z0 = wall_free_offset(-3.0, 0.5)  # the fixed point u = 0 sits at the section's offset: w = 0
+    br = continue_orbit(sim, {}, 1, -3.0, z0, p_range=(-3.0, 1.0), direction=1, max_points=400, ds_max=0.02)
+    assert br.values.max() > 0.9  # the branch went through the pole
+    kinds = [(e.kind, e.value) for e in br.events if e.kind != "end"]
+    assert len(kinds) == 1 and kinds[0][0] == "flip" and abs(kinds[0][1] + 1.5) < 1e-8, kinds
