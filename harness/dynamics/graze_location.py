@@ -290,5 +290,7 @@ def locate_graze(cont: ArclengthCorrector, a: BranchPoint, good: BranchPoint) ->
     if fit is None:
         return None
     value, err = fit
+    if (value - good.p) * math.copysign(1.0, float(good.tangent[2])) < -err:
+        return None  # behind the last orbit with the pattern: not the zero this change is at
     name = "gap" if good.ev.contacts[k] == 0 else "entry velocity"
     return GrazeLocation(value, (value - err, value + err), name, k, len(data), min(d[1] for d in data))
