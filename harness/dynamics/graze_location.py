@@ -42,6 +42,10 @@ TWO_PI = 2.0 * math.pi
 #: Samples per period of the free flight when its first wall crossing is searched.
 FLIGHT_SAMPLES = 96
 
+#: On a rigid wall, periods with up to this many impacts are followed flight by flight (each
+#: flight's gap and each impact's entry velocity); a longer chatter only by its first contact.
+RIGID_FLIGHTS_MAX = 4
+
 #: Smallest entry velocity (relative to 1 + |sigma|) used in a fit: below it the crossing time's
 #: rounding (~eps / v) makes v itself uncertain to ~eps a / v.
 VELOCITY_FLOOR = 1e-4
@@ -79,6 +83,9 @@ class GrazeLocation:
         Orbits of the fit.
     nearest : float
         The smallest defining value among them.
+    flight : int
+        Which flight of that period (0: from the section to the first contact; j: after the j-th
+        impact, on a rigid wall).
     """
 
     value: float
@@ -87,6 +94,7 @@ class GrazeLocation:
     period: int
     samples: int
     nearest: float
+    flight: int = 0
 
     @property
     def width(self) -> float:
@@ -94,31 +102,35 @@ class GrazeLocation:
 
 
 class _Flight:
-    """The free flight of one period from its section point z (exact: the linear free flow)."""
+    """A free flight of one period (exact: the linear free flow), in time t relative to the section,
+    from the state ``z`` at t = ``t0``."""
 
-    def __init__(self, pmap: PeriodMap, z: np.ndarray, p: float) -> None:
+    def __init__(self, pmap: PeriodMap, z: np.ndarray, p: float, t0: float = 0.0) -> None:
         prm = pmap.at(p)
         self.nu, self.Om = float(prm["nu"]), float(prm["Omega"])
         self.amp = 1.0 + pmap.sigma(p)
-        self.theta = pmap.theta
-        self.x = np.asarray(z, dtype=float) - wall_free_offset(pmap.sigma(p), pmap.theta)
+        self.theta, self.t0 = pmap.theta, float(t0)
+        self.x = np.asarray(z, dtype=float) - self._p(self.t0)
+
+    def _p(self, t: float) -> np.ndarray:
+        th = TWO_PI * (self.theta + t)
+        return np.array([self.amp * math.cos(th) - 1.0, -TWO_PI * self.amp * math.sin(th)])
 
     def state(self, t: float) -> tuple[float, float]:
-        h = free_propagator(self.nu, self.Om, t) @ self.x
-        th = TWO_PI * (self.theta + t)
-        return float(h[0] + self.amp * math.cos(th) - 1.0), float(h[1] - TWO_PI * self.amp * math.sin(th))
+        z = free_propagator(self.nu, self.Om, t - self.t0) @ self.x + self._p(t)
+        return float(z[0]), float(z[1])
 
-    def grid(self) -> tuple[np.ndarray, np.ndarray]:
-        t = np.linspace(0.0, 1.0, FLIGHT_SAMPLES + 1)
-        P1 = free_propagator(self.nu, self.Om, t[1])
+    def grid(self, t1: float) -> tuple[np.ndarray, np.ndarray]:
+        t = np.linspace(self.t0, t1, max(8, int(FLIGHT_SAMPLES * (t1 - self.t0))) + 1)
+        P1 = free_propagator(self.nu, self.Om, t[1] - t[0])
         x, hom = self.x.copy(), np.empty(t.size)
         for i in range(t.size):  # P(i dt) x by repeated steps (a semigroup)
             hom[i] = x[0]
             x = P1 @ x
         return t, hom + self.amp * np.cos(TWO_PI * (self.theta + t)) - 1.0
 
-    def highest_near(self, t0: float, lo: float, hi: float) -> float:
-        """The time of the local maximum of u in [lo, hi] near t0 (golden-section: u is unimodal there)."""
+    def highest_near(self, lo: float, hi: float) -> float:
+        """The time of the local maximum of u in [lo, hi] (golden-section: u is unimodal there)."""
         g = (math.sqrt(5.0) - 1.0) / 2.0
         a, b = lo, hi
         for _ in range(80):
@@ -131,53 +143,94 @@ class _Flight:
                 break
         return 0.5 * (a + b)
 
+    def first_entry(self, t1: float) -> float | None:
+        """The first time in (t0, t1] that u crosses 0 upward, or None."""
+        t, u = self.grid(t1)
+        for i in range(1, t.size):
+            if u[i] > 0.0 and u[i - 1] <= 0.0:
+                return brentq(lambda s: self.state(s)[0], t[i - 1], t[i], xtol=1e-16, rtol=1e-15)
+            if i < t.size - 1 and u[i] >= u[i - 1] and u[i] >= u[i + 1]:
+                # a maximum between samples may reach the wall by less than their spacing shows
+                tm = self.highest_near(t[i - 1], t[i + 1])
+                if self.state(tm)[0] > 0.0:
+                    return brentq(lambda s: self.state(s)[0], t[i - 1], tm, xtol=1e-16, rtol=1e-15)
+        return None
+
+    def highest_inside(self, t1: float) -> float | None:
+        """The highest u at a local maximum strictly inside (t0, t1), or None."""
+        t, u = self.grid(t1)
+        tops = [self.state(self.highest_near(t[i - 1], t[i + 1]))[0]
+                for i in range(1, t.size - 1) if u[i] >= u[i - 1] and u[i] >= u[i + 1]]
+        return max(tops) if tops else None
+
 
 def entry_velocity(pmap: PeriodMap, z: np.ndarray, p: float) -> float:
     """Velocity at the first wall entry (u = 0 upward) of the free flight from the section point
     ``z`` within one period; NaN when the flight does not reach the wall."""
     fl = _Flight(pmap, z, p)
-    t, u = fl.grid()
-    for i in range(1, t.size):
-        if u[i] > 0.0 and u[i - 1] <= 0.0:
-            tc = brentq(lambda s: fl.state(s)[0], t[i - 1], t[i], xtol=1e-16, rtol=1e-15)
-            return fl.state(tc)[1]
-        if 1 < i < t.size - 1 and u[i] >= u[i - 1] and u[i] >= u[i + 1]:
-            # a maximum between samples may reach the wall by less than their spacing shows
-            tm = fl.highest_near(t[i], t[i - 1], t[i + 1])
-            if fl.state(tm)[0] > 0.0:
-                tc = brentq(lambda s: fl.state(s)[0], t[i - 1], tm, xtol=1e-16, rtol=1e-15)
-                return fl.state(tc)[1]
-    return math.nan
+    tc = fl.first_entry(1.0)
+    return math.nan if tc is None else fl.state(tc)[1]
 
 
-def period_quantities(pmap: PeriodMap, pt: BranchPoint) -> np.ndarray:
-    """The defining quantity of every period of the orbit at ``pt``: its gap where it has no
-    contact, the entry velocity of its first contact where it has."""
-    out = np.empty(len(pt.ev.contacts))
-    for k, n in enumerate(pt.ev.contacts):
-        z = pt.ev.points[k]
-        out[k] = (pmap.gap(z[None, :], np.zeros(1, dtype=int), pt.p) if n == 0 else entry_velocity(pmap, z, pt.p))
-    return out
+def _rigid_period(pmap: PeriodMap, z: np.ndarray, p: float, n: int) -> dict[tuple[int, str], float] | None:
+    """Flight by flight through one period with ``n`` impacts on a rigid wall (free flights, each
+    impact v -> -r v): the gap of every flight's highest inner point, the entry velocity of every
+    impact; None when the flights do not meet the wall ``n`` times (a chatter the sampling cannot
+    resolve, a sticking phase)."""
+    r = float(pmap.at(p)["r"])
+    out: dict[tuple[int, str], float] = {}
+    fl = _Flight(pmap, z, p)
+    for j in range(n + 1):
+        tc = fl.first_entry(1.0)
+        top = fl.highest_inside(1.0 if tc is None else tc)
+        if top is not None and top < 0.0:
+            out[(j, "gap")] = -top
+        if tc is None:
+            return out if j == n else None
+        if j == n:
+            return None
+        v = fl.state(tc)[1]
+        out[(j, "entry velocity")] = v
+        fl = _Flight(pmap, np.array([0.0, -r * v]), p, tc)
+    return None
 
 
-def _grazing_period(pmap: PeriodMap, a: BranchPoint, good: BranchPoint) -> int | None:
-    """The period whose defining quantity is heading to zero between ``a`` and ``good``: the one
-    that fell the most (relatively), if it fell at all."""
-    qa, qg = period_quantities(pmap, a), period_quantities(pmap, good)
-    ratio = np.where(np.isfinite(qa) & np.isfinite(qg) & (qa > 0) & (qg > 0), qg / np.where(qa > 0, qa, 1.0), np.inf)
-    k = int(np.argmin(ratio))
-    return k if ratio[k] < 1.0 else None
+def period_quantities(pmap: PeriodMap, z: np.ndarray, n: int, p: float) -> dict[tuple[int, str], float]:
+    """The defining quantities of one period (section point ``z``, ``n`` contacts), by (flight,
+    kind): the gap of a period without contact; on a rigid wall every flight's gap and impact's
+    entry velocity; on a compliant wall the entry velocity of the first contact."""
+    if n == 0:
+        return {(0, "gap"): pmap.gap(np.asarray(z)[None, :], np.zeros(1, dtype=int), p)}
+    if int(pmap.params.get("wall", 1)) == 2 and n <= RIGID_FLIGHTS_MAX:
+        flights = _rigid_period(pmap, z, p, n)
+        if flights is not None:
+            return flights
+    return {(0, "entry velocity"): entry_velocity(pmap, z, p)}
 
 
-def _quantity(pmap: PeriodMap, pt: BranchPoint, k: int) -> float:
-    """The defining quantity of period k of the orbit at ``pt``."""
-    z = pt.ev.points[k]
-    if pt.ev.contacts[k] == 0:
-        return pmap.gap(z[None, :], np.zeros(1, dtype=int), pt.p)
-    return entry_velocity(pmap, z, pt.p)
+def _orbit_quantities(pmap: PeriodMap, pt: BranchPoint) -> dict[tuple[int, int, str], float]:
+    return {(k, *key): q for k, n in enumerate(pt.ev.contacts)
+            for key, q in period_quantities(pmap, pt.ev.points[k], int(n), pt.p).items()}
 
 
-def _sample(cont: ArclengthCorrector, a: BranchPoint, good: BranchPoint, k: int, q0: float,
+def _grazing_key(pmap: PeriodMap, a: BranchPoint, good: BranchPoint) -> tuple[int, int, str] | None:
+    """The (period, flight, kind) whose quantity is heading to zero between ``a`` and ``good``: the
+    one that fell the most (relatively), if one fell at all."""
+    qa, qg = _orbit_quantities(pmap, a), _orbit_quantities(pmap, good)
+    best, key = 1.0, None
+    for k in qa.keys() & qg.keys():
+        if math.isfinite(qa[k]) and math.isfinite(qg[k]) and qa[k] > 0 and qg[k] > 0 and qg[k] / qa[k] < best:
+            best, key = qg[k] / qa[k], k
+    return key
+
+
+def _quantity(pmap: PeriodMap, pt: BranchPoint, key: tuple[int, int, str]) -> float:
+    """The defining quantity ``key`` = (period, flight, kind) of the orbit at ``pt``."""
+    k, j, kind = key
+    return period_quantities(pmap, pt.ev.points[k], int(pt.ev.contacts[k]), pt.p).get((j, kind), math.nan)
+
+
+def _sample(cont: ArclengthCorrector, a: BranchPoint, good: BranchPoint, k: tuple[int, int, str], q0: float,
             q1: float) -> list[tuple[float, float, float]]:
     """Orbits of the branch behind ``good`` (old contacts) with the quantity in [q0, q1]: marched
     back from ``good`` in steps aimed at q1 / 8 apart, halved where the corrector fails (next to a
@@ -220,7 +273,7 @@ def _refined(cont: ArclengthCorrector, pt: BranchPoint) -> BranchPoint:
     return pt
 
 
-def _with_error(pmap: PeriodMap, pt: BranchPoint, q: float, k: int) -> tuple[float, float, float]:
+def _with_error(pmap: PeriodMap, pt: BranchPoint, q: float, k: tuple[int, int, str]) -> tuple[float, float, float]:
     """(p, q, uncertainty of q): the orbit is known to its corrector's residual, so one more Newton
     correction of it moves q by about q's error."""
     try:
@@ -232,15 +285,15 @@ def _with_error(pmap: PeriodMap, pt: BranchPoint, q: float, k: int) -> tuple[flo
     return pt.p, q, err + 64.0 * np.finfo(float).eps * (1.0 + abs(pt.p))
 
 
-def _quantity_from(pmap: PeriodMap, z0: np.ndarray, contacts: np.ndarray, p: float, k: int) -> float:
-    """The quantity of period k of the orbit started at ``z0`` (run k periods on by the FMU)."""
+def _quantity_from(pmap: PeriodMap, z0: np.ndarray, contacts: np.ndarray, p: float,
+                   key: tuple[int, int, str]) -> float:
+    """The quantity ``key`` of the orbit started at ``z0`` (run to its period by the FMU)."""
+    k, j, kind = key
     z = np.asarray(z0, dtype=float)
     if k:
         run, _ = pmap.run(p, z, k)
         z = run[-1]
-    if contacts[k] == 0:
-        return pmap.gap(z[None, :], np.zeros(1, dtype=int), p)
-    return entry_velocity(pmap, z, p)
+    return period_quantities(pmap, z, int(contacts[k]), p).get((j, kind), math.nan)
 
 
 def _fit_zero(data: list[tuple[float, float, float]]) -> tuple[float, float] | None:
@@ -276,21 +329,20 @@ def locate_graze(cont: ArclengthCorrector, a: BranchPoint, good: BranchPoint) ->
     contact pattern.
     """
     pmap = cont.pmap
-    k = _grazing_period(pmap, a, good)
-    if k is None:
+    key = _grazing_key(pmap, a, good)
+    if key is None:
         return None
-    qa, qg = _quantity(pmap, a, k), _quantity(pmap, good, k)
+    qa, qg = _quantity(pmap, a, key), _quantity(pmap, good, key)
     s = float(np.linalg.norm(good.x - a.x))
     if s == 0.0 or not qa > qg:
         return None
-    floor = (VELOCITY_FLOOR if good.ev.contacts[k] else GAP_FLOOR) * (1.0 + abs(pmap.sigma(good.p)))
+    floor = (VELOCITY_FLOOR if key[2] == "entry velocity" else GAP_FLOOR) * (1.0 + abs(pmap.sigma(good.p)))
     q0 = max(qg, floor)
-    data = _sample(cont, a, good, k, q0, SPREAD * q0)
+    data = _sample(cont, a, good, key, q0, SPREAD * q0)
     fit = _fit_zero(data)
     if fit is None:
         return None
     value, err = fit
     if (value - good.p) * math.copysign(1.0, float(good.tangent[2])) < -err:
         return None  # behind the last orbit with the pattern: not the zero this change is at
-    name = "gap" if good.ev.contacts[k] == 0 else "entry velocity"
-    return GrazeLocation(value, (value - err, value + err), name, k, len(data), min(d[1] for d in data))
+    return GrazeLocation(value, (value - err, value + err), key[2], key[0], len(data), min(d[1] for d in data), key[1])

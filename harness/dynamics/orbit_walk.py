@@ -243,8 +243,13 @@ def _how_located(located: GrazeLocation | None) -> str:
     if located is None:
         return ""
     lo, hi = located.interval
-    return (f"; located where the {located.quantity} of period {located.period} reaches 0 (fit of {located.samples} "
-            f"orbits down to {located.nearest:.2g}), in [{lo:.12g}, {hi:.12g}]")
+    j = located.flight
+    if located.quantity == "gap":
+        which = f"gap of period {located.period}" + (f" after its impact {j}" if j else "")
+    else:
+        which = f"entry velocity of impact {j + 1} of period {located.period}"
+    return (f"; located where the {which} reaches 0 (fit of {located.samples} orbits down to "
+            f"{located.nearest:.2g}), in [{lo:.12g}, {hi:.12g}]")
 
 
 def _sticks(pt: BranchPoint) -> bool:
