@@ -113,3 +113,42 @@ def test_a_test_function_through_a_pole_is_not_a_flip() -> None:
     assert br.values.max() > 0.9  # the branch went through the pole
     kinds = [(e.kind, e.value) for e in br.events if e.kind != "end"]
     assert len(kinds) == 1 and kinds[0][0] == "flip" and abs(kinds[0][1] + 1.5) < 1e-8, kinds
+
+
+def _exact_after_impact_gap(p: dict, sigma: float, z) -> tuple[float, np.ndarray]:
+    """The exact flow's one-impact orbit at ``sigma`` (mapcheck's shooting) and the distance to the
+    wall of the highest point of its flight after the impact (dense exact states, the top refined
+    on a parabola through the three highest samples)."""
+    from mapcheck.exact import ExactOscillator
+    from mapcheck.orbits import solve_periodic_orbit
+
+    ex = ExactOscillator(p["nu"], p["Omega"], sigma, p["r"], 10.0, "rigid")
+    orb = solve_periodic_orbit(lambda a, b: ex.state_at(a, b, 0.5, 1.5), np.asarray(z, float), 1, tol=1e-13,
+                               scale=np.array([1e-2, 1e-1]))
+    assert orb.converged and int(orb.contacts.sum()) == 1
+    (t_imp,) = [t for t, kind in ex.crossings(*orb.z[0], 0.5, 1.5) if kind == "impact"]
+    t = np.linspace(t_imp + 1e-6, 1.5, 40001)
+    u = ex.dense(*orb.z[0], t, 0.5)[0][:, 0]
+    i = int(np.argmax(u[1:-1])) + 1
+    a, b, c = u[i - 1], u[i], u[i + 1]
+    top = b + 0.125 * (a - c) ** 2 / (2 * b - a - c)  # the parabola's vertex
+    return -float(top), orb.z[0]
+
+
+def test_an_impact_added_after_another_is_located_on_the_flights_gap(sim, coco_branches) -> None:
+    """COCO's example at omega = 0.8, continued up from sigma = 2: the flight after the impact reaches
+    the wall again near sigma = 4.668 (a second impact per period).  Located on that flight's gap,
+    it agrees to 1e-9 with the exact flow's own zero of that gap (extrapolated from its one-impact
+    orbits 1e-6 and 2e-6 below) and lies in its interval; the last orbit with one impact was short
+    of it by 3e-9."""
+    p, _ = coco_branches[0.8]
+    (a,) = [x for x in find_attractors(sim, p, [2.0], M_max=2, transient=300).attractors if x.period == 1]
+    br = continue_orbit(sim, p, 1, 2.0, a.points[0], p_range=(-0.9, 10.0), direction=1, max_points=400)
+    (graze,) = [e for e in br.events if e.kind == "graze"]
+    assert graze.quantity == "gap" and "after its impact 1" in graze.note
+    g1, z = _exact_after_impact_gap(p, graze.value - 1e-6, graze.point)
+    g2, _ = _exact_after_impact_gap(p, graze.value - 2e-6, z)
+    exact = graze.value - 1e-6 + g1 * 1e-6 / (g2 - g1)
+    lo, hi = graze.interval
+    assert abs(graze.value - exact) < 1e-9 and hi - lo < 1e-9, (graze.value, exact, graze.interval)
+    assert graze.value - br.values[graze.index] > 1e-9  # not the last orbit with one impact
