@@ -25,7 +25,7 @@ from tests.mapcheck.test_impact_orbit import coco, section_state
 
 #: COCO's omegas, and the smooth events of their period-1 impacting branch between sigma = 2
 #: and the graze: the closed form's (fold: d sigma/dv = 0; flip: det(J + I) = 0 over v in [0.5, 5])
-OMEGAS = {0.8: "flip", 1.0: "fold", 1.32: "fold"}
+OMEGAS = {0.8: "flip", 1.0: "fold", 1.1: "fold", 1.32: "fold"}
 
 
 @pytest.fixture(scope="module")
