@@ -265,10 +265,13 @@ def _sample(cont: ArclengthCorrector, a: BranchPoint, good: BranchPoint, k: tupl
 
 
 def _refined(cont: ArclengthCorrector, pt: BranchPoint) -> BranchPoint:
-    """The orbit at ``pt.p`` to a residual of :data:`SAMPLE_TOL` (Newton at fixed p from the
-    corrector's orbit, good to its tolerance only), or ``pt`` where that Newton fails."""
-    w, ev, ok, _ = refine_orbit(cont.pmap, pt.w, pt.p, cont.M, tol=SAMPLE_TOL, max_iter=4)
-    if ok and np.array_equal(ev.contacts, pt.ev.contacts):
+    """The orbit at ``pt.p`` refined by Newton at fixed p towards a residual of :data:`SAMPLE_TOL`
+    (the corrector's orbit is good to its 1e-10 only): the refined orbit where its residual is
+    smaller (next to a rigid graze rounding times the large Jacobian may floor it above the
+    tolerance), else ``pt``."""
+    res0 = float(np.max(np.abs(pt.ev.image - pt.w)))
+    w, ev, _, res = refine_orbit(cont.pmap, pt.w, pt.p, cont.M, tol=SAMPLE_TOL, max_iter=4)
+    if res < res0 and np.array_equal(ev.contacts, pt.ev.contacts):
         return BranchPoint(w, pt.p, ev)
     return pt
 
