@@ -9,6 +9,7 @@
  *                   validated field by field)
  *   fmu_cs.c        the Co-Simulation stepping loop
  *   fmu_me.c        the Model Exchange calls and the event mode of FMI 3.0 Co-Simulation
+ *   fmu_derivatives.c  directional and adjoint derivatives (the model's exact partials)
  * The physics is the model's (model.h: its checks, derived quantities and outputs are calls
  * into model.c) and the integration the stepper's (stepper.h). The glue files only translate
  * types and status codes.
@@ -134,6 +135,18 @@ int core_get_derivatives(CoreInstance *c, const char *fn, double dx[], size_t n)
 int core_get_event_indicators(CoreInstance *c, const char *fn, double g[], size_t n);
 int core_get_nominals(CoreInstance *c, const char *fn, double x[], size_t n);
 int core_completed_step(CoreInstance *c, const char *fn, int *enter_event, int *terminate);
+
+/* -- exact partial derivatives (fmu_derivatives.c) -----------------------------------------
+ * Knowns: the states u, v and the inputs F_ext, u_wall; unknowns: der(u), der(v), the outputs,
+ * (FMI 3.0) the event indicator. Directional: out[i] = sum_j d unknown_i / d known_j seed[j]
+ * (seed over the knowns); adjoint: out[j] = sum_i seed[i] d unknown_i / d known_j (seed over
+ * the unknowns). */
+int core_directional_derivative(CoreInstance *c, const char *fn, const unsigned unknowns[],
+                                size_t nu, const unsigned knowns[], size_t nk,
+                                const double seed[], double out[]);
+int core_adjoint_derivative(CoreInstance *c, const char *fn, const unsigned unknowns[],
+                            size_t nu, const unsigned knowns[], size_t nk, const double seed[],
+                            double out[]);
 
 /* -- shared by the core's units (fmu_core.c) ---------------------------------------------- */
 /* The model's local time now: the stepper's (Co-Simulation) or the importer's (Model Exchange). */

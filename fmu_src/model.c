@@ -190,6 +190,49 @@ void model_jacobian(const ModelData *m, double tau, const double y[2], double J[
     }
 }
 
+/* d F / d d and d F / d d' of the contact law's force F(d, d') (model_contact_force). */
+static void contact_force_partials(const ModelData *m, double d, double dv, double *Fd,
+                                   double *Fdv) {
+    *Fd = *Fdv = 0.0;
+    if (m->contact == CONTACT_LINEAR) {
+        *Fd = m->kappa2;
+    } else if (d > 0.0) { /* the Hertz laws are C^1 at d = 0: both partials vanish there */
+        const double s = sqrt(d);
+        const double damp = m->contact == CONTACT_HUNT_CROSSLEY ? m->alpha_hc : 0.0;
+        *Fd = 1.5 * m->kappa2 * s * (1.0 + damp * dv);
+        *Fdv = m->kappa2 * d * s * damp;
+    }
+}
+
+void model_partials(const ModelData *m, double tau, double P[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS]) {
+    memset(P, 0, sizeof(double) * MODEL_N_UNKNOWNS * MODEL_N_KNOWNS);
+    if (m->mode == MODE_STICK) {
+        /* carried by the wall: der(u) = w', der(v) = 0 whatever (u, v); the holding force (and the
+         * indicator, the same force) is forcing + F_ext - nu w' - Omega^2 (w + 1) */
+        P[PU_F_CONTACT][PK_F_EXT] = P[PU_WALL_INDICATOR][PK_F_EXT] = 1.0;
+        P[PU_F_CONTACT][PK_U_WALL] = P[PU_WALL_INDICATOR][PK_U_WALL] = -m->Omega2;
+        return;
+    }
+    /* der(u) = v; der(v) = forcing - nu v - Omega^2 (u + 1) [- F(u - w, v - w')] + F_ext */
+    P[PU_DER_U][PK_V] = 1.0;
+    P[PU_DER_V][PK_U] = -m->Omega2;
+    P[PU_DER_V][PK_V] = -m->nu;
+    P[PU_DER_V][PK_F_EXT] = 1.0;
+    if (m->wall != WALL_NONE) { /* g0 = u - w (no wall: the constant 1) */
+        P[PU_WALL_INDICATOR][PK_U] = 1.0;
+        P[PU_WALL_INDICATOR][PK_U_WALL] = -1.0;
+    }
+    if (m->mode != MODE_CONTACT) return;
+    double Fd, Fdv;
+    contact_force_partials(m, m->u - model_wall_position(m, tau), m->v - m->du_wall, &Fd, &Fdv);
+    P[PU_DER_V][PK_U] -= Fd;
+    P[PU_DER_V][PK_V] -= Fdv;
+    P[PU_DER_V][PK_U_WALL] = Fd;
+    P[PU_F_CONTACT][PK_U] = Fd;
+    P[PU_F_CONTACT][PK_V] = Fdv;
+    P[PU_F_CONTACT][PK_U_WALL] = -Fd;
+}
+
 void model_event_indicators(const ModelData *m, double tau, const double y[2],
                             double g[MODEL_N_EVENTS]) {
     if (m->wall == WALL_NONE) {

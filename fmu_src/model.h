@@ -138,6 +138,17 @@ void model_shift_time(ModelData *m, double k);
  * updated in place): see model.c. Returns 1 if the mode or the state changed. */
 int model_input_jump(ModelData *m, double tau, double y[2]);
 
+/* -- exact partial derivatives (fmu_derivatives.c: fmi2/fmi3GetDirectionalDerivative,
+ * fmi3GetAdjointDerivative) -- The knowns (columns) are the continuous states and the inputs; the
+ * unknowns (rows) the right-hand side, the wall's force and the wall indicator. Each entry is the
+ * partial derivative at the instance's contact mode and state now: the piecewise right-hand side
+ * of that mode, differentiated (the mode itself changes only at events, so it has no partial). */
+typedef enum { PK_U = 0, PK_V = 1, PK_F_EXT = 2, PK_U_WALL = 3, MODEL_N_KNOWNS = 4 } PartialKnown;
+typedef enum {
+    PU_DER_U = 0, PU_DER_V = 1, PU_F_CONTACT = 2, PU_WALL_INDICATOR = 3, MODEL_N_UNKNOWNS = 4
+} PartialUnknown;
+void model_partials(const ModelData *m, double tau, double P[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS]);
+
 /* -- what the FMI core asks of the model (fmu_vars.c, fmu_snapshot.c, fmu_cs.c, fmu_core.c) -- */
 /* Bounds on the input derivatives (slopes per unit time). */
 #define MODEL_MAX_DF_EXT 1e12
