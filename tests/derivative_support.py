@@ -15,10 +15,6 @@ from fmpy.fmi3 import FMU3Model, FMU3Slave
 
 from tests.fmu_support import FMU3_PATH, FMU_PATH
 
-#: value references (fmu_src/variables.py)
-VR = {"u": 13, "v": 14, "der(u)": 19, "der(v)": 20, "wall_indicator": 21, "F_ext": 23,
-      "u_wall": 24, "F_contact": 25, "impacts": 15, "in_contact": 16, "v_impact": 26,
-      "J_uu": 32}
 KNOWNS = ("u", "v", "F_ext", "u_wall")
 INTEGERS = ("wall", "contact", "solver")
 INTERFACES = ("fmi2-me", "fmi2-cs", "fmi3-me", "fmi3-cs")
@@ -106,11 +102,11 @@ class Instance:
 
     # -- variables ----------------------------------------------------------------------------
     def get(self, *names: str) -> np.ndarray:
-        vr = [VR[n] for n in names]
+        vr = [self.vrs[n] for n in names]
         return np.array(self.fmu.getFloat64(vr) if self.fmi3 else self.fmu.getReal(vr))
 
     def set_inputs(self, **values: float) -> None:
-        vr = [VR[n] for n in values]
+        vr = [self.vrs[n] for n in values]
         x = [float(x) for x in values.values()]
         (self.fmu.setFloat64 if self.fmi3 else self.fmu.setReal)(vr, x)
 
@@ -124,13 +120,13 @@ class Instance:
 
     # -- derivatives --------------------------------------------------------------------------
     def directional(self, unknowns, knowns, seed) -> np.ndarray:
-        u = [VR[n] for n in unknowns]
-        k = [VR[n] for n in knowns]
+        u = [self.vrs[n] for n in unknowns]
+        k = [self.vrs[n] for n in knowns]
         return np.array(self.fmu.getDirectionalDerivative(u, k, list(seed)))
 
     def adjoint(self, unknowns, knowns, seed) -> np.ndarray:
-        u = [VR[n] for n in unknowns]
-        k = [VR[n] for n in knowns]
+        u = [self.vrs[n] for n in unknowns]
+        k = [self.vrs[n] for n in knowns]
         return np.array(self.fmu.getAdjointDerivative(u, k, list(seed), nSensitivity=len(k)))
 
     def jacobian(self, unknowns, knowns=KNOWNS) -> np.ndarray:
