@@ -164,6 +164,7 @@ int core_exit_init(CoreInstance *c, const char *fn) {
     c->st.clk.pending = 0;
     c->inputs_changed = 0;
     c->me_time = c->start_time;
+    c->me_wall = model_wall_position(&c->m, c->st.clk.tau);
     c->state = (c->is_me || c->event_mode_used) ? CS_EVENT : CS_STEP;
     return CORE_OK;
 }

@@ -54,6 +54,10 @@ typedef struct CoreInstance {
     int tunable_states;
     double start_time;
     double me_time; /* Model Exchange: the time set by the importer */
+    /* Model Exchange: the wall's position at the last event (or the start, or a restored state):
+     * a mass far beyond a rigid wall that has moved since is the wall's jump (the input-jump
+     * rule), one beyond a wall that has not moved is an importer's state no mode holds. */
+    double me_wall;
     int inputs_changed; /* an input jumped since the last step: apply model_input_jump */
     ModelData m;
     Stepper st; /* the integration method chosen by m.solver, and its clock */

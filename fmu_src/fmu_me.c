@@ -38,7 +38,26 @@ int core_update_discrete(CoreInstance *c, const char *fn, int *values_changed) {
          * remaining wall crossing an event. */
         changed = c->inputs_changed ? model_input_jump(&c->m, core_local_tau(c), y) : 0;
         c->inputs_changed = 0;
-        changed |= model_me_event_update(&c->m, core_local_tau(c), y);
+        const int mode = c->m.mode;
+        const double tau = core_local_tau(c), w = model_wall_position(&c->m, tau);
+        MeEventResult r = model_me_event_update(&c->m, tau, y);
+        if (r == ME_EVENT_INSIDE_RIGID && fabs(w - c->me_wall) > model_me_event_tolerance(&c->m, tau))
+            r = model_input_jump(&c->m, tau, y) ? ME_EVENT_JUMP : ME_EVENT_NONE; /* the wall jumped */
+        c->me_wall = w;
+        if (r == ME_EVENT_INSIDE_RIGID)
+            return core_fail(c, fn, "state (u, v) = (%.17g, %.17g) is %g inside the rigid wall at "
+                             "u_wall = %g, beyond the event tolerance %g: no contact mode holds a "
+                             "mass there (locate the crossing of the event indicator)", y[0],
+                             y[1], y[0] - model_wall_position(&c->m, core_local_tau(c)),
+                             model_wall_position(&c->m, core_local_tau(c)),
+                             model_me_event_tolerance(&c->m, core_local_tau(c)));
+        if (r == ME_EVENT_KEPT)
+            core_log(c, CORE_WARNING, "logStatusWarning", "%s: state (u, v) = (%.17g, %.17g) is "
+                     "beyond the event tolerance %g of the wall: kept, and the instance takes the "
+                     "mode it is in (%s; no jump applied)", fn, y[0], y[1],
+                     model_me_event_tolerance(&c->m, core_local_tau(c)),
+                     c->m.mode == MODE_FREE ? "in flight" : "in contact");
+        changed |= r != ME_EVENT_NONE || c->m.mode != mode;
         c->m.u = y[0];
         c->m.v = y[1];
         if (changed) c->st.clk.events++;

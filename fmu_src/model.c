@@ -393,20 +393,44 @@ void model_set_states(ModelData *m, const double x[MODEL_N_STATES]) {
     m->v = x[1];
 }
 
-int model_me_event_update(ModelData *m, double tau, double y[2]) {
-    if (model_release_now(m, tau)) { /* sticking: the holding force has gone */
-        y[0] = model_wall_position(m, tau);
-        y[1] = m->du_wall;
-        return 1;
-    }
-    if (m->wall == WALL_NONE || m->mode == MODE_STICK) return 0;
-    /* the importer stops on the far side of g0 = u - w = 0 (or on it) */
+double model_me_event_tolerance(const ModelData *m, double tau) {
+    return MODEL_ME_EVENT_TOL * fmax(1.0, fabs(model_wall_position(m, tau)));
+}
+
+/* A sticking mass whose state the importer moved off the wall (beyond the tolerance): free if it
+ * is outside the wall, refused inside it. */
+static MeEventResult me_unstick(ModelData *m, double d) {
+    if (d > 0.0) return ME_EVENT_INSIDE_RIGID;
+    m->mode = MODE_FREE;
+    return ME_EVENT_KEPT;
+}
+
+MeEventResult model_me_event_update(ModelData *m, double tau, double y[2]) {
+    if (m->wall == WALL_NONE) return ME_EVENT_NONE;
+    const double tol = model_me_event_tolerance(m, tau);
     const double d = y[0] - model_wall_position(m, tau), dv = y[1] - m->du_wall;
+    if (m->mode == MODE_STICK) {
+        if (fabs(d) > tol || fabs(dv) > tol) return me_unstick(m, d);
+        if (!model_release_now(m, tau)) return ME_EVENT_NONE; /* still held */
+        y[0] = model_wall_position(m, tau); /* the holding force has gone: released */
+        y[1] = m->du_wall;
+        return ME_EVENT_JUMP;
+    }
+    /* the importer stops on the far side of g0 = u - w = 0 (or on it) */
     const int crossed = m->mode == MODE_FREE ? (d > 0.0 || (d == 0.0 && dv > 0.0))
                                              : (d < 0.0 || (d == 0.0 && dv < 0.0));
-    if (!crossed) return 0;
-    model_event_update(m, tau, y, 0);
-    return 1;
+    if (!crossed) return ME_EVENT_NONE;
+    if (fabs(d) <= tol) { /* the crossing the importer located: the wall's jump */
+        model_event_update(m, tau, y, 0);
+        return ME_EVENT_JUMP;
+    }
+    if (m->mode == MODE_CONTACT) { /* far outside the compliant wall: in flight */
+        m->mode = MODE_FREE;
+        return ME_EVENT_KEPT;
+    }
+    if (m->wall == WALL_RIGID) return ME_EVENT_INSIDE_RIGID;
+    m->mode = MODE_CONTACT; /* far inside the compliant wall: in contact, no entry jump */
+    return ME_EVENT_KEPT;
 }
 
 /* --- what the FMI core asks of the model ---------------------------------------------------- */
