@@ -33,7 +33,7 @@ static int unknown_row(const CoreInstance *c, unsigned vr,
                        const double Pout[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS],
                        double row[MODEL_N_KNOWNS]) {
     const VarDef *d = vars_find(c, vr);
-    if (!d) return 0;
+    if (!d || d->type != VT_REAL) return 0; /* the unknowns are Real variables */
     memset(row, 0, sizeof(double) * MODEL_N_KNOWNS);
     switch (vr) {
     case VR_DER_U: memcpy(row, P[PU_DER_U], sizeof(double) * MODEL_N_KNOWNS); return 1;

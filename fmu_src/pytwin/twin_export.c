@@ -499,12 +499,34 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real tc, fmi2Real h, fmi2Boolean noSe
 }
 
 /* Not provided by the twin (canInterpolateInputs, maxOutputDerivativeOrder 0, no async steps). */
+/* Directional derivatives, exact and without Python: the twin is Co-Simulation only and has no
+ * inputs, so its knowns are the states u, v alone (as the C FMU's Co-Simulation accepts them) and
+ * its Real unknowns the outputs u, v, which are those states: the Jacobian is the identity. The
+ * right-hand side's partials (der(u), der(v), F_contact) belong to Model Exchange and the ports,
+ * which the twin does not have. */
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,
                                         const fmi2ValueReference z[], size_t nz,
                                         const fmi2Real dv[], fmi2Real dz[]) {
     Twin *t = check(c, "fmi2GetDirectionalDerivative");
-    (void)u, (void)nu, (void)z, (void)nz, (void)dv, (void)dz;
-    return t ? refuse(t, "fmi2GetDirectionalDerivative: not provided by the twin") : fmi2Error;
+    if (!t) return fmi2Error;
+    if ((nu && (!u || !dz)) || (nz && (!z || !dv)))
+        return refuse(t, "fmi2GetDirectionalDerivative: NULL argument");
+    for (size_t j = 0; j < nz; ++j) {
+        const int i = find_var(z[j], T_REAL);
+        if (i < 0 || (strcmp(TWIN_VARS[i].name, "u") && strcmp(TWIN_VARS[i].name, "v")))
+            return refuse(t, "fmi2GetDirectionalDerivative: value reference %u is not a known: the "
+                          "twin has no inputs, its knowns are the states u, v", z[j]);
+    }
+    for (size_t k = 0; k < nu; ++k) {
+        const int i = find_var(u[k], T_REAL);
+        if (i < 0 || TWIN_VARS[i].causality != C_OUTPUT)
+            return refuse(t, "fmi2GetDirectionalDerivative: value reference %u is not a Real "
+                          "output", u[k]);
+        dz[k] = 0.0;
+        for (size_t j = 0; j < nz; ++j) /* d u/d u = d v/d v = 1, the rest 0 */
+            if (z[j] == u[k]) dz[k] += dv[j];
+    }
+    return fmi2OK;
 }
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                                        const fmi2Integer order[], const fmi2Real value[]) {
