@@ -69,6 +69,18 @@ int core_allowed(CoreInstance *c, const char *fn) {
     return 0;
 }
 
+const CoreInstance *core_view(const CoreInstance *c, CoreInstance *buf) {
+    if (c->state != CS_INIT) return c;
+    memcpy(buf, c, sizeof *buf);
+    const double origin = floor(c->start_time), tau = c->start_time - origin;
+    buf->st.clk.origin = buf->m.origin = origin;
+    buf->st.clk.tau = buf->m.in_tau = tau;
+    buf->me_time = c->start_time;
+    model_update_derived(&buf->m);
+    model_initialize_state(&buf->m, tau);
+    return buf;
+}
+
 double core_local_tau(const CoreInstance *c) {
     return c->is_me ? c->me_time - floor(c->me_time) : c->st.clk.tau;
 }

@@ -153,6 +153,11 @@ int core_adjoint_derivative(CoreInstance *c, const char *fn, const unsigned unkn
                             double out[]);
 
 /* -- shared by the core's units (fmu_core.c) ---------------------------------------------- */
+/* What the getters read: c itself, or in Initialization Mode a copy in *buf holding the state the
+ * start values give (model_initialize_state at the start time), so that the initial unknowns
+ * (u, v, der(u), der(v), F_contact, in_contact, the indicator) answer the start values set so far
+ * rather than the defaults; exiting Initialization Mode computes the same state. */
+const CoreInstance *core_view(const CoreInstance *c, CoreInstance *buf);
 /* The model's local time now: the stepper's (Co-Simulation) or the importer's (Model Exchange). */
 double core_local_tau(const CoreInstance *c);
 /* The importer's allocator (or calloc/free). */

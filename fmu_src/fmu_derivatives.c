@@ -53,6 +53,8 @@ static int unknown_row(const CoreInstance *c, unsigned vr,
  * reports the state the input-jump rule gives: model_contact_output_now). */
 static void partials_now(const CoreInstance *c, double P[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS],
                          double Pout[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS]) {
+    CoreInstance buf;
+    c = core_view(c, &buf); /* Initialization Mode: at the state the start values give */
     const double tau = core_local_tau(c);
     model_partials(&c->m, tau, P);
     memcpy(Pout, P, sizeof(double) * MODEL_N_UNKNOWNS * MODEL_N_KNOWNS);

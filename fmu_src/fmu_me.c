@@ -119,7 +119,8 @@ int core_get_states(CoreInstance *c, const char *fn, double x[], size_t n) {
     ME_ONLY(c, fn);
     if (n != MODEL_N_STATES || !x)
         return core_fail(c, fn, "expected %d states, got %zu", MODEL_N_STATES, n);
-    model_get_states(&c->m, x);
+    CoreInstance buf;
+    model_get_states(&core_view(c, &buf)->m, x); /* Initialization Mode: from the start values */
     return CORE_OK;
 }
 
@@ -128,8 +129,10 @@ int core_get_derivatives(CoreInstance *c, const char *fn, double dx[], size_t n)
     if (n != MODEL_N_STATES || !dx)
         return core_fail(c, fn, "expected %d states, got %zu", MODEL_N_STATES, n);
     double y[MODEL_N_STATES];
-    model_get_states(&c->m, y);
-    model_derivatives(&c->m, core_local_tau(c), y, dx);
+    CoreInstance buf;
+    const CoreInstance *v = core_view(c, &buf);
+    model_get_states(&v->m, y);
+    model_derivatives(&v->m, core_local_tau(v), y, dx);
     if (!isfinite(dx[0]) || !isfinite(dx[1]))
         return core_fail(c, fn, "derivatives not finite at u = %g, v = %g", y[0], y[1]);
     return CORE_OK;
@@ -139,7 +142,9 @@ int core_get_event_indicators(CoreInstance *c, const char *fn, double g[], size_
     ME_ONLY(c, fn);
     if (n != MODEL_N_ME_EVENTS || !g)
         return core_fail(c, fn, "expected %d indicators, got %zu", MODEL_N_ME_EVENTS, n);
-    g[0] = model_wall_indicator(&c->m, core_local_tau(c));
+    CoreInstance buf;
+    const CoreInstance *v = core_view(c, &buf);
+    g[0] = model_wall_indicator(&v->m, core_local_tau(v));
     return CORE_OK;
 }
 

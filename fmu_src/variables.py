@@ -154,8 +154,8 @@ _SENS_DOC = "{d}: t0, t1 the start and end of the last doStep"
 _WORK_BOUND = ("bound on {what} one communication step, per unit of time advanced (at least "
                "one unit)")
 
-#: What decides the contact mode at the start (model_initialize_state): a discrete dependence of
-#: in_contact and der(u) (0 while sticking, else v0).
+#: What decides the contact mode at the start (model_initialize_state): in_contact's dependence.
+#: (der(u) is v0, or 0 sticking, which needs v0 = 0: it depends on v0 alone.)
 _MODE_DECIDERS = ("nu", "Omega", "sigma", "wall", "u0", "v0", "F_ext", "u_wall")
 #: ... and of the contact law's force: F_contact and der(v) at the start.
 _CONTACT_DEPS = ("nu", "Omega", "sigma", "Gamma", "wall", "u0", "v0", "contact", "alpha_hc",
@@ -256,7 +256,7 @@ VARIABLES: tuple[Variable, ...] = (
     Variable("der(u)", 19, "DER_U", "Real", "local", "continuous", "calculated",
              "du/dt (Model Exchange)", getter="get_der_u", derivative_of="u",
              dependencies=("v",), dependencies_kind=("discrete",),
-             initial_dependencies=_MODE_DECIDERS,
+             initial_dependencies=("v0",),  # v0, or 0 sticking, which needs v0 = 0
              doc_kind="local (Model Exchange)", doc_meaning="du/dt"),
     Variable("der(v)", 20, "DER_V", "Real", "local", "continuous", "calculated",
              "dv/dt (Model Exchange)", getter="get_der_v", derivative_of="v",

@@ -270,3 +270,65 @@ def test_a_parameter_is_no_known_and_the_error_names_it(interface):
             x.fmu.getDirectionalDerivative([20], [2], [1.0])  # d der(v) / d sigma: not offered
     finally:
         x.fmu.freeInstance()
+
+
+def _initial_values(md, unzipped: str, t0: float, params: dict, names) -> np.ndarray:
+    """The Real initial unknowns `names` read in Initialization Mode of a fresh FMI 2.0 instance
+    with the start values `params`."""
+    from fmpy.fmi2 import FMU2Slave
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    s = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
+                  modelIdentifier=md.coSimulation.modelIdentifier, instanceName="init")
+    s.instantiate()
+    try:
+        s.setupExperiment(startTime=t0)
+        for k, x in params.items():
+            if k in ("wall", "contact"):
+                s.setInteger([vr[k]], [int(x)])
+            else:
+                s.setReal([vr[k]], [float(x)])
+        s.enterInitializationMode()
+        return np.array(s.getReal([vr[n] for n in names]))
+    finally:
+        s.freeInstance()
+
+
+def _init_points() -> list[tuple[float, dict]]:
+    """Starts in flight, inside the linear and the Hunt-Crossley wall, sticking, and sticking
+    exactly where the holding force vanishes (where the knowns of the mode decision act)."""
+    nu, Omega, sigma = FIG9["nu"], FIG9["Omega"], 0.2
+    F_g, phi = forcing_amplitude_phase(nu, Omega)
+    t_edge = (math.acos(Omega ** 2 / ((1 + sigma) * F_g)) - phi) / (2 * math.pi) % 1.0
+    t_push, stick = _stick_start(dict(FIG9, wall=2))
+    return [(0.0, dict(FIG9, wall=1, u0=-0.4, v0=0.3, F_ext=0.1, u_wall=0.05)),
+            (0.0, dict(UNDER, wall=1, u0=0.3, v0=0.5, u_wall=0.05)),
+            (0.0, dict(UNDER, wall=1, contact=2, alpha_hc=0.15, u0=0.3, v0=0.5)),
+            (t_push, dict(stick, sigma=sigma)),
+            (t_edge, dict(FIG9, wall=2, sigma=sigma, u0=0.0, v0=0.0))]
+
+
+def test_declared_initial_unknowns_are_the_measured_dependencies():
+    """Initialization Mode, FMI 2.0: an initial unknown changes under a change of a Real known
+    (a parameter or input, +-1e-6 relative, 1e-6 from 0) at some start of the list iff it is declared to
+    depend on it; the Integer knowns (wall, contact) are left out (no value between)."""
+    from fmpy import extract
+    md = read_model_description(str(FMU_PATH))
+    unzipped = extract(str(FMU_PATH))
+    init = {u.variable.name: {d.name for d in u.dependencies} for u in md.initialUnknowns
+            if u.variable.type == "Real"}
+    knowns = [v.name for v in md.modelVariables if v.type == "Real"
+              and v.causality in ("parameter", "input")]
+    names = list(init)
+    measured: dict[str, set[str]] = {n: set() for n in names}
+    for t0, params in _init_points():
+        base = dict({k: v.start for v in md.modelVariables for k in [v.name]
+                     if v.name in knowns and v.start is not None}, **params)
+        for k in knowns:
+            x = float(base[k])
+            h = 1e-6 * abs(x) if x else 1e-6  # relative: rtol and atol are 1e-12, 1e-14
+            vals = [_initial_values(md, unzipped, t0, dict(base, **{k: x + s * h}), names)
+                    for s in (+1, -1)]
+            for i, n in enumerate(names):
+                if vals[0][i] != vals[1][i]:
+                    measured[n].add(k)
+    assert measured == {n: {d for d in init[n] if d in knowns} for n in names}

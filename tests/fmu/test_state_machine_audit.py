@@ -74,8 +74,10 @@ def test_initialization_mode_refuses_the_derivative_and_nominal_calls_but_not_ge
                   modelIdentifier=md.modelExchange.modelIdentifier, instanceName="audit")
     m.instantiate()
     m.setupExperiment(startTime=0.0)
+    m.setReal([6, 7], [-0.4, 0.5])  # u0, v0
     m.enterInitializationMode()
-    m.getReal([19, 20])  # der(u), der(v): answered (a refusal raises)
+    # the initial unknowns answer the start values set (not the defaults u = -1, v = 0)
+    assert m.getReal([13, 14, 19]) == [-0.4, 0.5, 0.5]  # u, v, der(u) = v0
     x = (ctypes.c_double * 2)()
     with pytest.raises(FMICallException):
         getattr(m, fn.replace("fmi2G", "g"))(x, 2)
