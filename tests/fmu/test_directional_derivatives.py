@@ -24,9 +24,10 @@ from tests.fmu_support import FMU3_PATH, FMU_PATH
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112, Gamma=10.0)
 UNDER = dict(nu=0.196, Omega=7.368, Gamma=1000.0)
-#: (id, parameters): every contact law, both linear regimes, and no wall
+#: (id, parameters): every contact law, both linear regimes, no wall, both solvers
 CASES = [
     ("fig9-linear", dict(FIG9, wall=1, contact=0)),
+    ("fig9-linear-closed-form-solver", dict(FIG9, wall=1, contact=0, solver=1)),
     ("under-linear", dict(UNDER, wall=1, contact=0)),
     ("under-hertz", dict(UNDER, wall=1, contact=1)),
     ("under-hunt-crossley", dict(UNDER, wall=1, contact=2, alpha_hc=0.15)),
