@@ -37,8 +37,9 @@ int core_update_discrete(CoreInstance *c, const char *fn, int *values_changed) {
          * the mass switches the contact mode and leaves the mass where it is. Only then is a
          * remaining wall crossing an event. */
         /* An input that jumped in Event Mode makes the right-hand side jump too, whether or not the
-         * rule moves the state: reported as valuesOfContinuousStatesChanged, the one flag by which
-         * importers (fmusim, FMPy) re-initialise their integrator; they read back the same state. */
+         * rule moves the state: reported as valuesOfContinuousStatesChanged, the one flag on which
+         * an importer such as fmusim re-initialises its integrator (FMPy does at every event);
+         * they read back the same state. */
         changed = c->inputs_changed ? (model_input_jump(&c->m, core_local_tau(c), y), 1) : 0;
         c->inputs_changed = 0;
         const int mode = c->m.mode;

@@ -110,8 +110,8 @@ def test_model_exchange_applies_the_same_rule(reference, path):
 @pytest.mark.parametrize("jump", [dict(F_ext=0.3), dict(u_wall=-0.05), dict(u_wall=-0.6)])
 def test_an_input_jump_in_event_mode_asks_the_importer_to_restart(interface, jump):
     """A jump of F_ext or u_wall set in Event Mode makes the right-hand side jump: the event
-    iteration reports valuesOfContinuousStatesChanged (the flag by which fmusim and FMPy restart
-    their integrator), with the state itself unchanged unless the input-jump rule moves it (the
+    iteration reports valuesOfContinuousStatesChanged (the flag on which fmusim restarts its
+    integrator; FMPy restarts at every event), with the state itself unchanged unless the input-jump rule moves it (the
     wall stepping 0.1 past the mass into the compliant wall: the state kept, contact taken)."""
     from tests.derivative_support import Instance
 
