@@ -64,6 +64,7 @@ SENS = "tests/fmu/test_sensitivities.py tests/harness/test_sensitivities.py"
 CF = "tests/fmu/test_closed_form.py"
 TRUTH = "tests/fmu/test_inputs_truth.py"
 GUARD = "tests/fmu/test_grazing_guard.py"
+DERIV = "tests/fmu/test_directional_derivatives.py"
 # mutants that survived the first run (issue 22): the independent-truth tests that now kill them run first
 ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28",
                                 "M52")}
@@ -216,6 +217,15 @@ MUTANTS: tuple[Mutant, ...] = (
        "a placement without impact treated as a rigid impact in the saltation matrix"),
     _m("M51", "fmu_src/solver_cvode.c", "if (locate_crossing(s, m, last_good_before(s, t), t) != 0) {",
        "if (0) {", f"{GUARD} {EVENTS}", "a stepped-over crossing counted by the rescue but never located"),
+    # -- fmu_src/model.c: the partial derivatives behind fmi2/fmi3GetDirectionalDerivative ----------
+    _m("M53", "fmu_src/model.c", "P[PU_DER_V][PK_U_WALL] = Fd;", "P[PU_DER_V][PK_U_WALL] = -Fd;",
+       DERIV, "d der(v) / d u_wall inside the wall with the wrong sign"),
+    _m("M54", "fmu_src/model.c", "*Fdv = m->kappa2 * d * s * damp;", "*Fdv = m->kappa2 * s * damp;",
+       DERIV, "Hunt-Crossley: the damper's partial on v without the depth factor d"),
+    _m("M55", "fmu_src/model.c",
+       "P[PU_F_CONTACT][PK_U_WALL] = P[PU_WALL_INDICATOR][PK_U_WALL] = -m->Omega2;",
+       "P[PU_F_CONTACT][PK_U_WALL] = P[PU_WALL_INDICATOR][PK_U_WALL] = -1.0;", DERIV,
+       "sticking: the holding force's partial on u_wall without the spring's Omega^2"),
 )
 
 
