@@ -251,3 +251,18 @@ def _assemble(model: Any, u0: np.ndarray, v0: np.ndarray, raw: np.ndarray, perio
                   "basins.first_error": errors[0] if errors else ""})
     ds.attrs = attrs
     return ds
+
+
+def with_zoom(ds: xr.Dataset, zoom: xr.Dataset) -> xr.Dataset:
+    """``ds`` with the scan of a sub-rectangle (run with ``attractors_from=ds``, so its labels mean
+    the same): ``attractor_zoom`` and ``periods_run_zoom`` on (u0_zoom, v0_zoom); attractors the
+    zoom found beyond ``ds``'s are named in ``basins.zoom_attractors``."""
+    ds = ds.copy()
+    ds = ds.assign_coords(u0_zoom=zoom["u0"].values, v0_zoom=zoom["v0"].values)
+    ds["attractor_zoom"] = (("u0_zoom", "v0_zoom"), zoom["attractor"].values,
+                            {**zoom["attractor"].attrs, "long_name": "attractor reached from the zoom's starts"})
+    ds["periods_run_zoom"] = (("u0_zoom", "v0_zoom"), zoom["periods_run"].values,
+                              {"long_name": "forcing periods each start of the zoom ran"})
+    ds.attrs["basins.zoom_attractors"] = zoom.attrs["basins.attractors"]
+    ds.attrs["basins.zoom_starts_per_s"] = zoom.attrs["basins.starts_per_s"]
+    return ds
