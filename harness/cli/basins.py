@@ -15,7 +15,7 @@ import numpy as np
 
 from ..config import parameter_values
 from ..errors import HarnessInputError
-from ..runs.budget import Budget, grid_count, sweep_estimate
+from ..runs.budget import Budget, basin_kernel_estimate, grid_count, sweep_estimate
 from .experiment_args import command_line, experiment_of, output_paths
 from .options import count, execution_options
 from .resumable import run_resumable
@@ -102,13 +102,16 @@ def cmd_basins(args: argparse.Namespace) -> int:
     factors = {"--u0-grid": n_u, "--v0-grid": n_v, exp.layers.arg("sampling", "transient"): s.n_transient,
                exp.layers.arg("sampling", "samples"): s.n_samples}
     blame = max(factors, key=lambda k: factors[k])  # the flag the user most likely mistyped
-    Budget.from_args(args).check(sweep_estimate(n_u, 1, n_v, s.n_transient, s.n_samples, s.extend + 5 * s.lyapunov, blame))
+    batch = _use_batch(args, exp)
+    scans = 1 + (args.zoom is not None)
+    Budget.from_args(args).check(
+        basin_kernel_estimate(scans * n_u * n_v, s.n_transient, s.n_samples, args.tile_size, blame) if batch else
+        sweep_estimate(n_u, 1, n_v, s.n_transient, s.n_samples, s.extend + 5 * s.lyapunov, blame))
     u0 = parameter_values(*gu, None, ("--u0-grid",) * 4)
     v0 = parameter_values(*gv, None, ("--v0-grid",) * 4)
     if args.match_tol is not None and not (np.isfinite(args.match_tol) and args.match_tol > 0):
         raise HarnessInputError("--match-tol", f"must be a finite number > 0, got {args.match_tol!r}")
     zoom = _zoom(args.zoom)
-    batch = _use_batch(args, exp)
     if zoom is not None and not batch:
         raise HarnessInputError("--zoom", "the zoom runs on the batch kernel: use --solver closed-form")
     out, plot = output_paths(args, exp, "basins")

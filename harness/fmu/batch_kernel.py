@@ -101,9 +101,9 @@ class KnownAttractors:
     confirm: int
 
     @classmethod
-    def none(cls) -> "KnownAttractors":
-        """No attractor known: every start runs in full."""
-        return cls(np.zeros((0, 1, 2)), np.zeros((0, 1), dtype=np.int32), np.zeros(0, dtype=np.int32), 1.0, 1)
+    def none(cls, tol: float = 1.0) -> "KnownAttractors":
+        """No attractor known: every start runs in full (``tol``: for matching its orbits later)."""
+        return cls(np.zeros((0, 1, 2)), np.zeros((0, 1), dtype=np.int32), np.zeros(0, dtype=np.int32), float(tol), 1)
 
 
 def kernel_parameters(params: Mapping[str, Any]) -> tuple[list[str], list[float]]:
