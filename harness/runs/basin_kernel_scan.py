@@ -29,6 +29,7 @@ from ..fmu import batch_kernel as bk
 from .basin_registry import Registry, TileCheckpoint, fingerprint
 from .basin_scan import MATCH_FACTOR, check_grid, with_attractors
 from .basin_tiles import BasinTile, label_result, run_tile
+from .tasks import run_test_hook
 
 #: Starts of the seed run (spread over the grid).
 SEED_STARTS = 400
@@ -85,6 +86,7 @@ def _run_tiles(todo: list[tuple[int, slice]], us: np.ndarray, vs: np.ndarray, pa
         results: dict[int, dict[str, Any]] = {}
         if be is None:
             for k, tile in tiles.items():
+                run_test_hook(f"tile-{k:05d}", 0)  # tests interrupt a scan at a known tile
                 results[k] = run_tile(tile)
                 _finish(results[k], reg, ckpt, on_tile, errors)
         else:

@@ -128,3 +128,95 @@ def test_the_kernel_refuses_what_it_cannot_run() -> None:
         bk.run_batch({"wall": 1, "contact": 1}, np.zeros(1), np.zeros(1), 0.0, 0, 2)
     with pytest.raises(HarnessInputError, match="does not know the parameter nonsense"):
         bk.run_batch({"nonsense": 1.0}, np.zeros(1), np.zeros(1), 0.0, 0, 2)
+
+
+# -- tiles, resumption, Dask, the command ---------------------------------------------------------
+FIG7 = ["basins", "--config", "harness/experiments/fig7-hysteresis.toml", "--set", "sigma=0.01", "--solver",
+        "closed-form", "--no-progress"]
+
+
+def test_a_rerun_computes_only_the_missing_tiles(tmp_path) -> None:
+    from harness.runs.sweep_collect import SweepStats
+
+    params, theta, box = CASES["fig7-compliant"]
+    s = SamplingSpec(theta=theta, n_transient=150, n_samples=30)
+    u0, v0 = np.linspace(box[0], box[1], 30), np.linspace(box[2], box[3], 24)
+    ckpt = tmp_path / "ckpt"
+    first = run_basins_kernel(None, u0, v0, {**params, "solver": 1}, s, progress=False, tile_size=100,
+                              checkpoint=str(ckpt))
+    tiles = sorted(ckpt.glob("tile-*.npz"))
+    assert len(tiles) == first.attrs["basins.tiles"] == 8
+    for p in tiles[2:5]:
+        p.unlink()  # as if interrupted before these three finished
+    stats = SweepStats()
+    again = run_basins_kernel(None, u0, v0, {**params, "solver": 1}, s, progress=False, tile_size=100,
+                              checkpoint=str(ckpt), stats=stats)
+    assert (stats.computed, stats.resumed) == (3, 5) and again.attrs["basins.tiles_resumed"] == 5
+    np.testing.assert_array_equal(again["attractor"].values, first["attractor"].values)
+    np.testing.assert_array_equal(again["periods_run"].values, first["periods_run"].values)
+
+
+@pytest.mark.slow  # real processes interrupted and rerun
+def test_cli_interrupted_at_a_tile_resumes_it_and_keeps_the_rest(tmp_path) -> None:
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import xarray as xr
+
+    from harness.runs.tasks import TEST_HOOK_ENV
+
+    root = Path(__file__).resolve().parents[2]
+    out = tmp_path / "b.nc"
+    cmd = [sys.executable, "-m", "harness", *FIG7, "--u0-grid=-1.2:0:30", "--v0-grid=-8:8:30", "--tile-size", "100",
+           "--out", str(out), "--no-plot"]
+    first = subprocess.run(cmd, cwd=root, capture_output=True, text=True, timeout=600,
+                           env={**os.environ, TEST_HOOK_ENV: "tile-00004:0:interrupt"})
+    assert first.returncode == 130, first.stderr
+    assert "400 of 900 points are kept" in first.stderr
+    second = subprocess.run(cmd, cwd=root, capture_output=True, text=True, timeout=600)
+    assert second.returncode == 0, second.stderr
+    resumed = xr.open_dataset(out)
+    assert resumed.attrs["basins.tiles_resumed"] == 4
+    fresh = tmp_path / "fresh.nc"
+    whole = subprocess.run([*cmd[:-3], "--out", str(fresh), "--no-plot"], cwd=root, capture_output=True, text=True,
+                           timeout=600)
+    assert whole.returncode == 0, whole.stderr
+    np.testing.assert_array_equal(resumed["attractor"].values, xr.open_dataset(fresh)["attractor"].values)
+
+
+def test_cli_zoom_check_and_figure(tmp_path, capsys) -> None:
+    import xarray as xr
+
+    from tests.cli_support import run_main
+
+    out = tmp_path / "b.nc"
+    code, stdout, err = run_main([*FIG7, "--u0-grid=-1.2:0:40", "--v0-grid=-8:8:40", "--zoom=-1:-0.8:-2:2",
+                                  "--check-fmu", "40", "--out", str(out)], capsys)
+    assert code == 0, err
+    ds = xr.open_dataset(out)
+    assert ds.attrs["basins.kernel"] == "batch" and ds["attractor_zoom"].shape == (40, 40)
+    assert ds.attrs["basins.fmu_check_equal"] == ds.attrs["basins.fmu_check_starts"] == 40
+    assert bool(ds["attractor_confirmed"].all()) and np.all(ds["attractor_multiplier"].values < 1.0)
+    f = dict(zip(ds["basin_class"].values.tolist(), ds["basin_fraction"].values.tolist()))
+    assert sum(f.values()) == pytest.approx(1.0) and set(f) == {0, 1}
+    for key in ("basins.entropy", "basins.boundary_entropy", "basins.uncertainty_exponent", "basins_zoom.entropy"):
+        assert key in ds.attrs
+    assert "basin entropy S_b" in stdout and "uncertainty exponent alpha" in stdout and "40 of 40" in stdout
+    assert out.with_suffix(".png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.mark.parametrize("bad, flag, what", [
+    (["--zoom=-1:-2:0:1"], "--zoom", "U1 < U2"),
+    (["--zoom=a:b"], "--zoom", "four numbers"),
+    (["--kernel", "batch", "--solver", "cvode"], "--kernel", "closed form"),
+    (["--kernel", "batch", "--lyapunov", "50"], "--kernel", "Lyapunov"),
+    (["--zoom=-1:-0.8:-2:2", "--kernel", "fmu"], "--zoom", "batch kernel"),
+])
+def test_cli_bad_input_is_one_line(tmp_path, capsys, bad: list[str], flag: str, what: str) -> None:
+    from tests.cli_support import run_main
+
+    code, _, err = run_main([*FIG7, "--u0-grid=-1.2:0:4", "--v0-grid=-8:8:4", *bad, "--out", str(tmp_path / "b.nc")],
+                            capsys)
+    assert code == 2 and flag in err and what in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
