@@ -153,38 +153,46 @@ def run_basins_kernel(model: Any, u0: Sequence[float], v0: Sequence[float], para
     shoot = _shooter(model, params, s.theta)
     reg = ckpt.registry(shoot) or _start_registry(attractors_from, params, us, vs, s, threads, match_tol, shoot)
     ckpt.save_registry(reg)
-    labels = np.full(us.size, -1, dtype=np.int32)
-    periods = np.zeros(us.size, dtype=np.int32)
     tiles = _tiles(us, vs, int(tile_size))
-    slices = dict(tiles)
-    done = ckpt.done()
-    for k, got in done.items():
-        labels[slices[k]], periods[slices[k]] = got["label"], got["periods"]
-    bar = _bar(progress, us.size, sum(slices[k].stop - slices[k].start for k in done))
-
-    def on_tile(k: int, lab: np.ndarray, per: np.ndarray) -> None:
-        labels[slices[k]], periods[slices[k]] = lab, per
-        bar.update(slices[k].stop - slices[k].start)
-        if stats is not None:
-            stats.computed += 1
-            stats.kept_points += slices[k].stop - slices[k].start
-
-    if stats is not None:
-        stats.total_points, stats.resumed, stats.kept_points = us.size, len(done), \
-            sum(slices[k].stop - slices[k].start for k in done)
+    grid = _Grid(us.size, dict(tiles), ckpt.done(), stats, progress)
     try:
-        errors = _run_tiles([t for t in tiles if t[0] not in done], us, vs, params, s, reg, ckpt, be, threads,
-                            on_tile)
+        errors = _run_tiles([t for t in tiles if t[0] not in grid.resumed], us, vs, params, s, reg, ckpt, be,
+                            threads, grid.on_tile)
     finally:
-        bar.close()
+        grid.bar.close()
         if be is not None:
             be.close()
     wall = time.perf_counter() - t_start
     describe = f"batch kernel (closed form in C), {threads} threads" if be is None else \
         f"batch kernel (closed form in C) on {be.describe()}"
     fixed = 0 if attractors_from is None else int(attractors_from.sizes.get("attractor_index", 0))
-    return _assemble(model, u0, v0, labels.reshape(U.shape), periods.reshape(U.shape), reg, s, settings, describe,
-                     wall, (len(done), len(tiles), fixed), errors)
+    return _assemble(model, u0, v0, grid.labels.reshape(U.shape), grid.periods.reshape(U.shape), reg, s, settings,
+                     describe, wall, (len(grid.resumed), len(tiles), fixed), errors)
+
+
+class _Grid:
+    """The scan's labels and periods as tiles finish (resumed ones first), with the progress bar
+    and the statistics the command line reports after an interruption."""
+
+    def __init__(self, n: int, slices: dict[int, slice], resumed: dict[int, dict[str, np.ndarray]], stats: Any,
+                 progress: bool) -> None:
+        self.labels = np.full(n, -1, dtype=np.int32)
+        self.periods = np.zeros(n, dtype=np.int32)
+        self.slices, self.resumed, self.stats = slices, resumed, stats
+        for k, got in resumed.items():
+            self.labels[slices[k]], self.periods[slices[k]] = got["label"], got["periods"]
+        kept = sum(slices[k].stop - slices[k].start for k in resumed)
+        self.bar = _bar(progress, n, kept)
+        if stats is not None:
+            stats.total_points, stats.resumed, stats.kept_points = n, len(resumed), kept
+
+    def on_tile(self, k: int, label: np.ndarray, periods: np.ndarray) -> None:
+        sl = self.slices[k]
+        self.labels[sl], self.periods[sl] = label, periods
+        self.bar.update(sl.stop - sl.start)
+        if self.stats is not None:
+            self.stats.computed += 1
+            self.stats.kept_points += sl.stop - sl.start
 
 
 def _backend(backend: Any, workers: int | None, scheduler: str | None) -> tuple[Any, int]:
