@@ -63,7 +63,7 @@ def _legend(ds: Any, labels: np.ndarray, colours: list[Any]) -> list[Any]:
     handles = []
     for i, name in enumerate(names):
         share = int(np.sum(labels == i)) / total
-        err = f" +- {fr[i]:.1%}" if i in fr else ""
+        err = f" +- {fr[i]:.2%}" if i in fr else ""
         handles.append(Line2D([], [], color=colours[i], marker=MARKERS[i % len(MARKERS)], markersize=9, linewidth=8,
                               markeredgecolor="black", label=f"{name}: {share:.1%}{err}"))
     for code, colour in CODE_COLOURS.items():

@@ -1,7 +1,7 @@
 """Basins of attraction at the scale of published figures: the batch kernel (the FMU's closed
 form in C, all cores) with early stopping, in tiles, resumable, locally or on Dask.
 
-1. *Seed*: a strided subset of the grid (:data:`SEED_STARTS` starts) runs in full; its
+1. *Seed*: a strided subset of the grid (a sixteenth, 64 to 400 starts) runs in full; its
    periodic orbits become the first attractors (stroboscopic points, wall entries per period),
    each confirmed by Newton shooting on the FMU.  The matching tolerance is fixed here, from
    the seed's samples, as :func:`harness.runs.basin_scan.default_match_tol` does.
@@ -23,7 +23,7 @@ import numpy as np
 import xarray as xr
 
 from ..config import SamplingSpec
-from ..dynamics.basins import ESCAPED, STICKING, Attractor, orbit_points
+from ..dynamics.basins import Attractor, orbit_points
 from ..errors import HarnessInputError
 from ..fmu import batch_kernel as bk
 from .basin_registry import Registry, TileCheckpoint, fingerprint
@@ -31,8 +31,9 @@ from .basin_scan import MATCH_FACTOR, check_grid, with_attractors
 from .basin_tiles import BasinTile, label_result, run_tile
 from .tasks import run_test_hook
 
-#: Starts of the seed run (spread over the grid).
-SEED_STARTS = 400
+#: Starts of the seed run (spread over the grid): SEED_SHARE of the grid, between SEED_MIN and
+#: SEED_MAX.  An attractor the seed misses is found by the tiles (it only stops fewer starts).
+SEED_MIN, SEED_MAX, SEED_SHARE = 64, 400, 1.0 / 16.0
 #: Starts per tile (a tile's samples: tile_size x samples x 21 bytes).
 DEFAULT_TILE = 32768
 
@@ -58,7 +59,8 @@ def _shooter(model: Any, params: Mapping[str, Any], theta: float) -> Any:
 def _seed(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: SamplingSpec, threads: int,
           match_tol: float | None, shoot: Any) -> Registry:
     """The first attractors, from a strided subset run in full."""
-    idx = np.unique(np.linspace(0, us.size - 1, min(SEED_STARTS, us.size)).round().astype(int))
+    n = min(us.size, max(SEED_MIN, min(SEED_MAX, int(us.size * SEED_SHARE))))
+    idx = np.unique(np.linspace(0, us.size - 1, n).round().astype(int))
     res = bk.run_batch(params, us[idx], vs[idx], s.theta, s.n_transient, s.n_samples, None, threads)
     if match_tol is None:
         finite = np.abs(np.concatenate([res.u[np.isfinite(res.u)], res.v[np.isfinite(res.v)]]))
