@@ -153,11 +153,24 @@ def section(res: dict, quick: bool) -> str:
         lines.append(row(f"{n} x {n}, batch kernel (2 threads)", x))
     big = res["grid"][max(res["grid"], key=int)]
     lines += ["", f"- The README's 60 x 60 scan: **{ratio:.0f}x faster** on the batch kernel than through the FMU "
-              f"({r['fmu']['wall_s']:.1f} s against {r['kernel']['wall_s']:.2f} s, the same labels: fractions "
-              f"{r['fmu']['fractions']} and {r['kernel']['fractions']}).",
+              f"({r['fmu']['wall_s']:.1f} s against {r['kernel']['wall_s']:.2f} s; basin fractions "
+              f"{', '.join(f'{x:.4f}' for x in r['fmu']['fractions'])} and "
+              f"{', '.join(f'{x:.4f}' for x in r['kernel']['fractions'])}).",
               f"- {max(res['grid'], key=int)}^2 starts: {big['wall_s']:.0f} s, {big['starts_per_s']:,.0f} starts/s, peak "
               f"{big['peak_rss_mb']:.0f} MB; each start ran {big['periods_mean']:.1f} periods on average instead of "
               "180 (early stop)."]
+    per_cpu = {k: x["starts"] / x["cpu_s"] for k, x in (("fmu", r["fmu"]), ("kernel", r["kernel"]), ("big", big))}
+    w = res["workers"]
+    lines += [f"- Per CPU second (all processes; what an idle machine would turn into wall time): the FMU path "
+              f"{per_cpu['fmu']:,.0f} starts, the kernel {per_cpu['kernel']:,.0f} on the 60 x 60 grid "
+              f"({per_cpu['kernel'] / per_cpu['fmu']:.0f}x: the seed, Newton's confirmation and the Dataset weigh on "
+              f"3,600 starts) and {per_cpu['big']:,.0f} on the largest grid ({per_cpu['big'] / per_cpu['fmu']:.0f}x the "
+              f"FMU path's rate), i.e. {big['starts'] / per_cpu['big'] / 2:.0f} s of wall time on 2 idle cores.",
+              "- Workers: " + ", ".join(f"{k.replace('kernel x', '').replace('dask x', 'Dask ')} "
+                                        f"{'thread(s)' if k.startswith('kernel') else 'workers'}: "
+                                        f"{x['cpu_s']:.1f} CPU s, {x['wall_s']:.1f} s wall" for k, x in w.items())
+              + ": the same work however it is spread (threads cost nothing; Dask adds its workers' start-up and "
+              "transfers); the wall times follow the other users' load more than the number of workers."]
     for solver, a in big["agree"].items():
         diff = "; ".join(f"({u:.4g}, {v:.4g}): {s} vs {f}" for u, v, s, f in a["differ"][:6]) or "none"
         lines.append(f"- Against the FMU ({solver}, every start run in full): {a['equal']} of {a['starts']} random "
@@ -175,13 +188,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="small grids, print only")
     ap.add_argument("--child", help=argparse.SUPPRESS)
     ap.add_argument("--json", help="also write the numbers as JSON")
+    ap.add_argument("--from-json", metavar="FILE", help="no measurement: the section from a --json file")
     args = ap.parse_args(argv)
     if args.child:
         print(json.dumps(child(json.loads(args.child))))
         return 0
-    res = measure(args.quick)
+    if args.from_json:
+        res = json.loads(Path(args.from_json).read_text())
+        res["grid"] = {int(k): v for k, v in res["grid"].items()}
+    else:
+        res = measure(args.quick)
     text = section(res, args.quick)
-    if args.json:
+    if args.json and not args.from_json:
         Path(args.json).write_text(json.dumps(res, indent=1, default=str))
     if args.quick:
         print(text)
