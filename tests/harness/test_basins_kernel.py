@@ -90,11 +90,15 @@ def test_kernel_agrees_with_the_exact_flow_of_mapcheck(case: str) -> None:
         assert np.max(np.abs(exact[:, 1] - res.v[i])) <= 1e-9 * scale
 
 
-def test_early_stopping_changes_no_label() -> None:
+@pytest.mark.parametrize("match_tol", [None, 0.3, 1.0])
+def test_early_stopping_changes_no_label(match_tol: float | None) -> None:
+    """Also with a coarse matching tolerance (up to the distance between the two attractors'
+    nearest points, 1.2), where a single passage near an attractor's point would mislabel
+    hundreds of starts: the orbit must come round twice."""
     params, theta, box = CASES["fig7-compliant"]
     s = SamplingSpec(theta=theta, n_transient=150, n_samples=30)
     u0, v0 = np.linspace(box[0], box[1], 36), np.linspace(box[2], box[3], 36)
-    fast = run_basins_kernel(None, u0, v0, {**params, "solver": 1}, s, progress=False, tile_size=400)
+    fast = run_basins_kernel(None, u0, v0, {**params, "solver": 1}, s, match_tol, progress=False, tile_size=400)
     # the same grid with every start run in full: the seed is the whole grid, no tile stops early
     us, vs = (x.ravel() for x in np.meshgrid(u0, v0, indexing="ij"))
     full = bk.run_batch({**params, "solver": 1}, us, vs, theta, s.n_transient, s.n_samples)
