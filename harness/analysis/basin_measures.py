@@ -29,6 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 
+#: Fewest uncertain pairs that make a point of a pairs estimate's fit.
+MIN_UNCERTAIN = 10
+
+
 @dataclass(frozen=True)
 class UncertaintyFit:
     """The uncertainty exponent and its fit.
@@ -124,14 +128,24 @@ def uncertainty_exponent(labels: np.ndarray, max_step: int | None = None) -> Unc
     top = max_step or max(1, min(lab.shape) // 8)
     steps = 2 ** np.arange(int(np.log2(top)) + 1)
     frac = uncertain_fractions(lab, steps)
+    alpha, err, use = power_law_fit(steps.astype(float), frac)
+    fit = (int(steps[use].min()), int(steps[use].max())) if use.any() else (0, 0)
+    return UncertaintyFit(alpha, err, steps, frac, fit)
+
+
+def power_law_fit(eps: np.ndarray, frac: np.ndarray, samples: int | None = None) -> tuple[float, float, np.ndarray]:
+    """Slope of log f against log eps over the points with 0 < f < 1/2 (and, for f estimated from
+    ``samples`` random pairs, at least MIN_UNCERTAIN of them uncertain: fewer are noise), its
+    standard error from the residuals, and the points used; NaN slope with fewer than 3 points."""
     use = np.isfinite(frac) & (frac > 0) & (frac < 0.5)
+    if samples is not None:
+        use &= frac * samples >= MIN_UNCERTAIN
     if use.sum() < 3:
-        return UncertaintyFit(float("nan"), float("nan"), steps, frac, (0, 0))
-    x, y = np.log(steps[use].astype(float)), np.log(frac[use])
+        return float("nan"), float("nan"), np.zeros_like(use)
+    x, y = np.log(eps[use]), np.log(frac[use])
     A = np.column_stack([x, np.ones_like(x)])
     coef, *_ = np.linalg.lstsq(A, y, rcond=None)
     resid = y - A @ coef
     dof = max(1, x.size - 2)
     var = float(resid @ resid) / dof / float(((x - x.mean()) ** 2).sum())
-    return UncertaintyFit(float(coef[0]), float(np.sqrt(var)), steps, frac,
-                          (int(steps[use].min()), int(steps[use].max())))
+    return float(coef[0]), float(np.sqrt(var)), use

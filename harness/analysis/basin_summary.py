@@ -77,6 +77,12 @@ def measure_lines(ds: Any, suffix: str = "") -> list[str]:
                      f"(fit over eps = {lo}..{hi} grid cells; a smooth boundary has 1, boundary dimension "
                      f"d = 2 - alpha = {2 - alpha:.3f})" if np.isfinite(alpha) else
                      "  uncertainty exponent: no boundary to fit (fewer than 3 steps with 0 < f < 1/2)")
+    if not suffix and "basins.pairs_uncertainty_exponent" in ds.attrs:
+        alpha, err = ds.attrs["basins.pairs_uncertainty_exponent"], ds.attrs["basins.pairs_uncertainty_exponent_err"]
+        lo, hi = json.loads(ds.attrs["basins.pairs_fit_eps"])
+        lines.append(f"  uncertainty exponent from {ds.attrs['basins.pairs_per_eps']} random pairs per eps: alpha = "
+                     f"{alpha:.3f} +- {err:.3f} (fit over eps = {lo:.3g}..{hi:.3g} of the box)" if np.isfinite(alpha)
+                     else "  uncertainty exponent from random pairs: too few uncertain pairs to fit")
     if not suffix and "basins.fmu_check_starts" in ds.attrs:
         n, eq = ds.attrs["basins.fmu_check_starts"], ds.attrs["basins.fmu_check_equal"]
         differ = json.loads(ds.attrs["basins.fmu_check_differ"])

@@ -50,6 +50,9 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     g.add_argument("--check-fmu", type=count, default=0, metavar="N",
                    help="run N random starts of the grid through the FMU without early stopping and report how "
                    "many are labelled alike (default 0: no check)")
+    g.add_argument("--uncertainty-pairs", type=count, default=0, metavar="N",
+                   help="also measure the uncertainty exponent from N random pairs of starts per eps (eps = 2^-3 .. "
+                   "2^-10 of the box; batch kernel only; default 0: from the grid alone)")
     execution_options(p, "scan")
     p.set_defaults(func=cmd_basins)
 
@@ -114,6 +117,8 @@ def cmd_basins(args: argparse.Namespace) -> int:
     zoom = _zoom(args.zoom)
     if zoom is not None and not batch:
         raise HarnessInputError("--zoom", "the zoom runs on the batch kernel: use --solver closed-form")
+    if args.uncertainty_pairs and not batch:
+        raise HarnessInputError("--uncertainty-pairs", "the pairs run on the batch kernel: use --solver closed-form")
     out, plot = output_paths(args, exp, "basins")
     stats = SweepStats()
     scan = _batch_scan(args, exp, u0, v0, zoom, stats) if batch else _fmu_scan(args, exp, u0, v0, stats)
@@ -121,6 +126,11 @@ def cmd_basins(args: argparse.Namespace) -> int:
     ds = with_measures(ds)
     if "attractor_zoom" in ds:
         ds = with_measures(ds, suffix="_zoom")
+    if args.uncertainty_pairs:
+        from ..analysis.basin_uncertainty import uncertainty_from_pairs, with_pairs
+
+        ds = with_pairs(ds, uncertainty_from_pairs(ds, exp.params, s, args.uncertainty_pairs,
+                                                   threads=exp.run.workers))
     if args.check_fmu:
         from ..analysis.basin_agreement import fmu_agreement
         from ..analysis.basin_summary import with_agreement

@@ -74,7 +74,9 @@ def _legend(ds: Any, labels: np.ndarray, colours: list[Any]) -> list[Any]:
 
 
 def _draw_uncertainty(ax: Any, ds: Any, suffix: str, colour: str, name: str) -> None:
-    steps = ds[f"uncertainty_step{suffix}"].values
+    """f(eps) of the grid (eps in cells, drawn as a fraction of the box's side) and its fit."""
+    cells = min(ds.sizes[f"u0{suffix}"], ds.sizes[f"v0{suffix}"]) - 1
+    steps = ds[f"uncertainty_step{suffix}"].values / max(cells, 1)
     frac = ds[f"uncertainty_fraction{suffix}"].values
     ok = np.isfinite(frac) & (frac > 0)
     if not ok.any():
@@ -84,11 +86,30 @@ def _draw_uncertainty(ax: Any, ds: Any, suffix: str, colour: str, name: str) -> 
     ax.loglog(steps[ok], frac[ok], "o", color=colour, label=f"{name}: alpha = {alpha:.2f} +- {err:.2f}"
               if np.isfinite(alpha) else f"{name}: no fit")
     if np.isfinite(alpha):
-        lo, hi = json.loads(ds.attrs[pre + "uncertainty_fit_cells"])
-        use = ok & (steps >= lo) & (steps <= hi)
-        c = np.mean(np.log(frac[use]) - alpha * np.log(steps[use]))
-        x = np.array([lo, hi], dtype=float)
+        lo, hi = (x / max(cells, 1) for x in json.loads(ds.attrs[pre + "uncertainty_fit_cells"]))
+        _fit_line(ax, steps, frac, ok, (lo, hi), alpha, colour)
+
+
+def _fit_line(ax: Any, eps: np.ndarray, frac: np.ndarray, ok: np.ndarray, fit: tuple[float, float], alpha: float,
+              colour: str) -> None:
+    use = ok & (eps >= fit[0] * (1 - 1e-9)) & (eps <= fit[1] * (1 + 1e-9))
+    if use.any():
+        c = np.mean(np.log(frac[use]) - alpha * np.log(eps[use]))
+        x = np.array(fit, dtype=float)
         ax.loglog(x, np.exp(c) * x ** alpha, "-", color=colour, linewidth=1.2)
+
+
+def _draw_pairs(ax: Any, ds: Any) -> None:
+    """f(eps) from random pairs, with binomial error bars, and its fit."""
+    eps, frac = ds["pairs_eps"].values, ds["pairs_uncertain_fraction"].values
+    err = ds["pairs_uncertain_fraction_err"].values
+    ok = frac > 0
+    alpha = ds.attrs["basins.pairs_uncertainty_exponent"]
+    ax.errorbar(eps[ok], frac[ok], yerr=err[ok], fmt="s", color="tab:blue", markersize=4, capsize=2,
+                label=f"random pairs: alpha = {alpha:.2f} +- {ds.attrs['basins.pairs_uncertainty_exponent_err']:.2f}"
+                if np.isfinite(alpha) else "random pairs: no fit")
+    if np.isfinite(alpha):
+        _fit_line(ax, eps, frac, ok, tuple(json.loads(ds.attrs["basins.pairs_fit_eps"])), alpha, "tab:blue")
 
 
 def basin_figure(ds: Any, path: str | Path) -> str:
@@ -126,8 +147,10 @@ def basin_figure(ds: Any, path: str | Path) -> str:
         af = axes[0, -1]
         _draw_uncertainty(af, ds, "", "black", "whole grid")
         if zoom and "uncertainty_fraction_zoom" in ds:
-            _draw_uncertainty(af, ds, "_zoom", "tab:red", "zoom")
-        af.set_xlabel("eps (grid cells)")
+            _draw_uncertainty(af, ds, "_zoom", "tab:red", "zoom (its own box)")
+        if "pairs_uncertain_fraction" in ds:
+            _draw_pairs(af, ds)
+        af.set_xlabel("eps (fraction of the box's side)")
         af.set_ylabel("f(eps): share of eps-uncertain starts")
         af.set_title("uncertainty exponent: f ~ eps^alpha", fontsize=10)
         af.legend(fontsize=8, loc="upper left")

@@ -105,3 +105,39 @@ def test_one_class_has_no_boundary() -> None:
     lab = np.zeros((50, 50), dtype=int)
     assert basin_entropy(lab, 5) == (0.0, 0.0, 100, 0)
     assert math.isnan(uncertainty_exponent(lab).alpha)
+
+
+# -- from random pairs of starts (Grebogi et al.'s own procedure) ---------------------------------
+@pytest.mark.parametrize("shape", ["line", "disc"])
+def test_pairs_of_a_smooth_boundary_give_exponent_one(shape: str) -> None:
+    from harness.analysis.basin_uncertainty import pairs_fit
+
+    def classify(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        return (u + 0.37 * v > 0.05) if shape == "line" else (u ** 2 + v ** 2 < 0.5)
+
+    fit = pairs_fit(classify, (-1.0, 1.0, -1.0, 1.0), pairs=20000, seed=3)
+    assert fit.alpha == pytest.approx(1.0, abs=max(0.08, 3 * fit.alpha_err))
+    assert fit.fit[0] < 0.01 and np.all(fit.fraction_err > 0)
+
+
+def test_pairs_of_a_cantor_boundary_give_the_exponent_of_its_dimension() -> None:
+    from harness.analysis.basin_uncertainty import pairs_fit
+
+    # labels exact down to 3^-14 ~ 2e-7, far below the smallest eps (2^-10); each level's thirds a
+    # class of its own (with two classes alternating, pairs that land in different thirds of the
+    # same parity hide part of the boundary and the exponent creeps up more slowly: 0.33). Pairs at
+    # exactly eps converge more slowly than the grid's eps-neighbourhood: 0.356 +- 0.006 here.
+    levels = 14
+
+    def classify(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+        i = np.clip((np.mod(u, 1.0) * 3 ** levels).astype(np.int64), 0, 3 ** levels - 1)
+        lab = np.zeros(i.shape, dtype=int)
+        done = np.zeros(i.shape, dtype=bool)
+        for m in range(levels):
+            hit = ((i // 3 ** (levels - 1 - m)) % 3 == 1) & ~done
+            lab[hit] = m + 1
+            done |= hit
+        return lab
+
+    fit = pairs_fit(classify, (0.0, 1.0, 0.0, 1.0), pairs=20000, seed=5)
+    assert fit.alpha == pytest.approx(1.0 - math.log(2) / math.log(3), abs=0.03)

@@ -197,7 +197,7 @@ def test_cli_zoom_check_and_figure(tmp_path, capsys) -> None:
 
     out = tmp_path / "b.nc"
     code, stdout, err = run_main([*FIG7, "--u0-grid=-1.2:0:40", "--v0-grid=-8:8:40", "--zoom=-1:-0.8:-2:2",
-                                  "--check-fmu", "40", "--out", str(out)], capsys)
+                                  "--check-fmu", "40", "--uncertainty-pairs", "300", "--out", str(out)], capsys)
     assert code == 0, err
     ds = xr.open_dataset(out)
     assert ds.attrs["basins.kernel"] == "batch" and ds["attractor_zoom"].shape == (40, 40)
@@ -208,6 +208,7 @@ def test_cli_zoom_check_and_figure(tmp_path, capsys) -> None:
     for key in ("basins.entropy", "basins.boundary_entropy", "basins.uncertainty_exponent", "basins_zoom.entropy"):
         assert key in ds.attrs
     assert "basin entropy S_b" in stdout and "uncertainty exponent alpha" in stdout and "40 of 40" in stdout
+    assert "from 300 random pairs per eps" in stdout and ds["pairs_uncertain_fraction"].size == 8
     assert out.with_suffix(".png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
@@ -217,6 +218,7 @@ def test_cli_zoom_check_and_figure(tmp_path, capsys) -> None:
     (["--kernel", "batch", "--solver", "cvode"], "--kernel", "closed form"),
     (["--kernel", "batch", "--lyapunov", "50"], "--kernel", "Lyapunov"),
     (["--zoom=-1:-0.8:-2:2", "--kernel", "fmu"], "--zoom", "batch kernel"),
+    (["--uncertainty-pairs", "10", "--kernel", "fmu"], "--uncertainty-pairs", "batch kernel"),
 ])
 def test_cli_bad_input_is_one_line(tmp_path, capsys, bad: list[str], flag: str, what: str) -> None:
     from tests.cli_support import run_main
