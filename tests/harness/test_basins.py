@@ -63,6 +63,22 @@ def test_identify_separates_equal_periods_and_merges_phase_shifts() -> None:
     assert merged.tolist() == [0, 0, 0, 0, 0, 1]
 
 
+def test_hausdorff_distance_is_symmetric_and_sees_extra_points() -> None:
+    """The definition: the larger of the two directed distances, so that an orbit whose points
+    are a subset of another's (a period-1 orbit at one point of a period-2 orbit) is not the
+    same attractor; random point sets check the symmetry and the value by brute force."""
+    one = np.array([[0.0, 0.0]])
+    two = np.array([[0.0, 0.0], [0.3, -0.1]])
+    assert hausdorff(one, two) == hausdorff(two, one) == 0.3  # max norm of the unmatched point
+    rng = np.random.default_rng(7)
+    for n, m in [(1, 3), (4, 2), (5, 5)]:
+        a, b = rng.normal(size=(n, 2)), rng.normal(size=(m, 2))
+        def directed(x, y):  # sup over x of the distance to the nearest point of y
+            return max(min(max(abs(p[0] - q[0]), abs(p[1] - q[1])) for q in y) for p in x)
+        truth = max(directed(a, b), directed(b, a))
+        assert hausdorff(a, b) == hausdorff(b, a) == truth
+
+
 def test_identify_marks_not_periodic_and_invalid() -> None:
     u = np.zeros((2, 2, 4))
     v = np.zeros((2, 2, 4))
