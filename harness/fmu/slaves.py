@@ -5,14 +5,28 @@ by the FMU's ``fmiVersion``; another version is one more entry in :data:`SLAVE_C
 from __future__ import annotations
 
 import collections
+import contextlib
 import os
 import threading
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Iterator, Mapping
 
 from ..errors import FmuError, HarnessInputError
 from .fmi import BOOLEAN_TYPES, INTEGER_TYPES, REAL_TYPES, SUPPORTED_FMI_VERSIONS, FmuModel, VariableInfo
 
 # ----------------------------------------------------------------------------------------
+@contextlib.contextmanager
+def _keeping_cwd() -> Iterator[None]:
+    """Restore the working directory afterwards: fmpy changes into the binary's folder to load it
+    and changes back only when the load succeeds, so a broken binary left the caller's process
+    in the (soon deleted) extraction folder, and every relative path after it failed."""
+    cwd = os.getcwd()
+    try:
+        yield
+    finally:
+        if os.getcwd() != cwd:
+            os.chdir(cwd)
+
+
 class _LogMixin:
     """The FMU's log messages, kept instead of printed, so errors can quote them."""
 
@@ -75,12 +89,9 @@ class Fmi2Slave(_SlaveBase):
         from harness.fmu.fmi2_logging import Fmi2Callbacks
 
         self.messages = collections.deque(maxlen=50)
-        self._fmu = FMU2Slave(
-            guid=model.guid,
-            unzipDirectory=unzipdir,
-            modelIdentifier=model.model_identifier,
-            instanceName=instance_name,
-        )
+        with _keeping_cwd():
+            self._fmu = FMU2Slave(guid=model.guid, unzipDirectory=unzipdir,
+                                  modelIdentifier=model.model_identifier, instanceName=instance_name)
         # Not a ctypes logger of our own: fmpy's proxy keeps one process-wide pointer to it,
         # which dangled once this slave was collected (harness/fmu/fmi2_logging.py).
         self._callbacks = Fmi2Callbacks(  # must outlive the instance; released by close()
@@ -149,12 +160,9 @@ class Fmi3Slave(_SlaveBase):
         self.record_events = bool(record_events)
         self.event_times: list[float] = []
         self.messages = collections.deque(maxlen=50)
-        self._fmu = FMU3Slave(
-            guid=model.guid,
-            unzipDirectory=unzipdir,
-            modelIdentifier=model.model_identifier,
-            instanceName=instance_name,
-        )
+        with _keeping_cwd():
+            self._fmu = FMU3Slave(guid=model.guid, unzipDirectory=unzipdir,
+                                  modelIdentifier=model.model_identifier, instanceName=instance_name)
 
         def log_message(env: Any, status: int, category: bytes, message: bytes) -> None:
             self._log(status, category, message)

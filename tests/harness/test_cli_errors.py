@@ -61,10 +61,12 @@ def _one_line(err: str) -> str:
 @pytest.mark.parametrize("command", [["strobe"], ["sweep", "--values", "0.5,0.6", "--mode", "fresh", "--workers", "2"]],
                          ids=["strobe (in process)", "sweep (pool workers)"])
 def test_fmu_with_a_garbage_binary(garbage_fmu: Path, tmp_path: Path, capsys, command: list[str]) -> None:
+    cwd = os.getcwd()
     code, _, err = _run_main([*command, "--fmu", str(garbage_fmu), *SHORT, "--out", str(tmp_path / "x.nc")], capsys)
     line = _one_line(err)
     assert code == 2 and "argument --fmu" in line and "invalid ELF header" in line, line
     assert not list(tmp_path.iterdir())  # no result, no checkpoint left behind
+    assert os.getcwd() == cwd  # not left in the extraction folder of the binary that failed to load
 
 
 def test_fmu_with_a_crc_corrupt_binary(crc_fmu: Path, tmp_path: Path, capsys) -> None:
