@@ -36,6 +36,7 @@ from mapcheck.compare import (
     window_differences,
 )
 
+from ..config.defaults import DEFAULT_SOLVER, SECTION_PHASE
 from ..errors import HarnessInputError
 from .context import Context, write_outputs
 from .window_problem import (  # noqa: F401  (the parameter set is part of this module's API)
@@ -120,21 +121,6 @@ def _write_scans(ctx: Context, ds: Any) -> str:
     return f"{ctx.target}_ode_scans.nc"
 
 
-def _verdict(ode: dict[int, Any], variants: dict[str, Any], best: str | None, score: dict[str, float],
-             st: WindowSettings) -> str:
-    """One line: which map variant is closest to the ODE, or why none was compared."""
-    finite = {k: v for k, v in score.items() if math.isfinite(v)}
-    if finite and best is not None:
-        return (f"best map variant: {best} (largest edge difference to the ODE {score[best]:.2g} in sigma)"
-                + "".join(f"; {k}: {v:.2g}" for k, v in score.items() if k != best))
-    if not any(w is not None for w in ode.values()):
-        return (f"the ODE has no stable maximal (one impact per period) window in sigma "
-                f"[{st.sigma_range[0]:.3g}, {st.sigma_range[1]:.3g}]; maps not compared")
-    if not variants:
-        return "no map applies to this oscillator (reasons in report.md); ODE windows only"
-    return "the maps miss windows that the ODE has (differences in report.md)"
-
-
 def _parameters(problem: WindowProblem, st: WindowSettings, shoot: dict[str, Any],
                 c: Coefficients | None) -> dict[str, Any]:
     """The result's ``parameters``: the parameter set and how hard it was looked at."""
@@ -186,6 +172,9 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
     scan = {d: sweep_windows(grid, ds["period"].sel(direction=d).values, ds["orbit_impacts"].sel(direction=d).values)
             for d in ("up", "down")}
     variants = {k: windows[k] for k in VARIANT_KEYS if applies[k] is None}
+    from .window_summary import coexistence, summary_lines
+    from .windows_plots import labels_for
+
     best, score = best_variant(ode, variants) if variants and any(w is not None for w in ode.values()) else (None, {})
     t1 = time.perf_counter()
     from .windows_plots import plot_all
@@ -211,11 +200,13 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
         "differences_to_ode": {k: window_differences(ode, w) for k, w in variants.items()},
         "max_abs_difference_to_ode": score,
         "best_variant": best,
-        "verdict": _verdict(ode, variants, best, score, st),
+        "coexistence": coexistence(shoot["all"], st.sigma_range),
         "files": files,
         "timings_s": timings,
         "parameters": _parameters(problem, st, shoot, c),
     }
+    result["summary"] = summary_lines(result, labels_for(problem), VARIANT_KEYS)
+    result["verdict"] = result["summary"][0]
     return result, report(ctx, problem, result)
 
 
@@ -223,7 +214,9 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
                     Omega: float | None = None, r: float = 0.9, wall: str = "compliant", Gamma: float = 10.0,
                     M_max: int | None = None, quick: bool = False, out: str | Path = "results/windows",
                     workers: int | None = None, progress: bool = False, fmu_path: str | None = None,
-                    solver: str = "cvode", map_wall: str = "auto", branch: int | None = None) -> dict[str, Any]:
+                    solver: str = DEFAULT_SOLVER, map_wall: str = "auto", branch: int | None = None,
+                    sigma_range: tuple[float, float] | None = None, xtol: float | None = None,
+                    theta: float = SECTION_PHASE) -> dict[str, Any]:
     """Window edges of the maps and of the ODE (FMU) for one parameter set.
 
     Give either (``alpha``, ``gamma``) of the map (9) or (``nu``, ``Omega``) of the ODE.
@@ -233,6 +226,10 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     ``"map"``, ``"map_A_tilde"``; ``result["edge_kinds"]["ode"]``, ``result["parameters"]``.
     ``map_wall`` chooses the maps' coefficients: "auto" follows ``wall`` ((48) compliant, (39)
     rigid); "compliant-high" uses (39) with a compliant wall (high-velocity impacts, stiff wall).
+    ``sigma_range`` (lo, hi): scan and shoot exactly there, sigma <= 0 allowed (the wall-free
+    orbit is then a window, grazing at sigma = 0); ``xtol``: an absolute bisection tolerance in
+    sigma; ``theta``: the section phase. ``result["coexistence"]`` lists where attractors coexist,
+    ``result["summary"]`` the summary's sentences, each derived from the tables.
 
     A worker pool is used for the scans and the shooting: call it from a script under
     ``if __name__ == "__main__":`` (the workers re-import the main module).
@@ -240,13 +237,15 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     if (alpha is None) != (gamma is None) or (nu is None) != (Omega is None) or (alpha is None) == (nu is None):
         raise HarnessInputError("--alpha/--gamma, --nu/--Omega", "give exactly one pair: (alpha, gamma) or (nu, Omega)")
     kw = dict(r=float(r), wall=wall, Gamma=float(Gamma), M_max=None if M_max in (None, "auto") else int(M_max),
-              map_wall=map_wall)
+              map_wall=map_wall, theta=float(theta))
     problem = (WindowProblem.from_alpha_gamma(float(alpha), float(gamma), branch, **kw) if alpha is not None
                else WindowProblem(float(nu), float(Omega), **kw))
     if workers is not None and workers < 1:
         raise HarnessInputError("--workers", f"must be >= 1, got {workers}")
     ctx = Context("windows", out, quick, workers, progress, fmu_path, solver)
-    ctx.command = command_line(problem, quick, out)
-    result, text = run_windows(ctx, problem, default_settings(problem, quick))
+    rng = None if sigma_range is None else (float(sigma_range[0]), float(sigma_range[1]))
+    settings = default_settings(problem, quick, rng, xtol)
+    ctx.command = command_line(problem, quick, out, solver, rng, xtol)
+    result, text = run_windows(ctx, problem, settings)
     write_outputs(ctx, result, text)
     return result
