@@ -126,7 +126,9 @@ def summary_lines(res: Mapping[str, Any], labels: Mapping[str, str], variants: S
                      f"{fmt_sigma(c['hi'], 'above')}): " + "; ".join(c["attractors"]) + ".")
     if not f["coexistence"]:
         lines.append("No two stable attractors coexist in the searched range (as far as the scans saw).")
-    return lines
+    from .edge_coincidence import warnings
+
+    return lines + warnings(res.get("coincident_edges", []))
 
 
 def _closest_line(f: Mapping[str, Any], labels: Mapping[str, str], res: Mapping[str, Any]) -> str:

@@ -172,6 +172,8 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
     scan = {d: sweep_windows(grid, ds["period"].sel(direction=d).values, ds["orbit_impacts"].sel(direction=d).values)
             for d in ("up", "down")}
     variants = {k: windows[k] for k in VARIANT_KEYS if applies[k] is None}
+    from .edge_coincidence import reconcile
+    coincident = reconcile(shoot["all"])  # before the coexistence: one point, not two
     from .window_summary import coexistence, summary_lines
     from .windows_plots import labels_for
 
@@ -201,6 +203,7 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
         "max_abs_difference_to_ode": score,
         "best_variant": best,
         "coexistence": coexistence(shoot["all"], st.sigma_range),
+        "coincident_edges": coincident,
         "files": files,
         "timings_s": timings,
         "parameters": _parameters(problem, st, shoot, c),

@@ -48,9 +48,15 @@ def _all_windows_table(res: dict[str, Any], f: str) -> list[str]:
             continue
         lo = "below the search range" if e["lo"] is None else format(e["lo"], f)
         hi = "above the search range" if e["hi"] is None else format(e["hi"], f)
-        out.append(f"| {e['M']} | {e['impacts']} | [{lo}, {hi}] | {e['kinds'][0]}/{e['kinds'][1]} | "
+        out.append(f"| {e['M']} | {e['impacts']} | [{lo}, {hi}]{_located(e)} | {e['kinds'][0]}/{e['kinds'][1]} | "
                    f"{_cmplx(e.get('multipliers_inside'))} (sigma = {e['seed_sigma']:{f}}) | {', '.join(e['found_by'])} |")
     return out
+
+
+def _located(e: dict[str, Any]) -> str:
+    """' (lower edge: the flip of period 2 (2/1))' where an edge was located once for two windows."""
+    by = e.get("located_by") or {}
+    return "".join(f" ({'lower' if k == 'lo' else 'upper'} edge: {v})" for k, v in by.items())
 
 
 def _how_found(ctx: Context, problem: Any, res: dict[str, Any], title: str | None) -> list[str]:
@@ -184,7 +190,7 @@ def _coexistence(res: dict[str, Any]) -> list[str]:
 
 def _verdict(ctx: Context, res: dict[str, Any]) -> list[str]:
     """The summary (each sentence derived from the tables above) and the figures."""
-    lines = ["", "## Verdict", ""] + list(res["summary"])
+    lines = ["", "## Verdict", ""] + [f"- {line}" for line in res["summary"]]
     return lines + ["", f"Figures: `{ctx.target}_map.png` (the maps' bifurcation diagrams, where they apply), "
                     f"`{ctx.target}_ode.png` (the FMU's up/down scans), `{ctx.target}_windows.png` (the windows)."]
 
