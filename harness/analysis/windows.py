@@ -172,16 +172,17 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
     scan = {d: sweep_windows(grid, ds["period"].sel(direction=d).values, ds["orbit_impacts"].sel(direction=d).values)
             for d in ("up", "down")}
     variants = {k: windows[k] for k in VARIANT_KEYS if applies[k] is None}
-    from .edge_coincidence import reconcile
-    coincident = reconcile(shoot["all"])  # before the coexistence: one point, not two
     from .window_summary import coexistence, summary_lines
     from .windows_plots import labels_for
 
     best, score = best_variant(ode, variants) if variants and any(w is not None for w in ode.values()) else (None, {})
+    from .edge_coincidence import reconcile
+
+    coincident = reconcile(shoot["all"])  # before the figures and the coexistence: one point, not two
     t1 = time.perf_counter()
     from .windows_plots import plot_all
 
-    files = plot_all(ctx, problem, st, ds, windows, applies)
+    files = plot_all(ctx, problem, st, ds, windows, applies, shoot["all"])
     timings["plots"] = time.perf_counter() - t1
     files.append(_write_scans(ctx, ds))
     result = {
