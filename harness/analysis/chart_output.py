@@ -87,7 +87,7 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
     g = problem.sigma_grid
     cs = res["continuation_search"]
     lines = [f"# Chart: windows of the ODE over (sigma, {problem.param2})", "",
-             f"Parameters: {', '.join(f'{k} = {v:g}' if isinstance(v, float) else f'{k} = {v}' for k, v in problem.params.items())}; "
+             f"Parameters: {named_parameters(problem.params)}; "
              f"{problem.param2} from {problem.values[0]:g} to {problem.values[-1]:g}{' (log)' if problem.log else ''}.", "",
              "## Where each window closes (two-parameter continuation)", "",
              f"Method: at {problem.param2} = {problem.values[0]:g} the stable maximal orbits (one impact per period, "
@@ -182,8 +182,19 @@ def chart(problem: ChartProblem, out: str | Path, fmu_path: str | None = None, b
                                                                  float(problem.sigma_grid[-1]), len(problem.sigma_grid)]}
     (out / "chart.json").write_text(json.dumps(to_jsonable(res), indent=1) + "\n")
     title = (f"Edges of the ODE's windows continued in (sigma, {problem.param2}) (thick), per-value scans (bands), "
-             f"maps (48)/(39) (thin)\n" + ", ".join(f"{k} = {v:.4g}" for k, v in problem.params.items()
-                                                     if isinstance(v, float) and k != problem.param2))
+             f"maps (48)/(39) (thin)\n" + named_parameters({k: v for k, v in problem.params.items()
+                                                             if k != problem.param2}, 4))
     plot_chart(res, problem, out / "chart.png", title)
     (out / "report.md").write_text(chart_report(res, problem, command) + "\n")
     return res
+
+
+def named_parameters(params: dict[str, Any], digits: int = 6) -> str:
+    """'nu = 4.60517, ..., wall = compliant, solver = cvode': enums by name, numbers to ``digits``."""
+    from ..config.defaults import WALL_NAMES
+    from ..fmu.fmi import SOLVER_NAMES
+
+    names = {"wall": dict(enumerate(WALL_NAMES)), "solver": {v: k for k, v in SOLVER_NAMES.items()}}
+    return ", ".join(f"{k} = {names[k].get(int(v), v)}" if k in names else
+                     (f"{k} = {v:.{digits}g}" if isinstance(v, float) else f"{k} = {v}") for k, v in params.items())
+
