@@ -1,0 +1,124 @@
+"""``windows --sigma-range`` below sigma = 0: the wall-free orbit is a window grazing at sigma = 0,
+coexisting attractors are listed, and every summary line is derived from the tables.  Checked
+against the exact flow (mapcheck.exact) and against the JSON tables the report prints."""
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from harness.cli.main import main
+from tests.edge_support import ExactFlow
+
+pytestmark = pytest.mark.slow  # three quick windows runs, ~20 s
+
+CASES = {
+    # rigid wall, r close to 1: a period-2 orbit (1 impact) coexists with the wall-free one below 0
+    "rigid": ["--nu", "0.8", "--Omega", "2.5", "--r", "0.95", "--wall", "rigid", "--sigma-range=-0.3:0.3"],
+    # underdamped, compliant wall: a period-3 orbit born below sigma = 0
+    "soft": ["--nu", "0.3", "--Omega", "1.2", "--r", "0.8", "--wall", "compliant", "--Gamma", "10",
+             "--sigma-range=-0.3:0.3"],
+    # no maximal window at all in this range (the wall-free orbit only)
+    "none": ["--nu", "0.3", "--Omega", "1.2", "--r", "0.8", "--wall", "compliant", "--Gamma", "10",
+             "--sigma-range=-0.3:-0.1"],
+}
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    out = {}
+    for name, args in CASES.items():
+        d = tmp_path_factory.mktemp(name)
+        assert main(["windows", *args, "--M-max", "4", "--quick", "--solver", "closed-form", "--workers", "1",
+                     "--no-progress", "--out", str(d)]) == 0
+        out[name] = (json.loads((d / "windows.json").read_text()), (d / "report.md").read_text(), args)
+    return out
+
+
+def _flow(args: list[str]) -> ExactFlow:
+    a = dict(zip(args[::2], args[1::2]))
+    return ExactFlow(float(a["--nu"]), float(a["--Omega"]), float(a["--r"]), float(a.get("--Gamma", 10.0)), a["--wall"])
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_the_wall_free_orbit_is_a_window_that_grazes_at_zero(runs, case) -> None:
+    res, _, args = runs[case]
+    free = [r for r in res["ode_windows_all"] if r["impacts"] == 0 and r["resolved"]]
+    assert len(free) == 1 and free[0]["M"] == 1 and free[0]["lo"] is None
+    if case == "none":  # the range ends below 0: no upper edge inside it
+        assert free[0]["hi"] is None
+        return
+    assert free[0]["kinds"][1] == "graze" and abs(free[0]["hi"]) <= free[0]["xtol"]
+    flow = _flow(args)  # the exact flow: no contact just below, contacts just above
+    for s, n in ((-1e-3, 0), (1e-3, 1)):
+        orb = flow.orbit(s, 1, flow.settle(s, 1, 0).z[0] if n == 0 else [-(1 + s) - 1.0, 0.0])
+        assert (int(np.sum(orb.contacts)) > 0) == bool(n) or not orb.converged
+
+
+@pytest.mark.parametrize("case", ["rigid", "soft"])
+def test_coexisting_attractors_exist_and_are_stable_on_the_exact_flow(runs, case, tmp_path_factory) -> None:
+    """At the middle of every coexistence interval, each listed attractor is a stable orbit of the
+    exact flow with its period and impacts (Newton from the scans' nearest state of it)."""
+    import xarray as xr
+
+    res, _, args = runs[case]
+    assert res["coexistence"], "the case was chosen for its bistability below sigma = 0"
+    flow = _flow(args)
+    scans = res["files"][-1]
+    ds = None
+    for d in tmp_path_factory.getbasetemp().rglob(scans):
+        if json.loads((d.parent / "windows.json").read_text())["parameters"] == res["parameters"]:
+            ds = xr.open_dataset(d)
+    assert ds is not None
+    for c in res["coexistence"]:
+        lo = c["lo"] if c["lo"] is not None else res["parameters"]["shooting_sigma_range"][0]
+        hi = c["hi"] if c["hi"] is not None else res["parameters"]["shooting_sigma_range"][1]
+        mid = 0.5 * (lo + hi)
+        for key in c["keys"]:
+            M, k = (int(x) for x in key.split("/"))
+            if k == 0:
+                w = 2 * math.pi * 0.5
+                z0 = [(1 + mid) * math.cos(w) - 1.0, 0.0]
+            else:
+                per = ds["period"].transpose("sigma", "direction").values
+                imp = ds["orbit_impacts"].transpose("sigma", "direction").values
+                sig = ds["sigma"].values
+                hits = [(abs(sig[i] - mid), i, j) for i in range(len(sig)) for j in range(per.shape[1])
+                        if per[i, j] == M and imp[i, j] == k and lo <= sig[i] <= hi]
+                assert hits, f"{key} not in the scans inside ({lo}, {hi})"
+                _, i, j = min(hits)
+                mid = float(sig[i])
+                u = ds["u"].transpose("sigma", "direction", ...).values
+                v = ds["v"].transpose("sigma", "direction", ...).values
+                z0 = [float(u[i, j, 0]), float(v[i, j, 0])]
+            orb = flow.orbit(mid, M, z0)
+            assert orb.converged and orb.stable, (key, mid)
+            assert int(np.sum(orb.contacts)) == k and len(orb.z) == M
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_every_summary_line_follows_from_its_table(runs, case) -> None:
+    res, report, _ = runs[case]
+    verdict = report.split("## Verdict", 1)[1]
+    ode = {int(M): w for M, w in res["windows"]["ode"].items()}
+    top = max([M for M, w in ode.items() if w is not None], default=None)
+    assert f"ODE M = {top}" in verdict if top else "ODE none" in verdict
+    if top is None:
+        assert "no stable maximal" in verdict
+    for line in res["summary"]:
+        assert f"- {line}" in verdict
+    # the coexistence lines: the listed attractors' windows all cover the interval, no other does
+    rows = [r for r in res["ode_windows_all"] if r["resolved"]]
+    for c in res["coexistence"]:
+        a = c["lo"] if c["lo"] is not None else -math.inf
+        b = c["hi"] if c["hi"] is not None else math.inf
+        mid = 0.5 * (max(a, -1.0) + min(b, 1e3))
+        covering = {f"{r['M']}/{r['impacts']}" for r in rows
+                    if (r["lo"] is None or r["lo"] < mid) and (r["hi"] is None or mid < r["hi"])}
+        assert covering == set(c["keys"])
+    n_lines = sum(line.startswith("Coexisting attractors") for line in res["summary"])
+    assert n_lines == len(res["coexistence"])
+    if case == "none":
+        assert not res["coexistence"] and "No two stable attractors coexist" in verdict
