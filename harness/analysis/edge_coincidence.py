@@ -1,12 +1,14 @@
-"""Edges that theory says coincide: a period-doubled orbit is born at the flip of its parent.
+"""Edges that theory says coincide: a period-doubled orbit is born at the flip of its parent, and
+the wall-free orbit (1 + sigma) cos(2 pi t) - 1 grazes the wall at sigma = 0 exactly.
 
 The shooting finds each window's edges on its own, so the period-2M orbit's edge where it
 collapses onto its parent ("period-halving") and the parent's flip are two bisections of one
 point, each to its own tolerance; printed side by side they differ in the last digits, and the
 coexistence table shows a spurious sliver between them.  :func:`reconcile` locates the point
 once: where the two brackets overlap, both windows take the parent's flip (the bisection of the
-multiplier -1, the sharper of the two); where they do not, both numbers stay and a warning
-says by how much they differ and what their tolerances were.
+multiplier -1, the sharper of the two), and the wall-free window's graze becomes 0 where its
+bracket holds 0; where not, the numbers stay and a warning says by how much they differ and what
+their tolerances were.
 """
 from __future__ import annotations
 
@@ -36,34 +38,49 @@ def _pairs(rows: Sequence[dict[str, Any]]):
 
 
 def reconcile(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
-    """Give a period-doubled window's birth the parent's flip, or flag the two when they differ.
+    """Give a period-doubled window's birth the parent's flip, and the wall-free window's graze
+    sigma = 0, or flag the two numbers when they differ by more than their tolerances.
 
-    ``rows`` is the table of every window (``ode_windows_all``), changed in place: a child's
-    edge that matches takes the parent's value (``located_by`` says so).  Returns one record per
-    pair: ``parent``, ``child`` ("M/k"), ``sigma`` (the flip), ``difference`` (child's own edge
-    minus the flip), ``tolerance`` (the two brackets' half-widths together), ``agree``.
+    ``rows`` is the table of every window (``ode_windows_all``), changed in place: an edge that
+    matches takes the shared value (``located_by`` says so).  Returns one record per pair:
+    ``what`` (in words), ``edge`` ("M/k lo|hi"), ``sigma`` (the shared value), ``difference``
+    (the edge's own bisection minus it), ``tolerance`` (the brackets' half-widths together),
+    ``agree``.
     """
+    key = ("lo", "hi")
     out = []
     for p, ps, c, cs in _pairs(rows):
-        key = ("lo", "hi")
         flip, own = p[key[ps]], c[key[cs]]
         if own is None:
             continue
         bp, bc = _bracket(p, ps), _bracket(c, cs)
-        tol = sum(0.5 * (b[1] - b[0]) for b in (bp, bc) if b is not None) or 0.0
+        tol = sum(0.5 * (b[1] - b[0]) for b in (bp, bc) if b is not None)
         agree = bool(bp and bc and bp[0] <= bc[1] and bc[0] <= bp[1]) or abs(own - flip) <= tol
-        rec = {"parent": f"{p['M']}/{p['impacts']}", "child": f"{c['M']}/{c['impacts']}", "sigma": flip,
-               "difference": own - flip, "tolerance": tol, "agree": agree}
-        if agree:
-            c[key[cs]] = flip
-            c.setdefault("located_by", {})[key[cs]] = f"the flip of period {p['M']} ({rec['parent']})"
-        out.append(rec)
+        out.append(_settle(c, cs, flip, own, tol, agree,
+                           f"the flip of period {p['M']} ({p['M']}/{p['impacts']})"))
+    for r in rows:  # the wall-free orbit (1 + sigma) cos(2 pi t) - 1 touches the wall at sigma = 0
+        if r.get("resolved") and r["impacts"] == 0 and r["hi"] is not None and r["kinds"][1] == "graze":
+            b = _bracket(r, 1)
+            tol = 0.5 * (b[1] - b[0]) if b else 0.0
+            agree = bool(b and b[0] <= 0.0 <= b[1]) or abs(r["hi"]) <= tol
+            out.append(_settle(r, 1, 0.0, r["hi"], tol, agree, "sigma = 0, where the wall-free orbit grazes"))
     return out
+
+
+def _settle(row: dict[str, Any], side: int, value: float, own: float, tol: float, agree: bool,
+            what: str) -> dict[str, Any]:
+    """Record one coincidence; where it holds, the edge takes the shared value."""
+    name = ("lo", "hi")[side]
+    if agree:
+        row[name] = value
+        row.setdefault("located_by", {})[name] = what
+    return {"what": what, "edge": f"{row['M']}/{row['impacts']} {name}", "sigma": value, "difference": own - value,
+            "tolerance": tol, "agree": agree}
 
 
 def warnings(records: Sequence[dict[str, Any]]) -> list[str]:
     """The report's warnings: coincident edges that differ by more than their tolerances."""
-    return [f"Warning: the period-{r['child'].split('/')[0]} window ({r['child']}) should be born at the flip of "
-            f"{r['parent']} (sigma = {r['sigma']:.8g}), but its own edge differs by {r['difference']:+.2g}, more than "
-            f"the two tolerances together ({r['tolerance']:.2g}): one of the two brackets is wrong; rerun with a "
-            "smaller --xtol." for r in records if not r["agree"]]
+    return [f"Warning: the {'lower' if r['edge'].endswith('lo') else 'upper'} edge of window {r['edge'].split()[0]} "
+            f"should be {r['what']} (sigma = {r['sigma']:.8g}), but its own bisection differs by "
+            f"{r['difference']:+.2g}, more than the tolerances together ({r['tolerance']:.2g}): one bracket is wrong; "
+            "rerun with a smaller --xtol." for r in records if not r["agree"]]

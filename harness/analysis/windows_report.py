@@ -169,8 +169,12 @@ def _disagreement(res: dict[str, Any], labels: dict[str, str]) -> list[str]:
     for name, d in diffs.items():
         cells = [("-" if d[M][0] is None else f"{d[M][0]:+.4g}") + ", " + ("-" if d[M][1] is None else f"{d[M][1]:+.4g}")
                  for M in Ms]
-        lines.append(f"| {labels[name]} | " + " | ".join(cells) + f" | {res['max_abs_difference_to_ode'][name]:.4g} |")
-    return lines + ["", "(map edge minus ODE edge, in sigma; inf: a window the ODE has is missing in the map.)"]
+        score = res["max_abs_difference_to_ode"][name]
+        score_txt = "no end to compare" if score is None or math.isnan(score) else f"{score:.4g}"
+        lines.append(f"| {labels[name]} | " + " | ".join(cells) + f" | {score_txt} |")
+    return lines + ["", "(map edge minus ODE edge, in sigma; -: an end open (beyond the range) in one source and "
+                    "not in the other, or both open, which counts as agreement; inf: a window the ODE has is missing "
+                    "in the map.)"]
 
 
 def _coexistence(res: dict[str, Any]) -> list[str]:
