@@ -107,7 +107,7 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
         wtxt = "none found" if win is None else f"{_edge_text(win[0])} .. {_edge_text(win[1])}"
         if cl["closes"] is None:
             why = cl.get("note") or "; ".join(f"{k}: {v}" for k, v in (cl.get("edges_end") or {}).items())
-            lines.append(f"| {M} | {wtxt} | null (searched {cl['searched'][0]:g} to {cl['searched'][1]:g}) | - | {why} |")
+            lines.append(f"| {M} | {wtxt} | does not close in {cl['searched'][0]:g} .. {cl['searched'][1]:g} | - | {why} |")
         else:
             lines.append(f"| {M} | {wtxt} | {cl['closes']:.6g} | {cl['sigma']:.5g} | {cl['how']} |")
     lines += ["", "Every edge curve (chart.json, `windows[*].curves`): its end and turning points:", ""]

@@ -122,3 +122,21 @@ def test_every_summary_line_follows_from_its_table(runs, case) -> None:
     assert n_lines == len(res["coexistence"])
     if case == "none":
         assert not res["coexistence"] and "No two stable attractors coexist" in verdict
+
+
+def test_the_run_line_reproduces_the_json(runs, tmp_path) -> None:
+    """Running the report's "Run:" line again (into another folder) gives the same windows,
+    coexistence, summary and parameters."""
+    import re
+    import shlex
+
+    res, report, _ = runs["none"]
+    line = re.search(r"Run: `impact-harness (.+?)`", report).group(1)
+    argv = shlex.split(line)
+    argv[argv.index("--out") + 1] = str(tmp_path / "again")
+    assert main([*argv, "--workers", "1", "--no-progress"]) == 0
+    again = json.loads((tmp_path / "again" / "windows.json").read_text())
+    for key in ("windows", "ode_windows_all", "coexistence", "summary", "edge_kinds"):
+        assert again[key] == res[key], key
+    same = {k: v for k, v in res["parameters"].items() if k != "fmu_periods_shooting"}
+    assert {k: again["parameters"][k] for k in same} == same
