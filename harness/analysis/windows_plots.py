@@ -43,7 +43,7 @@ def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any],
     """TARGET_map.png (map, linear rho and A~), TARGET_ode.png (FMU up/down), TARGET_windows.png.
 
     A map variant that does not apply (``applies[variant]`` a reason) is not drawn: its panel
-    says why."""
+    says why; when neither 2D map applies, TARGET_map.png is not written."""
     applies = applies or {}
     from ..io import plots  # noqa: F401  (selects the Agg backend)
 
@@ -51,8 +51,11 @@ def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any],
         c = problem.coefficients()
     except (ValueError, ArithmeticError):
         c = None
-    return [_plot_maps(ctx, problem, st, c, applies), _plot_ode_scans(ctx, problem, st, ds, windows, c, applies),
-            _plot_windows(ctx, problem, st, windows, applies, every)]
+    # a figure of two "does not apply" panels shows nothing: left out (the report says why)
+    maps = ([_plot_maps(ctx, problem, st, c, applies)]
+            if c is not None and not (applies.get("map") and applies.get("map_A_tilde")) else [])
+    return maps + [_plot_ode_scans(ctx, problem, st, ds, windows, c, applies),
+                   _plot_windows(ctx, problem, st, windows, applies, every)]
 
 
 def _plot_maps(ctx: Any, problem: Any, st: Any, c: Any, applies: dict[str, str | None]) -> str:

@@ -195,8 +195,10 @@ def _coexistence(res: dict[str, Any]) -> list[str]:
 def _verdict(ctx: Context, res: dict[str, Any]) -> list[str]:
     """The summary (each sentence derived from the tables above) and the figures."""
     lines = ["", "## Verdict", ""] + [f"- {line}" for line in res["summary"]]
-    return lines + ["", f"Figures: `{ctx.target}_map.png` (the maps' bifurcation diagrams, where they apply), "
-                    f"`{ctx.target}_ode.png` (the FMU's up/down scans), `{ctx.target}_windows.png` (the windows)."]
+    what = {"map": "the maps' bifurcation diagrams", "ode": "the FMU's up/down scans", "windows": "the windows"}
+    figs = [f"`{f}` ({what.get(f[len(ctx.target) + 1:-4], 'figure')})" for f in res.get("files", []) if f.endswith(".png")]
+    return lines + ["", "Figures: " + ", ".join(figs) + ("" if any("_map.png" in f for f in figs) else
+                                                           "; no map figure: no 2D map applies (above)") + "."]
 
 
 def report(ctx: Context, problem: Any, res: dict[str, Any], title: str | None = None) -> str:

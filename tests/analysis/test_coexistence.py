@@ -140,3 +140,26 @@ def test_the_run_line_reproduces_the_json(runs, tmp_path) -> None:
         assert again[key] == res[key], key
     same = {k: v for k, v in res["parameters"].items() if k != "fmu_periods_shooting"}
     assert {k: again["parameters"][k] for k in same} == same
+
+
+@pytest.mark.parametrize("case", ["rigid", "none"])
+def test_every_figure_panel_holds_data_or_says_why(case, tmp_path, monkeypatch) -> None:
+    """Each axes of each figure `windows` writes has drawn data (lines, bars, points, arrows) or
+    a text saying why it has none; a figure with nothing to show is not written."""
+    from matplotlib.figure import Figure
+
+    seen: dict[str, list[bool]] = {}
+    save = Figure.savefig
+
+    def inspect(fig, path, *a, **kw):
+        seen[str(path).rsplit("/", 1)[-1]] = [
+            bool(ax.lines or ax.collections or ax.images or ax.patches or ax.texts) for ax in fig.axes]
+        return save(fig, path, *a, **kw)
+
+    monkeypatch.setattr(Figure, "savefig", inspect)
+    assert main(["windows", *CASES[case], "--M-max", "4", "--quick", "--solver", "closed-form", "--workers", "1",
+                 "--no-progress", "--out", str(tmp_path)]) == 0
+    assert {"windows_ode.png", "windows_windows.png"} <= set(seen)
+    assert all(all(panels) for panels in seen.values()), seen
+    res = json.loads((tmp_path / "windows.json").read_text())
+    assert sorted(f for f in res["files"] if f.endswith(".png")) == sorted(seen)
