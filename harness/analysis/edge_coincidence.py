@@ -16,6 +16,10 @@ from typing import Any, Sequence
 
 __all__ = ["reconcile", "warnings"]
 
+#: Round-off of the march and bisection in sigma (an even march from -0.3 lands on 1.4e-16, not 0):
+#: two brackets this close still hold the same point.
+_ROUND_OFF = 1e-12
+
 
 def _bracket(row: dict[str, Any], side: int) -> tuple[float, float] | None:
     iv = (row.get("intervals") or [None, None])[side]
@@ -54,15 +58,15 @@ def reconcile(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         if own is None:
             continue
         bp, bc = _bracket(p, ps), _bracket(c, cs)
-        tol = sum(0.5 * (b[1] - b[0]) for b in (bp, bc) if b is not None)
-        agree = bool(bp and bc and bp[0] <= bc[1] and bc[0] <= bp[1]) or abs(own - flip) <= tol
+        tol = sum(0.5 * (b[1] - b[0]) for b in (bp, bc) if b is not None) + _ROUND_OFF
+        agree = bool(bp and bc and bp[0] <= bc[1] + _ROUND_OFF and bc[0] <= bp[1] + _ROUND_OFF) or abs(own - flip) <= tol
         out.append(_settle(c, cs, flip, own, tol, agree,
                            f"the flip of period {p['M']} ({p['M']}/{p['impacts']})"))
     for r in rows:  # the wall-free orbit (1 + sigma) cos(2 pi t) - 1 touches the wall at sigma = 0
         if r.get("resolved") and r["impacts"] == 0 and r["hi"] is not None and r["kinds"][1] == "graze":
             b = _bracket(r, 1)
-            tol = 0.5 * (b[1] - b[0]) if b else 0.0
-            agree = bool(b and b[0] <= 0.0 <= b[1]) or abs(r["hi"]) <= tol
+            tol = (0.5 * (b[1] - b[0]) if b else 0.0) + _ROUND_OFF
+            agree = bool(b and b[0] - _ROUND_OFF <= 0.0 <= b[1] + _ROUND_OFF) or abs(r["hi"]) <= tol
             out.append(_settle(r, 1, 0.0, r["hi"], tol, agree, "sigma = 0, where the wall-free orbit grazes"))
     return out
 

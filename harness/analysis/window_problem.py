@@ -125,6 +125,8 @@ class WindowSettings:
 
     Attributes
     ----------
+    far_start : bool
+        Scan also from a large-amplitude start (``--sigma-range``'s runs).
     scan_grid : ndarray
         Sorted sigma values of the up/down scans (and of the map's bifurcation diagrams).
     transient, samples : int
@@ -149,6 +151,10 @@ class WindowSettings:
     log_sigma: bool = False
     extra: dict[str, Any] = field(default_factory=dict)
     xtol_rel: float = 1e-3
+    #: also scan up and down from a start far from the wall-free orbit (large amplitude, hitting
+    #: the wall): below grazing the wall-free orbit is an attractor, and scans started on it never
+    #: leave it, so an impacting attractor beside it is reached only from elsewhere
+    far_start: bool = False
 
 
 #: The sigma range every default scan covers, whatever the maps say (geometric grid): the
@@ -189,7 +195,8 @@ def default_settings(problem: WindowProblem, quick: bool, sigma_range: tuple[flo
         raise HarnessInputError("--xtol", f"must be a finite number > 0, got {xtol!r}")
     rel = 1e-3 if quick else 1e-4
     search = (lo, hi) if sigma_range is not None else (0.1 * lo, 4.0 * hi)
-    st = dict(transient=200 if quick else 300, samples=24 if quick else 40, sigma_range=search, xtol_rel=rel)
+    st = dict(transient=200 if quick else 300, samples=24 if quick else 40, sigma_range=search, xtol_rel=rel,
+              far_start=sigma_range is not None)
     if lo <= 0:  # an even grid: a geometric one cannot reach sigma <= 0
         grid = np.linspace(lo, hi, 121 if quick else 401)
         return WindowSettings(scan_grid=grid, xtol=xtol if xtol is not None else (1e-6 if quick else 1e-8) * (hi - lo),

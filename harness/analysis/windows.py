@@ -73,8 +73,18 @@ def ode_scans(ctx: Context, problem: WindowProblem, st: WindowSettings):
     th = 2.0 * math.pi * problem.theta
     sin_th = math.sin(th) if abs(math.sin(th)) > 1e-12 else 0.0  # exactly 0 at theta = 1/2
     state0 = ((1.0 + mid) * math.cos(th) - 1.0, -2.0 * math.pi * (1.0 + mid) * sin_th)
-    return run_sweep(ctx.fmu, spec, ctx.params(**problem.fmu_params()), state0, sampling,
-                     workers=_workers(ctx), progress=ctx.progress)
+    params = ctx.params(**problem.fmu_params())
+    ds = run_sweep(ctx.fmu, spec, params, state0, sampling, workers=_workers(ctx), progress=ctx.progress)
+    if not st.far_start:
+        return ds
+    import xarray as xr
+
+    # three times the wall-free orbit's amplitude away, at rest: it hits the wall hard and settles
+    # on an impacting attractor where one coexists with the wall-free orbit
+    far = run_sweep(ctx.fmu, spec, params, (-3.0 * (1.0 + abs(mid)) - 1.0, 0.0), sampling, workers=_workers(ctx),
+                    progress=ctx.progress)
+    far = far.assign_coords(direction=[f"{d}-far" for d in far["direction"].values])
+    return xr.concat([ds, far], dim="direction", combine_attrs="override")
 
 
 def _safe_predictions(problem: WindowProblem, M_maps: int, st: WindowSettings) -> tuple[dict[str, dict], str | None]:

@@ -10,7 +10,6 @@ import numpy as np
 
 from ..errors import HarnessInputError
 from .checks import _count, _number, check_count, check_theta
-from .defaults import SECTION_PHASE
 from .defaults import BACKENDS, SWEEP_MODES, default_workers
 from .layers import Layered
 
@@ -24,7 +23,9 @@ class SamplingSpec:
     Keyword-only, and checked on creation (theta in [0, 1), counts >= 0, tol > 0).
     """
 
-    theta: float = SECTION_PHASE
+    #: the library's default is the paper's section t = n; every command passes the CLI's
+    #: default, :data:`harness.config.SECTION_PHASE`, through the settings' layers
+    theta: float = 0.0
     n_transient: int = 300
     n_samples: int = 40
     tol: float = 1e-5
