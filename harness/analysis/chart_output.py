@@ -65,7 +65,16 @@ def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: st
     ax.set_ylim(problem.sigma_grid[0], top)
     ax.set_ylabel("forcing above grazing, sigma")
     ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=7, ncol=3, loc="lower right")
+    grid = problem.sigma_grid
+    if ax.lines or ax.collections:
+        ax.legend(fontsize=7, ncol=3, loc="lower right")
+    else:  # a blank panel says why
+        ax.text(0.5, 0.5, f"no stable maximal window (one impact per period, M <= {problem.M_max})\nin sigma "
+                f"[{grid[0]:.3g}, {grid[-1]:.3g}] at any value of {problem.param2}: nothing to chart",
+                transform=ax.transAxes, ha="center", va="center", fontsize=9)
+    if not bx.lines:
+        bx.text(0.5, 0.5, "beta (43): compliant wall only, at the seed of a window found by the scans; none here",
+                transform=bx.transAxes, ha="center", va="center", fontsize=8)
     bx.axhline(1.0, color="k", lw=0.8, ls=":")
     bx.set_ylabel("beta = r v_c kappa / |A~|\n(at each window's seed)", fontsize=8)
     bx.set_yscale("log")

@@ -114,13 +114,18 @@ def summary_lines(res: Mapping[str, Any], labels: Mapping[str, str], variants: S
                  + (f"M = {h['ode']}" if h["ode"] else "none") + "".join(
                      f", {labels[k]} " + (f"M = {h[k]}" if h[k] else "none") if k in f["applies"] else
                      f", {labels[k]} n/a" for k in variants) + ".")
-    if f["M_auto"]:
+    above = sorted(int(M) for M, w in res["windows"]["ode"].items() if w is not None and f["stop"] is not None
+                   and int(M) > f["stop"] + 1)
+    if f["M_auto"] and above:  # windows beyond the gap: the gap is not where period adding ends
+        lines.append(f"--M-max auto: no stable maximal window at M = {f['stop']} and M = {f['stop'] + 1}, but at M = "
+                     f"{', '.join(map(str, above))}: the periods of the windows are not consecutive here.")
+    elif f["M_auto"]:
         stop = f["stop"]
-        lines.append(f"Period adding (--M-max auto): no stable maximal window at M = 1 or 2 in the searched range."
-                     if stop == 1 else
-                     f"Period adding truncates at M = {stop}: no stable maximal window at M = {stop} and M = {stop + 1}."
-                     if stop is not None else
-                     f"Period adding did not truncate up to the scan's limit M = {f['M_limit']}.")
+        lines.append("--M-max auto: period adding does not start: no stable maximal window at M = 1 or 2 in the "
+                     "searched range." if stop == 1 else
+                     f"--M-max auto: period adding truncates at M = {stop}: no stable maximal window at M = {stop} "
+                     f"and M = {stop + 1}." if stop is not None else
+                     f"--M-max auto: period adding did not truncate up to the scan's limit M = {f['M_limit']}.")
     for c in f["coexistence"]:
         lines.append(f"Coexisting attractors for sigma in ({fmt_sigma(c['lo'], 'below')}, "
                      f"{fmt_sigma(c['hi'], 'above')}): " + "; ".join(c["attractors"]) + ".")
