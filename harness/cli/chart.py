@@ -48,7 +48,8 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     p.add_argument("--num", type=int, default=30, help="values of the second parameter (default 30)")
     p.add_argument("--log", action="store_true", help="geometric values, log axis")
     p.add_argument("--M-max", type=int, default=5, dest="M_max", help="highest period charted (default 5)")
-    p.add_argument("--sigma-range", default="0.05:400", help="sigma range of the scans (default 0.05:400)")
+    p.add_argument("--sigma-range", default="0.05:400", metavar="LO:HI",
+                   help="sigma range of the scans, LO > 0 (default 0.05:400; below grazing: windows --sigma-range)")
     p.add_argument("--per-decade", type=int, default=None, help="scan points per decade of sigma (default 16, quick 10)")
     p.add_argument("--quick", action="store_true", help="coarser scans and tolerances")
     solver_option(p)
@@ -86,7 +87,8 @@ def cmd_chart(args: argparse.Namespace) -> int:
         raise HarnessInputError("--M-max", f"must be in 1..12, got {args.M_max}")
     s0, s1 = parse_range(args.sigma_range)
     if s0 <= 0:
-        raise HarnessInputError("--sigma-range", "must be positive (geometric grid)")
+        raise HarnessInputError("--sigma-range", "chart needs LO > 0 (its edge curves are followed on a log sigma "
+                                "axis); below grazing use windows --sigma-range=LO:HI at each value")
     per = args.per_decade or (10 if args.quick else 16)
     grid = np.geomspace(s0, s1, int(math.ceil(per * math.log10(s1 / s0))) + 1)
     values = np.geomspace(a, b, args.num) if args.log else np.linspace(a, b, args.num)
