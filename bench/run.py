@@ -610,6 +610,7 @@ def report(res: dict, command: str) -> str:
           ".venv/bin/python bench/fmu_long_run.py     # 10^6 periods through fmpy, error after 10 and 10^6",
           ".venv/bin/python bench/map_speed.py        # map iterations per second, all variants",
           ".venv/bin/python bench/sens_bench.py       # solver modes and sensitivities (its own section)",
+          ".venv/bin/python bench/basins_bench.py     # basin scans: batch kernel, FMU path (its own section)",
           "```", ""]
     notes = ROOT / "bench" / "analysis.md"
     if notes.exists():

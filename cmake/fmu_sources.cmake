@@ -3,5 +3,5 @@
 # description (stage_sources.cmake). The FMI core, one unit per concern (fmu_core.h), the
 # steppers (stepper.h) and the model.
 set(IMPACT_MODEL_SOURCES
-  fmu_core.c fmu_states.c fmu_vars.c fmu_snapshot.c fmu_cs.c fmu_me.c
+  fmu_core.c fmu_states.c fmu_vars.c fmu_snapshot.c fmu_cs.c fmu_me.c fmu_derivatives.c
   stepper.c steppers.c solver_cvode.c closed_form.c sens.c model.c)

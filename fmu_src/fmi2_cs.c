@@ -207,10 +207,9 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component comp, const fmi2Byte bytes[], s
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component comp, const fmi2ValueReference u[],
                                         size_t nu, const fmi2ValueReference z[], size_t nz,
                                         const fmi2Real dv[], fmi2Real dz[]) {
-    (void)u; (void)nu; (void)z; (void)nz; (void)dv; (void)dz;
-    CoreInstance *c = C(comp);
-    if (!core_allowed(c, "fmi2GetDirectionalDerivative")) return fmi2Error;
-    return S(core_fail(c, "fmi2GetDirectionalDerivative", "not provided by this FMU"));
+    /* FMI 2.0: u are the unknowns, z the knowns, dv the seed over z, dz the result over u */
+    return S(core_directional_derivative(C(comp), "fmi2GetDirectionalDerivative", u, nu, z, nz,
+                                         dv, dz));
 }
 
 /* ---------------------------------------------------------------------------------------- */

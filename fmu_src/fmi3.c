@@ -301,18 +301,23 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
                                         size_t nu, const fmi3ValueReference k[], size_t nk,
                                         const fmi3Float64 seed[], size_t ns,
                                         fmi3Float64 sens[], size_t nsens) {
-    (void)u; (void)nu; (void)k; (void)nk; (void)seed; (void)ns; (void)sens; (void)nsens;
     CHECK("fmi3GetDirectionalDerivative");
-    return core_fail(c, "fmi3GetDirectionalDerivative", "not provided by this FMU");
+    if (ns != nk || nsens != nu) /* FMI 3.0: nSeed = nKnowns, nSensitivity = nUnknowns */
+        return S(core_fail(c, "fmi3GetDirectionalDerivative", "nSeed = %zu, nSensitivity = %zu: "
+                           "must equal nKnowns = %zu and nUnknowns = %zu", ns, nsens, nk, nu));
+    return S(core_directional_derivative(c, "fmi3GetDirectionalDerivative", u, nu, k, nk, seed,
+                                         sens));
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference u[],
                                     size_t nu, const fmi3ValueReference k[], size_t nk,
                                     const fmi3Float64 seed[], size_t ns, fmi3Float64 sens[],
                                     size_t nsens) {
-    (void)u; (void)nu; (void)k; (void)nk; (void)seed; (void)ns; (void)sens; (void)nsens;
     CHECK("fmi3GetAdjointDerivative");
-    return core_fail(c, "fmi3GetAdjointDerivative", "not provided by this FMU");
+    if (ns != nu || nsens != nk) /* FMI 3.0: nSeed = nUnknowns, nSensitivity = nKnowns */
+        return S(core_fail(c, "fmi3GetAdjointDerivative", "nSeed = %zu, nSensitivity = %zu: "
+                           "must equal nUnknowns = %zu and nKnowns = %zu", ns, nsens, nu, nk));
+    return S(core_adjoint_derivative(c, "fmi3GetAdjointDerivative", u, nu, k, nk, seed, sens));
 }
 
 fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {

@@ -46,6 +46,8 @@ int core_set_logging(CoreInstance *c, const char *fn, int on, size_t n,
 
 int core_error_state(const CoreInstance *c) { return c->fmi3 ? CS_TERMINATED : CS_ERROR; }
 
+static void take_start_state(CoreInstance *v);
+
 int core_fail(CoreInstance *c, const char *fn, const char *fmt, ...) {
     char buf[900];
     va_list ap;
@@ -56,7 +58,10 @@ int core_fail(CoreInstance *c, const char *fn, const char *fmt, ...) {
     core_log(c, CORE_ERROR, "logStatusError", "%s: %s", fn, buf);
     /* FMI 2.0 (2.1.3): after fmi2Error the simulation cannot be continued (Error state, left by
      * fmi2SetFMUstate, fmi2Reset or fmi2FreeInstance); FMI 3.0 (2.2.3, 4.2): the instance is
-     * in Terminated (fmi3SetFMUState, fmi3Reset, fmi3FreeInstance). */
+     * in Terminated (fmi3SetFMUState, fmi3Reset, fmi3FreeInstance). Failing in Initialization
+     * Mode, the getters go on answering what they answered there (core_view): that state is
+     * made the instance's own. */
+    if (c->state == CS_INIT) take_start_state(c);
     c->state = core_error_state(c);
     return CORE_ERROR;
 }
@@ -67,6 +72,23 @@ int core_allowed(CoreInstance *c, const char *fn) {
     if (core_state_allows(c->iface, c->event_mode_used, c->state, fn, why, sizeof why)) return 1;
     core_fail(c, fn ? fn : "?", "%s", why);
     return 0;
+}
+
+/* The state the start values give at the start time, in v itself (its clock and model). */
+static void take_start_state(CoreInstance *v) {
+    const double origin = floor(v->start_time), tau = v->start_time - origin;
+    v->st.clk.origin = v->m.origin = origin;
+    v->st.clk.tau = v->m.in_tau = tau;
+    v->me_time = v->start_time;
+    model_update_derived(&v->m);
+    model_initialize_state(&v->m, tau);
+}
+
+const CoreInstance *core_view(const CoreInstance *c, CoreInstance *buf) {
+    if (c->state != CS_INIT) return c;
+    memcpy(buf, c, sizeof *buf);
+    take_start_state(buf);
+    return buf;
 }
 
 double core_local_tau(const CoreInstance *c) {
@@ -164,6 +186,7 @@ int core_exit_init(CoreInstance *c, const char *fn) {
     c->st.clk.pending = 0;
     c->inputs_changed = 0;
     c->me_time = c->start_time;
+    c->me_wall = model_wall_position(&c->m, c->st.clk.tau);
     c->state = (c->is_me || c->event_mode_used) ? CS_EVENT : CS_STEP;
     return CORE_OK;
 }

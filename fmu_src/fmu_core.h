@@ -9,6 +9,7 @@
  *                   validated field by field)
  *   fmu_cs.c        the Co-Simulation stepping loop
  *   fmu_me.c        the Model Exchange calls and the event mode of FMI 3.0 Co-Simulation
+ *   fmu_derivatives.c  directional and adjoint derivatives (the model's exact partials)
  * The physics is the model's (model.h: its checks, derived quantities and outputs are calls
  * into model.c) and the integration the stepper's (stepper.h). The glue files only translate
  * types and status codes.
@@ -53,6 +54,10 @@ typedef struct CoreInstance {
     int tunable_states;
     double start_time;
     double me_time; /* Model Exchange: the time set by the importer */
+    /* Model Exchange: the wall's position at the last event (or the start, or a restored state):
+     * a mass far beyond a rigid wall that has moved since is the wall's jump (the input-jump
+     * rule), one beyond a wall that has not moved is an importer's state no mode holds. */
+    double me_wall;
     int inputs_changed; /* an input jumped since the last step: apply model_input_jump */
     ModelData m;
     Stepper st; /* the integration method chosen by m.solver, and its clock */
@@ -135,7 +140,24 @@ int core_get_event_indicators(CoreInstance *c, const char *fn, double g[], size_
 int core_get_nominals(CoreInstance *c, const char *fn, double x[], size_t n);
 int core_completed_step(CoreInstance *c, const char *fn, int *enter_event, int *terminate);
 
+/* -- exact partial derivatives (fmu_derivatives.c) -----------------------------------------
+ * Knowns: the states u, v and the inputs F_ext, u_wall; unknowns: der(u), der(v), the outputs,
+ * (FMI 3.0) the event indicator. Directional: out[i] = sum_j d unknown_i / d known_j seed[j]
+ * (seed over the knowns); adjoint: out[j] = sum_i seed[i] d unknown_i / d known_j (seed over
+ * the unknowns). */
+int core_directional_derivative(CoreInstance *c, const char *fn, const unsigned unknowns[],
+                                size_t nu, const unsigned knowns[], size_t nk,
+                                const double seed[], double out[]);
+int core_adjoint_derivative(CoreInstance *c, const char *fn, const unsigned unknowns[],
+                            size_t nu, const unsigned knowns[], size_t nk, const double seed[],
+                            double out[]);
+
 /* -- shared by the core's units (fmu_core.c) ---------------------------------------------- */
+/* What the getters read: c itself, or in Initialization Mode a copy in *buf holding the state the
+ * start values give (model_initialize_state at the start time), so that the initial unknowns
+ * (u, v, der(u), der(v), F_contact, in_contact, the indicator) answer the start values set so far
+ * rather than the defaults; exiting Initialization Mode computes the same state. */
+const CoreInstance *core_view(const CoreInstance *c, CoreInstance *buf);
 /* The model's local time now: the stepper's (Co-Simulation) or the importer's (Model Exchange). */
 double core_local_tau(const CoreInstance *c);
 /* The importer's allocator (or calloc/free). */

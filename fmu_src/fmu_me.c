@@ -36,9 +36,32 @@ int core_update_discrete(CoreInstance *c, const char *fn, int *values_changed) {
          * applies (model_input_jump, README "Inputs that jump"): a compliant wall stepping past
          * the mass switches the contact mode and leaves the mass where it is. Only then is a
          * remaining wall crossing an event. */
-        changed = c->inputs_changed ? model_input_jump(&c->m, core_local_tau(c), y) : 0;
+        /* An input that jumped in Event Mode makes the right-hand side jump too, whether or not the
+         * rule moves the state: reported as valuesOfContinuousStatesChanged, the one flag on which
+         * an importer such as fmusim re-initialises its integrator (FMPy does at every event);
+         * they read back the same state. */
+        changed = c->inputs_changed ? (model_input_jump(&c->m, core_local_tau(c), y), 1) : 0;
         c->inputs_changed = 0;
-        changed |= model_me_event_update(&c->m, core_local_tau(c), y);
+        const int mode = c->m.mode;
+        const double tau = core_local_tau(c), w = model_wall_position(&c->m, tau);
+        MeEventResult r = model_me_event_update(&c->m, tau, y);
+        if (r == ME_EVENT_INSIDE_RIGID && fabs(w - c->me_wall) > model_me_event_tolerance(&c->m, tau))
+            r = model_input_jump(&c->m, tau, y) ? ME_EVENT_JUMP : ME_EVENT_NONE; /* the wall jumped */
+        c->me_wall = w;
+        if (r == ME_EVENT_INSIDE_RIGID)
+            return core_fail(c, fn, "state (u, v) = (%.17g, %.17g) is %g inside the rigid wall at "
+                             "u_wall = %g, beyond the event tolerance %g: no contact mode holds a "
+                             "mass there (locate the crossing of the event indicator)", y[0],
+                             y[1], y[0] - model_wall_position(&c->m, core_local_tau(c)),
+                             model_wall_position(&c->m, core_local_tau(c)),
+                             model_me_event_tolerance(&c->m, core_local_tau(c)));
+        if (r == ME_EVENT_KEPT)
+            core_log(c, CORE_WARNING, "logStatusWarning", "%s: state (u, v) = (%.17g, %.17g) is "
+                     "beyond the event tolerance %g of the wall: kept, and the instance takes the "
+                     "mode it is in (%s; no jump applied)", fn, y[0], y[1],
+                     model_me_event_tolerance(&c->m, core_local_tau(c)),
+                     c->m.mode == MODE_FREE ? "in flight" : "in contact");
+        changed |= r != ME_EVENT_NONE || c->m.mode != mode;
         c->m.u = y[0];
         c->m.v = y[1];
         if (changed) c->st.clk.events++;
@@ -97,7 +120,8 @@ int core_get_states(CoreInstance *c, const char *fn, double x[], size_t n) {
     ME_ONLY(c, fn);
     if (n != MODEL_N_STATES || !x)
         return core_fail(c, fn, "expected %d states, got %zu", MODEL_N_STATES, n);
-    model_get_states(&c->m, x);
+    CoreInstance buf;
+    model_get_states(&core_view(c, &buf)->m, x); /* Initialization Mode: from the start values */
     return CORE_OK;
 }
 
@@ -106,8 +130,10 @@ int core_get_derivatives(CoreInstance *c, const char *fn, double dx[], size_t n)
     if (n != MODEL_N_STATES || !dx)
         return core_fail(c, fn, "expected %d states, got %zu", MODEL_N_STATES, n);
     double y[MODEL_N_STATES];
-    model_get_states(&c->m, y);
-    model_derivatives(&c->m, core_local_tau(c), y, dx);
+    CoreInstance buf;
+    const CoreInstance *v = core_view(c, &buf);
+    model_get_states(&v->m, y);
+    model_derivatives(&v->m, core_local_tau(v), y, dx);
     if (!isfinite(dx[0]) || !isfinite(dx[1]))
         return core_fail(c, fn, "derivatives not finite at u = %g, v = %g", y[0], y[1]);
     return CORE_OK;
@@ -117,7 +143,9 @@ int core_get_event_indicators(CoreInstance *c, const char *fn, double g[], size_
     ME_ONLY(c, fn);
     if (n != MODEL_N_ME_EVENTS || !g)
         return core_fail(c, fn, "expected %d indicators, got %zu", MODEL_N_ME_EVENTS, n);
-    g[0] = model_wall_indicator(&c->m, core_local_tau(c));
+    CoreInstance buf;
+    const CoreInstance *v = core_view(c, &buf);
+    g[0] = model_wall_indicator(&v->m, core_local_tau(v));
     return CORE_OK;
 }
 

@@ -187,6 +187,7 @@ static void snapshot_restore(CoreInstance *c, const Snapshot *s) {
     c->st.clk.guard_hits = s->guard_hits;
     c->st.clk.pending = s->pending;
     c->st.clk.restart = 1;
+    c->me_wall = model_wall_position(&c->m, core_local_tau(c));
 }
 
 

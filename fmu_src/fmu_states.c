@@ -83,7 +83,7 @@ static const StateRow STATE_TABLE[] = {
     {"fmi3SetDebugLogging", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
     {"fmi3EnterInitializationMode", I, I, I},
     {"fmi3ExitInitializationMode", N, N, N},
-    {"fmi3EnterEventMode", 0, E|C, S},
+    {"fmi3EnterEventMode", 0, C, S},
     {"fmi3Terminate", S, E|C, S|E},
     {"fmi3Reset", I|N|S|T, I|N|E|C|T, I|N|S|E|T},
     {"fmi3FreeInstance", I|N|S|T, I|N|E|C|T, I|N|S|E|T},

@@ -110,12 +110,14 @@ int core_get(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[]
              double out[]) {
     if (!core_allowed(c, fn)) return CORE_ERROR;
     if (n > 0 && (!vr || !out)) return core_fail(c, fn, "NULL argument");
+    CoreInstance buf;
+    const CoreInstance *v = core_view(c, &buf);
     for (size_t i = 0; i < n; ++i) {
         const VarDef *d = vars_find(c, vr[i]);
         if (!d || d->type != t)
             return core_fail(c, fn, "value reference %u is not a%s %s variable", vr[i],
                              t == VT_INTEGER ? "n" : "", TYPE_NAMES[t]);
-        out[i] = d->get ? d->get(c) : vars_field_get(&c->m, d);
+        out[i] = d->get ? d->get(v) : vars_field_get(&v->m, d);
     }
     return CORE_OK;
 }

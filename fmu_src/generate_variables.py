@@ -134,6 +134,19 @@ def _initial_unknowns(variables):
             or v.derivative_of]
 
 
+def _dependency_attrs(v, names, ref) -> list[tuple[str, str | None]]:
+    """``dependencies`` (by ``ref``: index or value reference) and, where declared,
+    ``dependenciesKind``, sorted together; ``names`` None: both omitted."""
+    if names is None:
+        return []
+    kinds = v.dependencies_kind if tuple(names) == v.dependencies else None
+    pairs = sorted(zip((ref[n] for n in names), kinds or ("",) * len(names)))
+    out = [("dependencies", " ".join(str(i) for i, _ in pairs))]
+    if kinds:
+        out.append(("dependenciesKind", " ".join(k for _, k in pairs)))
+    return out
+
+
 def fmi2_variables(variables) -> str:
     """FMI 2.0: ``<ModelVariables>`` to ``</ModelStructure>``."""
     declared = [v for v in variables if v.fmi2]
@@ -155,10 +168,15 @@ def fmi2_variables(variables) -> str:
                 f"      <{v.type}{body}/>",
                 "    </ScalarVariable>"]
     out += ["  </ModelVariables>", "", "  <ModelStructure>", "    <Outputs>"]
-    out += [f'      <Unknown index="{index[v.name]}" dependencies="{deps(v.dependencies)}"/>'
-            for v in declared if v.causality == "output"]
+    for v in declared:
+        if v.causality == "output":
+            attrs = [("index", str(index[v.name]))] + _dependency_attrs(v, v.dependencies, index)
+            out.append(f"      <Unknown{_attrs(attrs)}/>")
     out += ["    </Outputs>", "    <Derivatives>"]
-    out += [f'      <Unknown index="{index[v.name]}"/>' for v in declared if v.derivative_of]
+    for v in declared:
+        if v.derivative_of:
+            attrs = [("index", str(index[v.name]))] + _dependency_attrs(v, v.dependencies, index)
+            out.append(f"      <Unknown{_attrs(attrs)}/>")
     out += ["    </Derivatives>", "    <InitialUnknowns>"]
     for v in sorted(_initial_unknowns(declared), key=lambda v: index[v.name]):
         d = None if v.initial_dependencies is None else deps(v.initial_dependencies)
@@ -182,17 +200,18 @@ def fmi3_variables(variables) -> str:
         description = v.description_fmi3 or v.description
         out += [f"    <{FMI3_TYPES[v.type]}{head}", f'      description="{_xml(description)}"/>']
     out += ["  </ModelVariables>", "", "  <ModelStructure>"]
-    for v in variables:
-        if v.causality == "output":
-            d = v.dependencies_fmi3
-            d = None if d is None else " ".join(str(i) for i in sorted(vr[n] for n in d))
-            out.append(f'    <Output{_attrs([("valueReference", str(v.vr)), ("dependencies", d)])}/>')
-    out += [f'    <ContinuousStateDerivative valueReference="{v.vr}"/>'
-            for v in variables if v.derivative_of]
-    out += [f'    <InitialUnknown valueReference="{v.vr}"/>'
+    def unknown(element: str, v, names) -> str:
+        attrs = [("valueReference", str(v.vr))] + _dependency_attrs(v, names, vr)
+        return f"    <{element}{_attrs(attrs)}/>"
+
+    out += [unknown("Output", v, v.dependencies_fmi3) for v in variables
+            if v.causality == "output"]
+    out += [unknown("ContinuousStateDerivative", v, v.dependencies) for v in variables
+            if v.derivative_of]
+    out += [unknown("InitialUnknown", v, v.initial_dependencies)
             for v in sorted(_initial_unknowns(variables), key=lambda v: v.vr)]
-    out += [f'    <EventIndicator valueReference="{v.vr}"/>'
-            for v in variables if v.event_indicator]
+    out += [unknown("EventIndicator", v, v.dependencies) for v in variables
+            if v.event_indicator]
     out += ["  </ModelStructure>"]
     return "\n".join(out) + "\n"
 

@@ -190,6 +190,49 @@ void model_jacobian(const ModelData *m, double tau, const double y[2], double J[
     }
 }
 
+/* d F / d d and d F / d d' of the contact law's force F(d, d') (model_contact_force). */
+static void contact_force_partials(const ModelData *m, double d, double dv, double *Fd,
+                                   double *Fdv) {
+    *Fd = *Fdv = 0.0;
+    if (m->contact == CONTACT_LINEAR) {
+        *Fd = m->kappa2;
+    } else if (d > 0.0) { /* the Hertz laws are C^1 at d = 0: both partials vanish there */
+        const double s = sqrt(d);
+        const double damp = m->contact == CONTACT_HUNT_CROSSLEY ? m->alpha_hc : 0.0;
+        *Fd = 1.5 * m->kappa2 * s * (1.0 + damp * dv);
+        *Fdv = m->kappa2 * d * s * damp;
+    }
+}
+
+void model_partials(const ModelData *m, double tau, double P[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS]) {
+    memset(P, 0, sizeof(double) * MODEL_N_UNKNOWNS * MODEL_N_KNOWNS);
+    if (m->mode == MODE_STICK) {
+        /* carried by the wall: der(u) = w', der(v) = 0 whatever (u, v); the holding force (and the
+         * indicator, the same force) is forcing + F_ext - nu w' - Omega^2 (w + 1) */
+        P[PU_F_CONTACT][PK_F_EXT] = P[PU_WALL_INDICATOR][PK_F_EXT] = 1.0;
+        P[PU_F_CONTACT][PK_U_WALL] = P[PU_WALL_INDICATOR][PK_U_WALL] = -m->Omega2;
+        return;
+    }
+    /* der(u) = v; der(v) = forcing - nu v - Omega^2 (u + 1) [- F(u - w, v - w')] + F_ext */
+    P[PU_DER_U][PK_V] = 1.0;
+    P[PU_DER_V][PK_U] = -m->Omega2;
+    P[PU_DER_V][PK_V] = -m->nu;
+    P[PU_DER_V][PK_F_EXT] = 1.0;
+    if (m->wall != WALL_NONE) { /* g0 = u - w (no wall: the constant 1) */
+        P[PU_WALL_INDICATOR][PK_U] = 1.0;
+        P[PU_WALL_INDICATOR][PK_U_WALL] = -1.0;
+    }
+    if (m->mode != MODE_CONTACT) return;
+    double Fd, Fdv;
+    contact_force_partials(m, m->u - model_wall_position(m, tau), m->v - m->du_wall, &Fd, &Fdv);
+    P[PU_DER_V][PK_U] -= Fd;
+    P[PU_DER_V][PK_V] -= Fdv;
+    P[PU_DER_V][PK_U_WALL] = Fd;
+    P[PU_F_CONTACT][PK_U] = Fd;
+    P[PU_F_CONTACT][PK_V] = Fdv;
+    P[PU_F_CONTACT][PK_U_WALL] = -Fd;
+}
+
 void model_event_indicators(const ModelData *m, double tau, const double y[2],
                             double g[MODEL_N_EVENTS]) {
     if (m->wall == WALL_NONE) {
@@ -350,20 +393,44 @@ void model_set_states(ModelData *m, const double x[MODEL_N_STATES]) {
     m->v = x[1];
 }
 
-int model_me_event_update(ModelData *m, double tau, double y[2]) {
-    if (model_release_now(m, tau)) { /* sticking: the holding force has gone */
-        y[0] = model_wall_position(m, tau);
-        y[1] = m->du_wall;
-        return 1;
-    }
-    if (m->wall == WALL_NONE || m->mode == MODE_STICK) return 0;
-    /* the importer stops on the far side of g0 = u - w = 0 (or on it) */
+double model_me_event_tolerance(const ModelData *m, double tau) {
+    return MODEL_ME_EVENT_TOL * fmax(1.0, fabs(model_wall_position(m, tau)));
+}
+
+/* A sticking mass whose state the importer moved off the wall (beyond the tolerance): free if it
+ * is outside the wall, refused inside it. */
+static MeEventResult me_unstick(ModelData *m, double d) {
+    if (d > 0.0) return ME_EVENT_INSIDE_RIGID;
+    m->mode = MODE_FREE;
+    return ME_EVENT_KEPT;
+}
+
+MeEventResult model_me_event_update(ModelData *m, double tau, double y[2]) {
+    if (m->wall == WALL_NONE) return ME_EVENT_NONE;
+    const double tol = model_me_event_tolerance(m, tau);
     const double d = y[0] - model_wall_position(m, tau), dv = y[1] - m->du_wall;
+    if (m->mode == MODE_STICK) {
+        if (fabs(d) > tol || fabs(dv) > tol) return me_unstick(m, d);
+        if (!model_release_now(m, tau)) return ME_EVENT_NONE; /* still held */
+        y[0] = model_wall_position(m, tau); /* the holding force has gone: released */
+        y[1] = m->du_wall;
+        return ME_EVENT_JUMP;
+    }
+    /* the importer stops on the far side of g0 = u - w = 0 (or on it) */
     const int crossed = m->mode == MODE_FREE ? (d > 0.0 || (d == 0.0 && dv > 0.0))
                                              : (d < 0.0 || (d == 0.0 && dv < 0.0));
-    if (!crossed) return 0;
-    model_event_update(m, tau, y, 0);
-    return 1;
+    if (!crossed) return ME_EVENT_NONE;
+    if (fabs(d) <= tol) { /* the crossing the importer located: the wall's jump */
+        model_event_update(m, tau, y, 0);
+        return ME_EVENT_JUMP;
+    }
+    if (m->mode == MODE_CONTACT) { /* far outside the compliant wall: in flight */
+        m->mode = MODE_FREE;
+        return ME_EVENT_KEPT;
+    }
+    if (m->wall == WALL_RIGID) return ME_EVENT_INSIDE_RIGID;
+    m->mode = MODE_CONTACT; /* far inside the compliant wall: in contact, no entry jump */
+    return ME_EVENT_KEPT;
 }
 
 /* --- what the FMI core asks of the model ---------------------------------------------------- */

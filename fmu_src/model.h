@@ -113,13 +113,27 @@ int model_release_now(ModelData *m, double tau);
 /* Model Exchange: the importer integrates (u, v) and watches MODEL_N_ME_EVENTS indicators (the
  * wall indicator g0 only: the grazing guard g1 is the importer's business in ME). At an event
  * (importer found a sign change of g0, state y at local time tau), applies what the mode's
- * sign of g0 calls for; returns 1 if the mode or the state changed. */
+ * sign of g0 calls for: the wall's jump for a state within the event tolerance of the wall; for
+ * any other state the mode it is in, its values kept (never a silent move). */
 #define MODEL_N_ME_EVENTS 1
 /* Model Exchange's continuous states: (u, v). */
 #define MODEL_N_STATES 2
 void model_get_states(const ModelData *m, double x[MODEL_N_STATES]);
 void model_set_states(ModelData *m, const double x[MODEL_N_STATES]);
-int model_me_event_update(ModelData *m, double tau, double y[2]);
+/* The event tolerance of Model Exchange: a state within this distance of the wall (|u - w|, and
+ * |v - w'| for a sticking mass) is one the importer located at the wall, and the event's jump
+ * places it there; 1e-6 of the model's unit of length (rest at -1, wall at 0), of |u_wall| for a
+ * wall beyond 1 (docs/fmu.md, "Model Exchange keeps the importer's state"). */
+#define MODEL_ME_EVENT_TOL 1e-6
+double model_me_event_tolerance(const ModelData *m, double tau);
+/* What model_me_event_update did. */
+typedef enum {
+    ME_EVENT_NONE = 0,   /* nothing: the state is on its mode's side of the wall */
+    ME_EVENT_JUMP = 1,   /* the wall event within the tolerance: placed on the wall, jump applied */
+    ME_EVENT_KEPT = 2,   /* a state far from the wall: kept, the mode it is in taken */
+    ME_EVENT_INSIDE_RIGID = -1 /* a state far inside the rigid wall: no mode has it (refused) */
+} MeEventResult;
+MeEventResult model_me_event_update(ModelData *m, double tau, double y[2]);
 /* Contact force of the compliant wall at depth d = u - w (> 0) and velocity d' relative to the
  * wall (0 for d <= 0 with the Hertz laws). */
 double model_contact_force(const ModelData *m, double d, double dv);
@@ -137,6 +151,17 @@ void model_shift_time(ModelData *m, double k);
 /* Applies the documented rule after the inputs jumped between steps (state y at local time tau,
  * updated in place): see model.c. Returns 1 if the mode or the state changed. */
 int model_input_jump(ModelData *m, double tau, double y[2]);
+
+/* -- exact partial derivatives (fmu_derivatives.c: fmi2/fmi3GetDirectionalDerivative,
+ * fmi3GetAdjointDerivative) -- The knowns (columns) are the continuous states and the inputs; the
+ * unknowns (rows) the right-hand side, the wall's force and the wall indicator. Each entry is the
+ * partial derivative at the instance's contact mode and state now: the piecewise right-hand side
+ * of that mode, differentiated (the mode itself changes only at events, so it has no partial). */
+typedef enum { PK_U = 0, PK_V = 1, PK_F_EXT = 2, PK_U_WALL = 3, MODEL_N_KNOWNS = 4 } PartialKnown;
+typedef enum {
+    PU_DER_U = 0, PU_DER_V = 1, PU_F_CONTACT = 2, PU_WALL_INDICATOR = 3, MODEL_N_UNKNOWNS = 4
+} PartialUnknown;
+void model_partials(const ModelData *m, double tau, double P[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS]);
 
 /* -- what the FMI core asks of the model (fmu_vars.c, fmu_snapshot.c, fmu_cs.c, fmu_core.c) -- */
 /* Bounds on the input derivatives (slopes per unit time). */

@@ -69,7 +69,14 @@ class Variable:
         Output dependencies, FMI 2.0 ModelStructure (None: not an output).
     dependencies_fmi3 : tuple of str or None
         Output dependencies written in the FMI 3.0 file (None: the attribute is omitted, which
-        FMI 3.0 reads as "depends on everything").
+        FMI 3.0 reads as "depends on everything").  Derivatives and the event indicator write
+        ``dependencies`` in both files.
+    dependencies_kind : tuple of str or None
+        The ``dependenciesKind`` of each entry of ``dependencies`` (same order), written in both
+        files: ``constant`` (a fixed factor), ``discrete`` (a factor that changes only at events:
+        with the contact mode), ``dependent`` (changes with the state: the Hertz laws).
+        tests/fmu/test_directional_derivatives.py measures the pattern against the FMU's own
+        partial derivatives.
     initial_dependencies : tuple of str or None
         FMI 2.0 InitialUnknowns dependencies (None: the attribute is omitted).
     event_indicator : bool
@@ -106,6 +113,7 @@ class Variable:
     derivative_of: str | None = None
     dependencies: tuple[str, ...] | None = None
     dependencies_fmi3: tuple[str, ...] | None = None
+    dependencies_kind: tuple[str, ...] | None = None
     initial_dependencies: tuple[str, ...] | None = None
     event_indicator: bool = False
     twin: bool = False
@@ -133,6 +141,7 @@ def _output(name: str, vr: int, enum: str, type_: str, variability: str, descrip
             **more) -> Variable:
     """An output, an initial unknown without dependencies unless given."""
     more.setdefault("dependencies", ())
+    more.setdefault("dependencies_fmi3", more["dependencies"])
     more.setdefault("initial_dependencies", ())
     return Variable(name, vr, enum, type_, "output", variability, "calculated", description,
                     **more)
@@ -144,6 +153,16 @@ _SENS = ("derivative of the state at the end t1 of the last doStep w.r.t. its st
 _SENS_DOC = "{d}: t0, t1 the start and end of the last doStep"
 _WORK_BOUND = ("bound on {what} one communication step, per unit of time advanced (at least "
                "one unit)")
+
+#: What decides the contact mode at the start (model_initialize_state): in_contact's dependence.
+#: (der(u) is v0, or 0 sticking, which needs v0 = 0: it depends on v0 alone.)
+_MODE_DECIDERS = ("nu", "Omega", "sigma", "wall", "u0", "v0", "F_ext", "u_wall")
+#: ... and of the contact law's force: F_contact and der(v) at the start.
+_CONTACT_DEPS = ("nu", "Omega", "sigma", "Gamma", "wall", "u0", "v0", "contact", "alpha_hc",
+                 "F_ext", "u_wall")
+#: der(v) and F_contact on (u, v, F_ext, u_wall): the Hertz laws make u, v, u_wall's factors
+#: change with the state; F_ext's is 1 or 0 (sticking) per contact mode.
+_RHS_KINDS = ("dependent", "dependent", "discrete", "dependent")
 
 #: Every variable, in value-reference order.
 VARIABLES: tuple[Variable, ...] = (
@@ -204,10 +223,12 @@ VARIABLES: tuple[Variable, ...] = (
     _calculated("kappa", 12, "wall frequency kappa = sqrt(Gamma) Omega, eq (40)",
                 ("Omega", "Gamma"), doc_meaning="wall frequency sqrt(Gamma) Omega, eq (40)"),
     _output("u", 13, "U", "Real", "continuous", "position (wall at u = 0)", field="u",
-            dependencies=("u",), dependencies_fmi3=None, initial_dependencies=("u0",),
+            dependencies=("u",), dependencies_fmi3=("u",), dependencies_kind=("constant",),
+            initial_dependencies=("u0",),
             twin=True, doc_kind="output", doc_meaning="position (wall at u = 0)"),
     _output("v", 14, "V", "Real", "continuous", "velocity", field="v",
-            dependencies=("v",), dependencies_fmi3=None, initial_dependencies=("v0",),
+            dependencies=("v",), dependencies_fmi3=("v",), dependencies_kind=("constant",),
+            initial_dependencies=("v0",),
             twin=True, doc_kind="output", doc_meaning="velocity"),
     _output("impacts", 15, "IMPACTS", "Integer", "discrete",
             "wall entries (impacts) since the start time", field="impacts", twin=True,
@@ -215,8 +236,7 @@ VARIABLES: tuple[Variable, ...] = (
     _output("in_contact", 16, "IN_CONTACT", "Boolean", "discrete",
             "true while inside the compliant wall or sticking on the rigid one",
             getter="get_in_contact",
-            initial_dependencies=("nu", "Omega", "sigma", "wall", "u0", "v0", "F_ext",
-                                  "u_wall"),
+            initial_dependencies=_MODE_DECIDERS,
             twin=True, doc_kind="Boolean output",
             doc_meaning="inside the compliant wall, or sticking on the rigid one"),
     _parameter("contact", 17, "CONTACT", "Integer",
@@ -235,13 +255,19 @@ VARIABLES: tuple[Variable, ...] = (
                doc_meaning="Hunt-Crossley damping factor"),
     Variable("der(u)", 19, "DER_U", "Real", "local", "continuous", "calculated",
              "du/dt (Model Exchange)", getter="get_der_u", derivative_of="u",
+             dependencies=("v",), dependencies_kind=("discrete",),
+             initial_dependencies=("v0",),  # v0, or 0 sticking, which needs v0 = 0
              doc_kind="local (Model Exchange)", doc_meaning="du/dt"),
     Variable("der(v)", 20, "DER_V", "Real", "local", "continuous", "calculated",
              "dv/dt (Model Exchange)", getter="get_der_v", derivative_of="v",
+             dependencies=("u", "v", "F_ext", "u_wall"), dependencies_kind=_RHS_KINDS,
+             initial_dependencies=_CONTACT_DEPS,
              doc_kind="local (Model Exchange)", doc_meaning="dv/dt"),
     Variable("wall_indicator", 21, "WALL_INDICATOR", "Real", "local", "continuous", "calculated",
              "event indicator: u (the wall), or the net wall force while sticking on the rigid "
              "wall", getter="get_indicator", fmi2=False, event_indicator=True,
+             dependencies=("u", "F_ext", "u_wall"),
+             dependencies_kind=("discrete", "discrete", "discrete"),
              doc_kind="local (FMI 3.0 Model Exchange)",
              doc_meaning="the event indicator g0: u, or the net wall force while sticking"),
     Variable("time", 22, "TIME", "Real", "independent", "continuous", None,
@@ -277,8 +303,8 @@ VARIABLES: tuple[Variable, ...] = (
             getter="get_contact_force",
             dependencies=("u", "v", "F_ext", "u_wall"),
             dependencies_fmi3=("u", "v", "F_ext", "u_wall"),
-            initial_dependencies=("nu", "Omega", "sigma", "Gamma", "wall", "u0", "v0",
-                                  "contact", "alpha_hc", "F_ext", "u_wall"),
+            dependencies_kind=_RHS_KINDS,
+            initial_dependencies=_CONTACT_DEPS,
             description_fmi3="the wall's force on the mass, repulsive positive: the contact "
                              "law's force in the compliant wall, the holding force while "
                              "sticking on the rigid wall, 0 in flight",

@@ -41,6 +41,11 @@ The public entry points, grouped as you look for them:
   labelled by the periodic attractor it reaches (`Attractor`: period, impacts, stroboscopic
   points); coexisting attractors of equal period told apart by their points
   (`identify_attractors`); starts inside a rigid wall marked invalid; parallel and resumable.
+* `run_basins_kernel` -- the same on the batch kernel (the FMU's closed form in C for many starts
+  at once, early-stopped on the attractors found, in tiles, locally or on Dask); its quantifiers:
+  `basin_fractions`, `basin_entropy`, `uncertainty_exponent` (from the grid),
+  `uncertainty_from_pairs` (from random pairs of starts), and `fmu_agreement` (random starts
+  through the FMU, labels compared).
 
 # Shooting
 
@@ -117,6 +122,9 @@ _EXPORTS = {
     "StroboscopicMap": "dynamics.shooting", "map_guided_windows": "dynamics.shooting",
     "compare_windows": "analysis.windows",
     "run_basins": "runs.basin_scan", "Attractor": "dynamics.basins", "identify_attractors": "dynamics.basins",
+    "run_basins_kernel": "runs.basin_kernel_scan", "basin_fractions": "analysis.basin_measures",
+    "basin_entropy": "analysis.basin_measures", "uncertainty_exponent": "analysis.basin_measures",
+    "fmu_agreement": "analysis.basin_agreement", "uncertainty_from_pairs": "analysis.basin_uncertainty",
 }
 
 __all__ = sorted(_EXPORTS) + ["__version__"]

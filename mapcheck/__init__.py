@@ -11,6 +11,7 @@ Modules, by concern:
 * :mod:`mapcheck.bifurcation` -- vectorized iteration over sigma/rho grids (fresh, up, down)
 * :mod:`mapcheck.duration` -- impact duration: exact (41) and (42), (45), (50)
 * :mod:`mapcheck.orbits`   -- Newton periodic orbits and window edges of any map (e.g. the exact map)
+* :mod:`mapcheck.impact_orbit` -- the rigid wall's one-impact period-1 orbit in closed form: fold, flip, graze
 """
 from .coeffs import A_GRAZING, Coefficients, coefficients, grazing_acceleration
 from .exact import ExactOscillator

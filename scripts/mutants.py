@@ -64,6 +64,9 @@ SENS = "tests/fmu/test_sensitivities.py tests/harness/test_sensitivities.py"
 CF = "tests/fmu/test_closed_form.py"
 TRUTH = "tests/fmu/test_inputs_truth.py"
 GUARD = "tests/fmu/test_grazing_guard.py"
+DERIV = "tests/fmu/test_directional_derivatives.py"
+BASINS = "tests/harness/test_basins_kernel.py"
+MEASURES = "tests/analysis/test_basin_measures.py"
 # mutants that survived the first run (issue 22): the independent-truth tests that now kill them run first
 ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28",
                                 "M52")}
@@ -216,6 +219,27 @@ MUTANTS: tuple[Mutant, ...] = (
        "a placement without impact treated as a rigid impact in the saltation matrix"),
     _m("M51", "fmu_src/solver_cvode.c", "if (locate_crossing(s, m, last_good_before(s, t), t) != 0) {",
        "if (0) {", f"{GUARD} {EVENTS}", "a stepped-over crossing counted by the rescue but never located"),
+    # -- fmu_src/model.c: the partial derivatives behind fmi2/fmi3GetDirectionalDerivative ----------
+    _m("M53", "fmu_src/model.c", "P[PU_DER_V][PK_U_WALL] = Fd;", "P[PU_DER_V][PK_U_WALL] = -Fd;",
+       DERIV, "d der(v) / d u_wall inside the wall with the wrong sign"),
+    _m("M54", "fmu_src/model.c", "*Fdv = m->kappa2 * d * s * damp;", "*Fdv = m->kappa2 * s * damp;",
+       DERIV, "Hunt-Crossley: the damper's partial on v without the depth factor d"),
+    _m("M55", "fmu_src/model.c",
+       "P[PU_F_CONTACT][PK_U_WALL] = P[PU_WALL_INDICATOR][PK_U_WALL] = -m->Omega2;",
+       "P[PU_F_CONTACT][PK_U_WALL] = P[PU_WALL_INDICATOR][PK_U_WALL] = -1.0;", DERIV,
+       "sticking: the holding force's partial on u_wall without the spring's Omega^2"),
+    # -- basins: the batch kernel's early stop, the labels of slow regions, the quantifiers --------
+    _m("M56", "fmu_src/batch.c", "if (cand >= 0 && run >= known->confirm) {", "if (cand >= 0) {", BASINS,
+       "early stop at the first point near an attractor, without following the orbit round"),
+    _m("M57", "harness/runs/basin_tiles.py", "if np.any(stuck) or int(np.max(imp)) >= CHATTER_ENTRIES:",
+       "if np.any(stuck):", BASINS, "a start chattering at its samples not labelled sticking/chatter"),
+    _m("M58", "harness/analysis/basin_measures.py",
+       "return float(entropy.mean()), float(entropy[on_boundary].mean()) if n_b else 0.0, nu * nv, n_b",
+       "return float(entropy.mean()), float(entropy.mean()) if n_b else 0.0, nu * nv, n_b", MEASURES,
+       "boundary basin entropy averaged over all boxes, not the boundary's"),
+    _m("M59", "harness/analysis/basin_measures.py", "        diff |= (c != lab[m - j: nu - m - j, m: nv - m])",
+       "        diff = (c != lab[m - j: nu - m - j, m: nv - m])", MEASURES,
+       "eps-uncertain: only the neighbours at eps (the last axis direction), not within eps"),
 )
 
 

@@ -53,6 +53,24 @@ Mode (FMI 3.0), never in Continuous-Time Mode, where only the continuous inputs 
 `u_wall` may be set; `SetDebugLogging` accepts only the declared categories (`logStatusError`,
 `logStatusWarning`, `logEvents`); with logging off only errors are logged.
 
+**Where the two versions differ, and which text decides.**
+
+* `fmi3EnterEventMode` (Model Exchange) is allowed in Continuous-Time Mode only: FMI 3.0
+  section 3.2 draws the transition into Event Mode from Continuous-Time Mode (and, in
+  Co-Simulation with `eventModeUsed`, section 4.2 from Step Mode), none from Event Mode itself;
+  the Reference FMUs' mask is the same. FMI 2.0.4's table (section 3.2.3) marks
+  `fmi2EnterEventMode` in Event Mode too, and the FMI 2.0 FMU accepts it there.
+* `fmi2GetDerivatives` and `fmi2GetNominalsOfContinuousStates` are refused in Initialization
+  Mode: FMI 2.0.4 section 3.2.3, the table of the functions allowed per state, marks neither in
+  its Initialization Mode column (fmusdk's masks agree). The derivatives are InitialUnknowns of
+  the ModelStructure there and `fmi2GetReal` on `der(u)`, `der(v)` answers; FMI 3.0 (section 3.2)
+  allows `fmi3GetContinuousStateDerivatives` and `fmi3GetNominalsOfContinuousStates` in
+  Initialization Mode, and the FMI 3.0 FMU answers them.
+* `fmi2GetRealStatus(fmi2LastSuccessfulTime)` (FMI 2.0.4 section 4.2.3) answers after a
+  completed step and after `fmi2Terminate` (the table of 4.2.4: stepComplete and terminated),
+  on the C FMU and on the twin: the end of the last completed step, the start time before the
+  first. The other status kinds are not provided (the twin: Discard; the C FMU: Error).
+
 Letters: I Instantiated, N Initialization Mode, S Step Mode (FMI 2.0: stepComplete), E Event
 Mode, C Continuous-Time Mode, T Terminated, X Error. A dash: allowed in no state (the FMU does
 not declare what it needs: clocks, structural parameters, `providesEvaluateDiscreteStates`,

@@ -80,6 +80,9 @@ FMI2["fmi2EnterContinuousTimeMode"] = (frozenset(), _s("Event"))
 FMI2["fmi2CompletedIntegratorStep"] = (frozenset(), _s("Continuous"))
 FMI2["fmi2SetTime"] = (frozenset(), _s("Continuous"))
 FMI2["fmi2SetContinuousStates"] = (frozenset(), _s("Continuous"))
+# FMI 2.0.4, 3.2.3, the table of allowed calls per state (Model Exchange): fmi2GetDerivatives and
+# fmi2GetNominalsOfContinuousStates have no mark in the Initialization Mode column (the derivatives
+# are InitialUnknowns there, read with fmi2GetReal); fmusdk's masks agree.
 FMI2["fmi2GetDerivatives"] = (frozenset(), _s("Event Continuous Terminated Error"))
 FMI2["fmi2GetEventIndicators"] = (frozenset(), _s("Init Event Continuous Terminated Error"))
 FMI2["fmi2GetContinuousStates"] = (frozenset(), _s("Init Event Continuous Terminated Error"))
@@ -99,7 +102,12 @@ for _fn in ("SetDebugLogging", "Reset", "FreeInstance", "GetFMUState", "SetFMUSt
     FMI3["fmi3" + _fn] = (_s(_ANY_CS), _s(_ANY_CSE), _s(_ANY_ME))
 FMI3["fmi3EnterInitializationMode"] = (_s("Instantiated"),) * 3
 FMI3["fmi3ExitInitializationMode"] = (_s("Init"),) * 3
-FMI3["fmi3EnterEventMode"] = (frozenset(), _s("Step"), _s("Event Continuous"))
+# FMI 3.0, 3.2 (Model Exchange state machine, the transitions into Event Mode) and 4.2.5
+# (Co-Simulation Event Mode): fmi3EnterEventMode leads from Continuous-Time Mode (ME) or Step Mode
+# (CS with eventModeUsed) into Event Mode; no transition starts in Event Mode itself (unlike FMI
+# 2.0.4's table, which allows fmi2EnterEventMode in Event Mode). The Reference FMUs' mask agrees:
+# MASK_fmi3EnterEventMode = (ContinuousTimeMode | StepMode).
+FMI3["fmi3EnterEventMode"] = (frozenset(), _s("Step"), _s("Continuous"))
 FMI3["fmi3Terminate"] = (_s("Step"), _s("Step Event"), _s("Event Continuous"))
 TYPES3 = ("Float32", "Float64", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64",
           "UInt64", "Boolean", "String", "Binary")

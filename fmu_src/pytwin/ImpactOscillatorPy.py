@@ -239,12 +239,15 @@ class ImpactOscillatorPy(Fmi2Slave):
     def to_xml(self, model_options: dict[str, str] = dict()) -> Element:  # noqa: B006
         """pythonfmu's model description, completed to match the C FMU's.
 
-        Adds what pythonfmu cannot declare: ``InitialUnknowns`` (required by FMI 2.0 for
+        Adds what pythonfmu cannot declare: ``providesDirectionalDerivative`` (answered by the C
+        front), ``InitialUnknowns`` (required by FMI 2.0 for
         outputs with initial="calculated" and for calculated parameters), min/max and the
         ``rad`` unit on the variables, and the flat naming convention of the C FMU.
         """
         root = super().to_xml(model_options)
         root.set("variableNamingConvention", "flat")
+        # the C front answers fmi2GetDirectionalDerivative (pytwin/twin_export.c)
+        root.find("CoSimulation").set("providesDirectionalDerivative", "true")
         declared = {name: (type_, attrs) for name, type_, *_, attrs in VARIABLES}
         for sv in root.iter("ScalarVariable"):
             type_, attrs = declared[sv.get("name")]

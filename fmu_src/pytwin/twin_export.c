@@ -66,12 +66,16 @@ typedef struct {
     char *name;
     TwinState state;
     int logging_on;
+    /* fmi2LastSuccessfulTime (FMI 2.0.4, 4.2.3): the end of the last completed doStep, else the
+     * start time; the twin's Python side has no time variable to read it from. */
+    double last_time;
 } Twin;
 
 /* Snapshot box: pythonfmu's state plus the machine state it was taken in. */
 typedef struct {
     fmi2FMUstate inner;
     TwinState state;
+    double last_time;
 } TwinSnapshot;
 
 static void log_to(const fmi2CallbackFunctions *cb, const char *name, fmi2Status status,
@@ -337,6 +341,7 @@ fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDef, fmi2Real tol
                                fmi2Boolean stopDef, fmi2Real t1) {
     Twin *t = check(c, "fmi2SetupExperiment");
     if (!t) return fmi2Error;
+    t->last_time = t0;
     return after(t, inner.fmi2SetupExperiment(t->comp, tolDef, tol, t0, stopDef, t1), S_INSTANTIATED);
 }
 
@@ -364,6 +369,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
     fmi2Status s = inner.fmi2Reset(t->comp);
     if (s == fmi2OK || s == fmi2Warning) {
         t->state = S_INSTANTIATED;
+        t->last_time = 0.0;
         return s;
     }
     t->state = S_ERROR;
@@ -412,6 +418,7 @@ fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *s) {
         return after(t, r, keep);
     }
     box->state = keep;
+    box->last_time = t->last_time;
     *s = box;
     return r;
 }
@@ -421,7 +428,9 @@ fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate s) {
     if (!t) return fmi2Error;
     if (!s) return refuse(t, "fmi2SetFMUstate: FMUstate is NULL");
     TwinSnapshot *box = (TwinSnapshot *)s;
-    return after(t, inner.fmi2SetFMUstate(t->comp, box->inner), box->state);
+    const fmi2Status r = inner.fmi2SetFMUstate(t->comp, box->inner);
+    if (r == fmi2OK || r == fmi2Warning) t->last_time = box->last_time;
+    return after(t, r, box->state);
 }
 
 fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s) {
@@ -435,39 +444,46 @@ fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *s) {
     return after(t, r, t->state);
 }
 
-/* Serialised form: one byte of machine state, then pythonfmu's bytes. */
+/* Serialised form: one byte of machine state, the last successful time (a double, native byte
+ * order), then pythonfmu's bytes. */
+#define TWIN_HEADER (1 + sizeof(double))
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate s, size_t *size) {
     Twin *t = check(c, "fmi2SerializedFMUstateSize");
     if (!t) return fmi2Error;
     if (!s || !size) return refuse(t, "fmi2SerializedFMUstateSize: NULL argument");
     fmi2Status r = inner.fmi2SerializedFMUstateSize(t->comp, ((TwinSnapshot *)s)->inner, size);
-    if (r == fmi2OK) *size += 1;
+    if (r == fmi2OK) *size += TWIN_HEADER;
     return after(t, r, t->state);
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate s, fmi2Byte bytes[], size_t size) {
     Twin *t = check(c, "fmi2SerializeFMUstate");
     if (!t) return fmi2Error;
-    if (!s || !bytes || size < 1) return refuse(t, "fmi2SerializeFMUstate: bad argument");
+    if (!s || !bytes || size < TWIN_HEADER)
+        return refuse(t, "fmi2SerializeFMUstate: bad argument");
     bytes[0] = (fmi2Byte)((TwinSnapshot *)s)->state;
-    return after(t, inner.fmi2SerializeFMUstate(t->comp, ((TwinSnapshot *)s)->inner, bytes + 1,
-                                                size - 1), t->state);
+    memcpy(bytes + 1, &((TwinSnapshot *)s)->last_time, sizeof(double));
+    return after(t, inner.fmi2SerializeFMUstate(t->comp, ((TwinSnapshot *)s)->inner,
+                                                bytes + TWIN_HEADER, size - TWIN_HEADER),
+                 t->state);
 }
 
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte bytes[], size_t size,
                                    fmi2FMUstate *s) {
     Twin *t = check(c, "fmi2DeSerializeFMUstate");
     if (!t) return fmi2Error;
-    if (!bytes || size < 1 || !s || (unsigned char)bytes[0] > S_ERROR)
+    if (!bytes || size < TWIN_HEADER || !s || (unsigned char)bytes[0] > S_ERROR)
         return refuse(t, "fmi2DeSerializeFMUstate: not a serialised state of this FMU");
     TwinSnapshot *box = calloc(1, sizeof *box);
     if (!box) return refuse(t, "fmi2DeSerializeFMUstate: out of memory");
-    fmi2Status r = inner.fmi2DeSerializeFMUstate(t->comp, bytes + 1, size - 1, &box->inner);
+    fmi2Status r = inner.fmi2DeSerializeFMUstate(t->comp, bytes + TWIN_HEADER, size - TWIN_HEADER,
+                                                 &box->inner);
     if (r != fmi2OK) {
         free(box);
         return after(t, r, t->state);
     }
     box->state = (TwinState)(unsigned char)bytes[0];
+    memcpy(&box->last_time, bytes + 1, sizeof(double));
     *s = box;
     return fmi2OK;
 }
@@ -477,16 +493,40 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real tc, fmi2Real h, fmi2Boolean noSe
     if (!t) return fmi2Error;
     if (!(h > 0.0)) /* FMI 2.0.4, 4.2.2: communicationStepSize > 0; also NaN */
         return refuse(t, "fmi2DoStep: communicationStepSize must be > 0 (got %g)", h);
-    return after(t, inner.fmi2DoStep(t->comp, tc, h, noSetPrior), S_STEP);
+    const fmi2Status r = after(t, inner.fmi2DoStep(t->comp, tc, h, noSetPrior), S_STEP);
+    if (r == fmi2OK || r == fmi2Warning) t->last_time = tc + h;
+    return r;
 }
 
 /* Not provided by the twin (canInterpolateInputs, maxOutputDerivativeOrder 0, no async steps). */
+/* Directional derivatives, exact and without Python: the twin is Co-Simulation only and has no
+ * inputs, so its knowns are the states u, v alone (as the C FMU's Co-Simulation accepts them) and
+ * its Real unknowns the outputs u, v, which are those states: the Jacobian is the identity. The
+ * right-hand side's partials (der(u), der(v), F_contact) belong to Model Exchange and the ports,
+ * which the twin does not have. */
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference u[], size_t nu,
                                         const fmi2ValueReference z[], size_t nz,
                                         const fmi2Real dv[], fmi2Real dz[]) {
     Twin *t = check(c, "fmi2GetDirectionalDerivative");
-    (void)u, (void)nu, (void)z, (void)nz, (void)dv, (void)dz;
-    return t ? refuse(t, "fmi2GetDirectionalDerivative: not provided by the twin") : fmi2Error;
+    if (!t) return fmi2Error;
+    if ((nu && (!u || !dz)) || (nz && (!z || !dv)))
+        return refuse(t, "fmi2GetDirectionalDerivative: NULL argument");
+    for (size_t j = 0; j < nz; ++j) {
+        const int i = find_var(z[j], T_REAL);
+        if (i < 0 || (strcmp(TWIN_VARS[i].name, "u") && strcmp(TWIN_VARS[i].name, "v")))
+            return refuse(t, "fmi2GetDirectionalDerivative: value reference %u is not a known: the "
+                          "twin has no inputs, its knowns are the states u, v", z[j]);
+    }
+    for (size_t k = 0; k < nu; ++k) {
+        const int i = find_var(u[k], T_REAL);
+        if (i < 0 || TWIN_VARS[i].causality != C_OUTPUT)
+            return refuse(t, "fmi2GetDirectionalDerivative: value reference %u is not a Real "
+                          "output", u[k]);
+        dz[k] = 0.0;
+        for (size_t j = 0; j < nz; ++j) /* d u/d u = d v/d v = 1, the rest 0 */
+            if (z[j] == u[k]) dz[k] += dv[j];
+    }
+    return fmi2OK;
 }
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t n,
                                        const fmi2Integer order[], const fmi2Real value[]) {
@@ -513,7 +553,15 @@ fmi2Status fmi2CancelStep(fmi2Component c) {
         return t ? fmi2Discard : fmi2Error; /* 4.2.3: Discard when the status is not provided */ \
     }
 STATUS_GETTER(fmi2GetStatus, fmi2Status)
-STATUS_GETTER(fmi2GetRealStatus, fmi2Real)
+/* fmi2LastSuccessfulTime is answered after a completed step and after Terminate (4.2.3; the C FMU
+ * and fmusdk's masks agree); the other kinds are not provided (Discard). */
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind k, fmi2Real *v) {
+    Twin *t = check(c, "fmi2GetRealStatus");
+    if (!t) return fmi2Error;
+    if (k != fmi2LastSuccessfulTime || !v) return fmi2Discard;
+    *v = t->last_time;
+    return fmi2OK;
+}
 STATUS_GETTER(fmi2GetIntegerStatus, fmi2Integer)
 STATUS_GETTER(fmi2GetBooleanStatus, fmi2Boolean)
 STATUS_GETTER(fmi2GetStringStatus, fmi2String)

@@ -12,7 +12,11 @@ non-impacting and an impacting period-1 orbit coexist.
 Starts whose samples are not periodic (chaotic, quasi-periodic, or not converged in the
 transient) cannot be matched point by point; they form one class, ``NOT_PERIODIC``, and the
 scan's ``dynamics`` variable says which of the three each one is when Lyapunov exponents were
-asked for.  Starts the FMU refused (inside a rigid wall) are ``INVALID``.
+asked for.  Starts the FMU refused (inside a rigid wall) are ``INVALID``.  The batch kernel's
+scans (:mod:`harness.runs.basin_kernel_scan`) add two labels: ``STICKING`` for a start that is
+not periodic and sticks on the wall or chatters (many wall entries in one period) at its
+samples -- the slow regions of the flow that a recurrence test could take for an attractor --
+and ``ESCAPED`` for one that left every bound or that the closed form could not continue.
 """
 from __future__ import annotations
 
@@ -24,6 +28,15 @@ import numpy as np
 NOT_PERIODIC = -1
 #: Label of a start that was not run: the FMU refused it (a start inside a rigid wall).
 INVALID = -2
+#: Label of a start that is not periodic and sticks or chatters at its samples (batch kernel).
+STICKING = -3
+#: Label of a start that escaped (|u| or |v| beyond every bound) or failed (batch kernel).
+ESCAPED = -4
+#: Wall entries in one forcing period from which a non-periodic start counts as chattering.
+CHATTER_ENTRIES = 8
+#: What each label below 0 means (the NetCDF flags and the figure's legend).
+LABEL_NAMES = {NOT_PERIODIC: "not periodic", INVALID: "invalid start", STICKING: "sticking or chatter",
+               ESCAPED: "escaped or failed"}
 
 
 @dataclass(frozen=True)

@@ -34,11 +34,14 @@ class Event:
     kind : str
         One of :data:`EVENT_KINDS`.
     value : float
-        Parameter value where it lies (for flip/fold/ns: the root of the test function; for
-        graze/stick: the last orbit with the old contact count, ``bracket`` from the first
-        parameter without it).
+        Parameter value where it lies: for flip/fold/ns the root of the test function; for a
+        graze the zero of its defining quantity (``quantity``: the gap of a free passage or the
+        entry velocity of a contact), extrapolated from the orbits on the old side; for a stick
+        (or a graze that no such quantity describes, ``quantity`` "contacts") the last orbit with
+        the old contact count, ``bracket`` from the first parameter without it.
     index : int
-        Index of the branch point that is this event (located points are inserted in the branch).
+        Index of the branch point that is this event (located points are inserted in the branch;
+        for a graze, the last orbit with the old contacts, at ``values[index]`` next to ``value``).
     multipliers : ndarray complex (2,)
         Of the orbit at ``value``.
     point : ndarray (2,)
@@ -48,6 +51,11 @@ class Event:
         itself reached zero).
     note : str
         What happened there, e.g. "continued with 2 impacts per period" or the reason of an end.
+    interval : (float, float) or None
+        For a graze located on its defining equation: an interval of the parameter that contains
+        the zero (``bracket`` is its width).
+    quantity : str
+        For a graze: "gap", "entry velocity" or "contacts" (located by the contact pattern only).
     """
 
     kind: str
@@ -57,11 +65,17 @@ class Event:
     point: np.ndarray
     bracket: float = 0.0
     note: str = ""
+    interval: tuple[float, float] | None = None
+    quantity: str = ""
 
     def as_dict(self) -> dict[str, Any]:
-        return {"kind": self.kind, "value": self.value, "index": self.index,
-                "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers],
-                "point": [float(x) for x in self.point], "bracket": self.bracket, "note": self.note}
+        out = {"kind": self.kind, "value": self.value, "index": self.index,
+               "multipliers": [[float(m.real), float(m.imag)] for m in self.multipliers],
+               "point": [float(x) for x in self.point], "bracket": self.bracket, "note": self.note}
+        if self.kind in ("graze", "stick"):
+            out["quantity"] = self.quantity
+            out["interval"] = None if self.interval is None else [float(x) for x in self.interval]
+        return out
 
 
 @dataclass

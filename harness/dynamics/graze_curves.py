@@ -183,8 +183,16 @@ def _first_graze(pmap: PeriodMap, M: int, sigma_in: float, z_in: Any, sigma_out:
                  of_q: Callable[[float], float], q0: float, locate_tol: float) -> _GrazeWalk:
     """The walk started at the first point of the curve: the graze located by bisection across
     the curve along ln sigma, between ``sigma_in`` (the orbit with its pattern) and ``sigma_out``."""
-    w_in = np.asarray(z_in, dtype=float) - pmap.offset(sigma_in)
-    w0, ev0, ok, _ = refine_orbit(pmap, w_in, sigma_in, M)
+    w0, ev0, ok = np.zeros(2), None, False
+    for k in (0.0, 1.0, 4.0, 16.0):
+        # a graze event's value is the zero of its defining quantity, where the orbit with the
+        # pattern may already be lost: step inward (away from sigma_out) when it is
+        sigma_in_k = sigma_in + k * (sigma_in - sigma_out)
+        w_in = np.asarray(z_in, dtype=float) - pmap.offset(sigma_in_k)
+        w0, ev0, ok, _ = refine_orbit(pmap, w_in, sigma_in_k, M)
+        if ok:
+            sigma_in = sigma_in_k
+            break
     if not ok:
         raise ValueError(f"no period-{M} orbit at sigma = {sigma_in:g} near the given point")
     plane = _Plane(pmap, param2, of_q, M, ev0.contacts.copy())

@@ -14,6 +14,7 @@ import numpy as np
 
 from .arclength import ArclengthCorrector, BranchPoint
 from .branch import Branch, Event
+from .graze_location import GrazeLocation, locate_graze
 from .periodic_map import PeriodMap, refine_orbit
 from .step_control import StepControl
 
@@ -31,6 +32,11 @@ GRAZE_GAP = 1e-5
 
 #: A multiplier above this at a corrector failure: a contact of the orbit is grazing.
 GRAZE_MULTIPLIER = 1e3
+
+#: A located flip (fold) is kept only with a multiplier within this of -1 (+1): det(D + I) also
+#: changes sign where a multiplier passes through infinity (the 1/v of a grazing impact's
+#: saltation), which is a pole of the test function, not a bifurcation.
+POLE_TOL = 1e-2
 
 
 def _growth(iterations: int) -> float:
@@ -67,11 +73,18 @@ class OrbitWalk:
         #: the corrector already failed from the current point (its corner was looked at)
         self.failed_here = False
 
-    def record(self, kind: str, pt: BranchPoint, bracket: float, note: str = "") -> None:
-        """Add a located event point to the branch."""
+    def record(self, kind: str, pt: BranchPoint, bracket: float, note: str = "",
+               located: GrazeLocation | None = None) -> None:
+        """Add a located event point to the branch (a graze with its location on the defining
+        equation: its value and interval, the point staying the last orbit with the old contacts)."""
         self.pts.append(pt)
         self.labels.append(kind)
-        self.events.append(Event(kind, pt.p, len(self.pts) - 1, pt.mult, pt.ev.points[0], bracket, note))
+        ev = Event(kind, pt.p, len(self.pts) - 1, pt.mult, pt.ev.points[0], bracket, note)
+        if located is not None:
+            ev.value, ev.bracket, ev.interval, ev.quantity = located.value, located.width, located.interval, located.quantity
+        elif kind in ("graze", "stick"):
+            ev.quantity = "contacts"
+        self.events.append(ev)
 
     def advance(self, pt: BranchPoint) -> None:
         """Make ``pt`` the current end of the branch."""
@@ -143,18 +156,25 @@ class OrbitWalk:
         exists (True: the branch ends here)."""
         a, M = self.a, self.M
         n_old = int(a.ev.contacts.sum())
-        nxt = _new_contact_orbit(self.cont, good, bad) if self.follow_grazing else None
+        # the graze on its defining equation (gap or entry velocity = 0), None for another change
+        located = locate_graze(self.cont, a, good)
+        at = located.value if located is not None else good.p
+        nxt = _new_contact_orbit(self.cont, good, bad, at) if self.follow_grazing else None
         if nxt is not None and any(np.array_equal(np.roll(nxt.ev.contacts, k), good.ev.contacts) for k in range(M)):
             nxt = None  # the same contacts shifted: the same orbit again, not a new one
         kind = self.graze_kind(good, nxt if nxt is not None else bad, n_beyond)
+        if kind != "graze":
+            located = None
+        how = _how_located(located)
         if nxt is None:
             self.record(kind, good, bracket, f"{n_old} impact(s) per period before; no orbit with another contact "
-                        "count found next to it" + ("" if self.follow_grazing else " (not sought)") + "; branch ends")
-            self.control.stop(kind, f"{kind} at {self.pmap.param} = {good.p:.10g}")
+                        "count found next to it" + ("" if self.follow_grazing else " (not sought)") + "; branch ends"
+                        + how, located)
+            self.control.stop(kind, f"{kind} at {self.pmap.param} = {at if located else good.p:.10g}")
             return True
         n_new = int(nxt.ev.contacts.sum())
-        how = "beyond it" if (nxt.p - good.p) * (good.p - a.p) > 0 else "back on the same side (nonsmooth fold)"
-        self.record(kind, good, bracket, f"{n_old} -> {n_new} impacts per period; continued {how}")
+        how_on = "beyond it" if (nxt.p - good.p) * (good.p - a.p) > 0 else "back on the same side (nonsmooth fold)"
+        self.record(kind, good, bracket, f"{n_old} -> {n_new} impacts per period; continued {how_on}" + how, located)
         self.advance(nxt)
         self.control.count()
         return False
@@ -202,6 +222,8 @@ class OrbitWalk:
                 pt, bracket = self.cont.locate_root(a, self.control.size, lambda q, k=kind: q.tests()[k], fa, fb)
                 if kind == "ns" and abs(pt.mult[0].imag) < 1e-12:
                     continue  # a real pair with product 1: a neutral saddle, not a bifurcation
+                if kind != "ns" and float(np.min(np.abs(pt.mult - (1.0 if kind == "fold" else -1.0)))) > POLE_TOL:
+                    continue  # the test changed sign through a pole (a multiplier through infinity), not a zero
                 if pt.tangent @ a.tangent < 0:
                     pt.tangent = -pt.tangent
                 self.record(kind, pt, bracket)
@@ -214,6 +236,20 @@ class OrbitWalk:
         self.events.append(Event("end", last.p, len(self.pts) - 1, last.mult, last.ev.points[0], 0.0,
                                  self.control.note))
         return _branch(self.pmap, self.M, self.pts, self.labels, self.events)
+
+
+def _how_located(located: GrazeLocation | None) -> str:
+    """The note's account of how a graze was located."""
+    if located is None:
+        return ""
+    lo, hi = located.interval
+    j = located.flight
+    if located.quantity == "gap":
+        which = f"gap of period {located.period}" + (f" after its impact {j}" if j else "")
+    else:
+        which = f"entry velocity of impact {j + 1} of period {located.period}"
+    return (f"; located where the {which} reaches 0 (fit of {located.samples} orbits down to "
+            f"{located.nearest:.2g}), in [{lo:.12g}, {hi:.12g}]")
 
 
 def _sticks(pt: BranchPoint) -> bool:
@@ -262,9 +298,11 @@ def _flip_of_half(cont: ArclengthCorrector, a: BranchPoint, b: BranchPoint, m: i
     return BranchPoint(w, p1, ev), step
 
 
-def _new_contact_orbit(cont: ArclengthCorrector, good: BranchPoint, bad: BranchPoint | None) -> BranchPoint | None:
-    """The orbit with another contact count next to a graze at ``good``: the corrector's own
-    solution beyond it if it converged, else Newton at fixed p on both sides of the graze."""
+def _new_contact_orbit(cont: ArclengthCorrector, good: BranchPoint, bad: BranchPoint | None,
+                       at: float) -> BranchPoint | None:
+    """The orbit with another contact count next to a graze at ``at`` (``good`` the last orbit with
+    the old contacts): the corrector's own solution beyond it if it converged, else Newton at fixed
+    p on both sides of the graze."""
     near = max(1e3 * cont.locate_tol, 1e-6)
     if (bad is not None and not np.array_equal(bad.ev.contacts, good.ev.contacts)
             and float(np.max(np.abs(bad.x - good.x))) < near):
@@ -272,11 +310,14 @@ def _new_contact_orbit(cont: ArclengthCorrector, good: BranchPoint, bad: BranchP
         return _oriented(bad, bad.x - good.x)
     pmap, M = cont.pmap, cont.M
     h = max(1e3 * cont.locate_tol, 1e-6)
-    for dp in (h * good.tangent[2] / max(abs(good.tangent[2]), 1e-300), -h * np.sign(good.tangent[2])):
+    ahead = float(np.sign(good.tangent[2])) or 1.0
+    # on both sides of the graze, measured from the graze itself (which the last orbit that
+    # converged may be well short of, next to a rigid wall's square-root singularity)
+    for p in (at + h * ahead, at - h * ahead, good.p + h * ahead, good.p - h * ahead):
         for dw in (good.tangent[:2] * 1e-3, -good.tangent[:2] * 1e-3, np.zeros(2)):
-            w, ev, ok, _ = refine_orbit(pmap, good.w + dw, good.p + dp, M)
+            w, ev, ok, _ = refine_orbit(pmap, good.w + dw, p, M)
             if ok and not np.array_equal(ev.contacts, good.ev.contacts) and float(np.max(np.abs(w - good.w))) < 1e-2:
-                pt = BranchPoint(w, good.p + dp, ev)
+                pt = BranchPoint(w, p, ev)
                 return _oriented(pt, pt.x - good.x)
     return None
 

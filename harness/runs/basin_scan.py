@@ -14,7 +14,7 @@ import numpy as np
 import xarray as xr
 
 from ..config import SamplingSpec, SweepSpec
-from ..dynamics.basins import INVALID, NOT_PERIODIC, Attractor, identify_attractors
+from ..dynamics.basins import ESCAPED, INVALID, NOT_PERIODIC, STICKING, Attractor, identify_attractors
 from ..errors import HarnessInputError
 from .sweeps import SweepStats, run_sweep
 
@@ -64,13 +64,7 @@ def run_basins(fmu: Any, u0: Sequence[float], v0: Sequence[float], params: Mappi
         coordinate), NaN-padded.
     """
     sampling = sampling or SamplingSpec()
-    u0 = np.asarray(u0, dtype=float)
-    v0 = np.asarray(v0, dtype=float)
-    for name, grid in (("u0", u0), ("v0", v0)):
-        if grid.ndim != 1 or grid.size < 1 or not np.all(np.isfinite(grid)):
-            raise HarnessInputError(name, "expected one or more finite values")
-        if np.unique(grid).size != grid.size:
-            raise HarnessInputError(name, "values must be distinct")
+    u0, v0 = check_grid(u0, "u0"), check_grid(v0, "v0")
     spec = SweepSpec("u0", u0, ("fresh",), "v0", v0)
     ds = run_sweep(fmu, spec, params, (float(u0[0]), float(v0[0])), sampling, backend=backend, workers=workers,
                    scheduler=scheduler, checkpoint=checkpoint, progress=progress, settings=settings, stats=stats)
@@ -83,16 +77,27 @@ def run_basins(fmu: Any, u0: Sequence[float], v0: Sequence[float], params: Mappi
     return with_attractors(ds, labels, attractors, tol)
 
 
+def check_grid(values: Sequence[float], name: str) -> np.ndarray:
+    """One axis of the grid of starts: one or more finite, distinct values."""
+    grid = np.asarray(values, dtype=float)
+    if grid.ndim != 1 or grid.size < 1 or not np.all(np.isfinite(grid)):
+        raise HarnessInputError(name, "expected one or more finite values")
+    if np.unique(grid).size != grid.size:
+        raise HarnessInputError(name, "values must be distinct")
+    return grid
+
+
 def with_attractors(ds: xr.Dataset, labels: np.ndarray, attractors: list[Attractor], tol: float) -> xr.Dataset:
     """``ds`` with the variables and attributes of :func:`run_basins`'s result."""
     ds = ds.copy()
     ds["attractor"] = (("u0", "v0"), labels, {
         "long_name": "attractor reached from (u0, v0) at t = theta",
-        "flag_values": np.array([INVALID, NOT_PERIODIC], dtype=np.int64),
-        "flag_meanings": "invalid_start not_periodic",
+        "flag_values": np.array([ESCAPED, STICKING, INVALID, NOT_PERIODIC], dtype=np.int64),
+        "flag_meanings": "escaped_or_failed sticking_or_chatter invalid_start not_periodic",
         "comment": ">= 0: index of the periodic attractor (attractor_* variables); -1: samples not periodic "
                    "(chaotic, quasi-periodic or not converged: see dynamics); -2: start refused by the FMU "
-                   "(inside a rigid wall)"})
+                   "(inside a rigid wall); -3 (batch kernel): not periodic, sticking or chattering at its "
+                   "samples; -4 (batch kernel): escaped or failed"})
     n = len(attractors)
     width = max([a.period for a in attractors], default=1)
     points = np.full((n, width, 2), np.nan)
@@ -111,6 +116,8 @@ def with_attractors(ds: xr.Dataset, labels: np.ndarray, attractors: list[Attract
     ds.attrs["basins.attractors"] = json.dumps([a.name for a in attractors])
     ds.attrs["basins.not_periodic_starts"] = int(np.sum(labels == NOT_PERIODIC))
     ds.attrs["basins.invalid_starts"] = int(np.sum(labels == INVALID))
+    ds.attrs["basins.sticking_starts"] = int(np.sum(labels == STICKING))
+    ds.attrs["basins.escaped_starts"] = int(np.sum(labels == ESCAPED))
     return ds
 
 

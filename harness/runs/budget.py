@@ -174,6 +174,24 @@ def sweep_estimate(n_values: float, n_modes: int, n_scan: float, transient: floa
     )
 
 
+#: One period of the batch kernel (the closed form in C, no FMI) in FMU periods of work: about
+#: 3 us against about 300 us (BENCHMARKS.md), rounded up.
+KERNEL_PERIOD_COST = 0.02
+
+
+def basin_kernel_estimate(starts: float, transient: float, samples: float, tile: float,
+                          argument: str = "--u0-grid") -> Estimate:
+    """A basin scan on the batch kernel: every start at most ``transient + samples`` periods of
+    the kernel; a tile's samples and the grid's labels held at once."""
+    periods = transient + samples
+    return Estimate(
+        memory=min(tile, starts) * samples * 21.0 + starts * 40.0,
+        work=starts * periods * KERNEL_PERIOD_COST,
+        what=f"batch-kernel basin scan of {starts:.3g} start(s) x {periods:.3g} periods",
+        argument=argument,
+    )
+
+
 def strobe_estimate(transient: float, samples: float, argument: str = "--samples") -> Estimate:
     """One stroboscopic run."""
     return Estimate(memory=_COPIES * _SAMPLE_BYTES * samples, work=transient + samples,

@@ -124,6 +124,25 @@ class SweepCollector:
             self.in_flight[key] = points - self.first_of[key]  # points computed in this run
             self.show()
 
+    def count_kept_on_disk(self) -> None:
+        """Set ``stats.kept_points`` to the points the checkpoint holds now, counted on disk.
+
+        After an interrupt the running count can lag the files by one report: a progress
+        thread (or the result loop) saves its point and counts it a moment later, and the
+        interrupt can fall in between. The files are written atomically, so they are the truth.
+        """
+        if self.store is None:
+            return
+        with self.lock:
+            kept = 0
+            for key, task in self.tasks.items():
+                if self.store.has(key):
+                    kept += len(task.values)
+                else:
+                    rows = self.store.load_partial(key)
+                    kept += len(rows["period"]) if rows else 0
+            self.stats.kept_points = kept
+
     def on_result(self, key: str, arrays: dict[str, np.ndarray]) -> None:
         """A task finished with ``arrays``."""
         rows = self.partial.get(key)

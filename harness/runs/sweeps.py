@@ -189,6 +189,13 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
 
 # ----------------------------------------------------------------------------------------
 # Driver
+def _open_checkpoint(directory: str, spec: SweepSpec, base: Mapping[str, Any], state0: tuple[float, float],
+                     sampling: SamplingSpec, sha: str) -> Checkpoint:
+    """The checkpoint of this sweep in ``directory``, tied to everything that determines its results."""
+    identity = sweep_identity(spec, base, state0, sampling, sha)
+    return Checkpoint(directory, fingerprint(identity), identity=identity)
+
+
 # ----------------------------------------------------------------------------------------
 def run_sweep(
     fmu: FmuModel | str | Any,
@@ -248,10 +255,7 @@ def run_sweep(
     sampling = sampling or SamplingSpec()  # checked on creation
     model, base, source, sha = _resolve_fmu(fmu, spec, params)
     tasks = plan_tasks(spec, base, state0, sampling)
-    store = None
-    if checkpoint is not None:
-        identity = sweep_identity(spec, base, state0, sampling, sha)
-        store = Checkpoint(checkpoint, fingerprint(identity), identity=identity)
+    store = None if checkpoint is None else _open_checkpoint(checkpoint, spec, base, state0, sampling, sha)
     stats = stats if stats is not None else SweepStats()
     collect = SweepCollector(tasks, store, stats)
     be, source = _open_backend(backend, workers, scheduler, model, source)
@@ -261,6 +265,9 @@ def run_sweep(
         be.run(run_task, collect.todo, source, collect.on_result,
                collect.on_progress if (progress or store is not None) else None)
         description = be.describe()
+    except KeyboardInterrupt:
+        collect.count_kept_on_disk()  # the message then says what a rerun will find
+        raise
     finally:
         collect.bar.close()
         if backend is None or isinstance(backend, str):

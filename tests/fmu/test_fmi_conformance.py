@@ -29,13 +29,13 @@ from tests.fuzz.bindings import ERROR, OK, WARNING
 
 INTERFACES = ("fmi2-cs", "fmi2-me", "fmi3-cs", "fmi3-cs-event", "fmi3-me")
 
-# Functions this FMU does not provide (no directional derivatives, no asynchronous step, no
-# structural parameters, no dependency information): where allowed they fail, but not for the
-# state.
+# Functions this FMU does not provide (no asynchronous step, no structural parameters, no
+# dependency information): where allowed they fail, but not for the state. The directional and
+# adjoint derivatives are provided: where allowed they must succeed.
 NOT_PROVIDED = {
-    "fmi2GetDirectionalDerivative", "fmi2GetRealOutputDerivatives", "fmi2CancelStep",
+    "fmi2GetRealOutputDerivatives", "fmi2CancelStep",
     "fmi2GetStatus", "fmi2GetIntegerStatus", "fmi2GetBooleanStatus", "fmi2GetStringStatus",
-    "fmi3GetDirectionalDerivative", "fmi3GetAdjointDerivative", "fmi3EnterConfigurationMode",
+    "fmi3EnterConfigurationMode",
     "fmi3GetNumberOfVariableDependencies", "fmi3GetVariableDependencies",
     "fmi3GetOutputDerivatives",
 }

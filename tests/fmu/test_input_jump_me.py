@@ -104,3 +104,26 @@ def test_model_exchange_applies_the_same_rule(reference, path):
     # update moved the mass onto the stepped wall)
     assert err <= 1e-6, err
     assert list(res["impacts"][rows_at]) == list(counts)
+
+
+@pytest.mark.parametrize("interface", ["fmi2-me", "fmi3-me"])
+@pytest.mark.parametrize("jump", [dict(F_ext=0.3), dict(u_wall=-0.05), dict(u_wall=-0.6)])
+def test_an_input_jump_in_event_mode_asks_the_importer_to_restart(interface, jump):
+    """A jump of F_ext or u_wall set in Event Mode makes the right-hand side jump: the event
+    iteration reports valuesOfContinuousStatesChanged (the flag on which fmusim restarts its
+    integrator; FMPy restarts at every event), with the state itself unchanged unless the input-jump rule moves it (the
+    wall stepping 0.1 past the mass into the compliant wall: the state kept, contact taken)."""
+    from tests.derivative_support import Instance
+
+    x = Instance(interface, u0=-0.5, v0=0.2, wall=1)
+    try:
+        x.enter_event_mode()
+        x.set_inputs(**jump)
+        assert x.event_update()
+        assert x.states().tolist() == [-0.5, 0.2]
+        assert x.integer("in_contact") == int(jump.get("u_wall", 0.0) < -0.5)
+        x.fmu.enterContinuousTimeMode()
+        x.enter_event_mode()  # no input changed since: nothing to restart
+        assert not x.event_update()
+    finally:
+        x.close()

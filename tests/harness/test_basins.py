@@ -139,9 +139,10 @@ ARGS = ["basins", "--set", "nu=0.8", "--set", "Omega=2.5", "--set", "r=0.8", "--
         "--transient", "400", "--samples", "20", "--no-progress"]
 
 
-def test_cli_writes_netcdf_figure_and_lists_the_attractors(tmp_path: Path, capsys) -> None:
+@pytest.mark.parametrize("kernel", ["fmu", "batch"])
+def test_cli_writes_netcdf_figure_and_lists_the_attractors(tmp_path: Path, capsys, kernel: str) -> None:
     out = tmp_path / "b.nc"
-    code, stdout, err = run_main([*ARGS, "--workers", "2", "--out", str(out)], capsys)
+    code, stdout, err = run_main([*ARGS, "--workers", "2", "--kernel", kernel, "--out", str(out)], capsys)
     assert code == 0, err
     assert "A0: P1, 1 impact" in stdout and "invalid (refused by the FMU: inside a rigid wall): 3 start(s)" in stdout
     ds = xr.open_dataset(out)
@@ -161,7 +162,10 @@ def test_cli_bad_input_is_one_line(tmp_path: Path, capsys, bad: str, flag: str) 
 @pytest.mark.slow
 def test_cli_interrupted_scan_resumes_with_no_point_missing(tmp_path: Path) -> None:
     out = tmp_path / "b.nc"
-    cmd = [sys.executable, "-m", "harness", *ARGS, "--backend", "serial", "--out", str(out), "--no-plot"]
+    # the FMU path (a sweep of every start, resumed point by point; the batch kernel's tiles:
+    # tests/harness/test_basins_kernel.py)
+    cmd = [sys.executable, "-m", "harness", *ARGS, "--kernel", "fmu", "--backend", "serial", "--out", str(out),
+           "--no-plot"]
     first = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=600,
                            env={**os.environ, TEST_HOOK_ENV: "fresh-s0001-p00002:0:interrupt"})
     assert first.returncode == 130, first.stderr

@@ -100,6 +100,29 @@ def test_cli_sweep_with_scheduler_address(model: FmuModel, cluster, tmp_path: Pa
         assert ds["period"].sel(direction="fresh").values.tolist() == [2, 1]
 
 
+def test_batch_kernel_basins_on_dask_equal_the_local_scan(cluster, tmp_path: Path) -> None:
+    """The batch kernel's tiles on the two workers: the same labels as in this process, and a
+    rerun with the checkpoint computes nothing."""
+    from harness.runs.basin_kernel_scan import run_basins_kernel
+    from harness.runs.sweep_collect import SweepStats
+
+    client, _ = cluster
+    params = {"nu": 0.196, "Omega": 7.368, "r": 0.9, "Gamma": 1000.0, "wall": 1, "sigma": 0.01, "solver": 1}
+    s = SamplingSpec(n_transient=150, n_samples=30)
+    u0, v0 = np.linspace(-1.2, 0.0, 24), np.linspace(-8.0, 8.0, 20)
+    local = run_basins_kernel(None, u0, v0, params, s, progress=False, tile_size=60)
+    ckpt = tmp_path / "ckpt"
+    remote = run_basins_kernel(None, u0, v0, params, s, progress=False, tile_size=60, backend=client,
+                               checkpoint=str(ckpt))
+    assert remote.attrs["backend"].startswith("batch kernel (closed form in C) on dask")
+    np.testing.assert_array_equal(remote["attractor"].values, local["attractor"].values)
+    stats = SweepStats()
+    again = run_basins_kernel(None, u0, v0, params, s, progress=False, tile_size=60, backend=client,
+                              checkpoint=str(ckpt), stats=stats)
+    assert stats.computed == 0 and stats.resumed == 8
+    np.testing.assert_array_equal(again["attractor"].values, local["attractor"].values)
+
+
 def test_dask_sweep_equals_local_and_survives_a_killed_worker(model: FmuModel, cluster) -> None:
     client, workers = cluster
     spec = SweepSpec("sigma", np.linspace(0.2, 1.0, 8), ("fresh", "up"))

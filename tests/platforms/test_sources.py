@@ -7,6 +7,7 @@ builds without -O2's exact flags)."""
 from __future__ import annotations
 
 import shutil
+import sys
 import subprocess
 import zipfile
 from pathlib import Path
@@ -75,6 +76,32 @@ def test_plain_cmake_rebuilds_from_sources_alone(tmp_path, fmu, fmi):
         for cmd in (["cmake", "-S", str(alone), "-B", str(bld)], ["cmake", "--build", str(bld), "-j", "2"]):
             subprocess.run(cmd, check=True, capture_output=True)
         shutil.copy(bld / "ImpactOscillator.so", target)
+
+    shipped, rebuilt = _shipped_and(rebuild, tmp_path, fmu, fmi)
+    assert np.isfinite(rebuilt).all()
+    assert np.abs(rebuilt - shipped).max() <= 1e-12
+
+
+@pytest.mark.parametrize("fmu,fmi", FMUS[1:], ids=["fmi3"])  # buildDescription.xml: FMI 3.0 only
+def test_fmi_bd2cmake_builds_the_binary_from_the_build_description(tmp_path, fmu, fmi):
+    """An independent toolchain: the PyPI package fmi-bd2cmake reads sources/buildDescription.xml
+    and writes its own CMake project (not the one shipped in sources/); the binary it builds runs
+    the same orbit as the shipped one."""
+    require_cross_build()
+    tool = Path(sys.executable).with_name("fmi-bd2cmake")
+    assert tool.exists(), "fmi-bd2cmake missing: pip install fmi-bd2cmake (pyproject.toml)"
+
+    def rebuild(unzipdir: Path, target: Path) -> None:
+        project = tmp_path / "bd2cmake"
+        shutil.copytree(unzipdir / "sources", project / "sources")
+        (project / "sources" / "CMakeLists.txt").unlink()  # only the generated project is used
+        subprocess.run([str(tool), "-i", "sources/buildDescription.xml", "-o", "CMakeLists.txt"],
+                       cwd=project, check=True, capture_output=True)
+        headers = project / "sources" / "fmi-headers"
+        for cmd in (["cmake", "-S", ".", "-B", "build", f"-DFMI_HEADERS_DIR={headers}"],
+                    ["cmake", "--build", "build", "-j", "2"]):
+            subprocess.run(cmd, cwd=project, check=True, capture_output=True)
+        shutil.copy(project / "build" / NATIVE.binary(fmi), target)
 
     shipped, rebuilt = _shipped_and(rebuild, tmp_path, fmu, fmi)
     assert np.isfinite(rebuilt).all()

@@ -75,3 +75,14 @@ def test_continuation_bench_quick() -> None:
                           capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, proc.stderr
     assert "<!-- continuation:begin -->" in proc.stdout and "| closed form | 21 |" in proc.stdout
+
+
+def test_basins_bench_quick() -> None:
+    """``bench/basins_bench.py --quick`` runs the FMU path, the kernel on threads and on Dask, and
+    the check against the FMU, and prints its section (nothing written)."""
+    proc = subprocess.run([sys.executable, str(ROOT / "bench" / "basins_bench.py"), "--quick"],
+                          capture_output=True, text=True, timeout=600)
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    assert "<!-- basins:begin -->" in out and "batch kernel on Dask, 2 workers" in out
+    assert "40 of 40 random starts labelled alike (100.00%)" in out

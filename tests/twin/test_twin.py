@@ -756,3 +756,25 @@ def test_c_importer_exit_has_no_use_after_free(twin_fmu: Path, tmp_path: Path) -
     blocks = run.stderr.split("==\n")
     bad = [b for b in blocks if "Invalid" in b and "finalizePythonInterpreter" in b]
     assert not bad, bad[0]
+
+
+def test_twins_directional_derivatives_are_the_c_fmus_in_co_simulation(twin_fmu: Path,
+                                                                       c_fmu: Path) -> None:
+    """The twin (Co-Simulation, no inputs) answers fmi2GetDirectionalDerivative from its C front:
+    its Real outputs u, v with respect to the states u, v, as the C FMU's Co-Simulation does."""
+    from fmpy.fmi1 import FMICallException
+    seeds = [(1.0, 0.0), (0.0, 1.0), (0.3, -2.0)]
+    got = {}
+    for path in (twin_fmu, c_fmu):
+        s = Slave(path)
+        try:
+            s.start(t0=0.0, u0=-0.4, v0=0.5)
+            s.step_to(0.7)
+            got[path] = [s.slave.getDirectionalDerivative([13, 14], [13, 14], list(w))
+                         for w in seeds]
+            if path == twin_fmu:
+                with pytest.raises(FMICallException):
+                    s.slave.getDirectionalDerivative([13], [2], [1.0])  # sigma: no known
+        finally:
+            s.close()
+    assert got[twin_fmu] == got[c_fmu] == [list(w) for w in seeds]

@@ -1,0 +1,247 @@
+/*
+ * The batch kernel: the closed-form stepper (closed_form.c) run for many starts at once, for basin
+ * scans. Not a second implementation of the physics: each start is the FMU's own sequence of
+ * calls -- model_set_defaults, the parameters, model_update_derived and its checks, stepper_start
+ * at t0 = theta, model_initialize_state, then one advance_to per forcing period to the same
+ * t_end the FMU computes from the harness's doStep (t + (target - t)) -- so its stroboscopic
+ * points are the FMU's closed-form mode's, bit for bit.
+ *
+ * Early stopping (recurrence on the stroboscopic section). The caller passes the attractors
+ * found so far: per attractor its period p, its p stroboscopic points in orbit order and the
+ * wall entries of the period that ends on each point. After every period the state is compared
+ * with them in the max norm; a start whose state lands within `tol` (the tolerance the
+ * attractors are told apart with) of point j of an attractor, and then on point j+1, j+2, ...
+ * (cyclically) with the right wall entries each period, for `confirm` periods in a row, is
+ * labelled with that attractor and stops. Any other start runs the whole transient and its
+ * samples come back to the caller, which classifies them (and so finds new attractors).
+ *
+ * Starts are independent: OpenMP spreads them over `threads` threads (dynamic schedule: early
+ * stops make their costs uneven); ctypes releases the GIL while it runs.
+ *
+ * Built by fmu_src/CMakeLists.txt into build/fmu/libimpact_batch.so; loaded by
+ * harness/fmu/batch_kernel.py.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "closed_form.h"
+#include "model.h"
+#include "stepper.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+#define BATCH_EXPORT __attribute__((visibility("default")))
+
+/* Per-start status (the `status` output). */
+enum { BATCH_RAN = 0, BATCH_MATCHED = 1, BATCH_INVALID = 2, BATCH_FAILED = 3, BATCH_ESCAPED = 4 };
+
+/* Above this |u| or |v| a start has escaped (the FMU's own bound is 1e15, CORE_MAX_STATE). */
+static const double ESCAPE_BOUND = 1e12;
+
+static int set_param(ModelData *m, const char *name, double x) {
+    if (!strcmp(name, "nu")) m->nu = x;
+    else if (!strcmp(name, "Omega")) m->Omega = x;
+    else if (!strcmp(name, "sigma")) m->sigma = x;
+    else if (!strcmp(name, "r")) m->r = x;
+    else if (!strcmp(name, "Gamma")) m->Gamma = x;
+    else if (!strcmp(name, "wall")) m->wall = (int)x;
+    else if (!strcmp(name, "contact")) m->contact = (int)x;
+    else if (!strcmp(name, "alpha_hc")) m->alpha_hc = x;
+    else if (!strcmp(name, "F_ext")) m->F_ext = x;
+    else if (!strcmp(name, "u_wall")) m->u_wall = x;
+    else if (!strcmp(name, "max_events_per_time")) m->max_events_per_time = x;
+    else if (!strcmp(name, "max_steps_per_time")) m->max_steps_per_time = x;
+    /* the method's own settings: this kernel is the closed form, whatever they say */
+    else if (!strcmp(name, "solver") || !strcmp(name, "rtol") || !strcmp(name, "atol") ||
+             !strcmp(name, "sensitivities") || !strcmp(name, "u0") || !strcmp(name, "v0")) {
+    } else return -1;
+    return 0;
+}
+
+/* The model of every start, checked as the FMU checks it at the end of initialisation. */
+static int build_model(ModelData *m, int n_params, const char *const *names, const double *values,
+                       char *err, int errlen) {
+    model_set_defaults(m);
+    for (int i = 0; i < n_params; ++i)
+        if (set_param(m, names[i], values[i]) != 0) {
+            snprintf(err, (size_t)errlen, "the batch kernel does not know the parameter %s", names[i]);
+            return -1;
+        }
+    m->solver = SOLVER_CLOSED_FORM;
+    m->sensitivities = 0;
+    model_update_derived(m);
+    char buf[300];
+    const char *why = model_check_consistency(m, buf, sizeof buf);
+    if (!why) why = model_check_derived(m, buf, sizeof buf);
+    if (!why) why = closed_form_unsupported(m);
+    if (why) {
+        snprintf(err, (size_t)errlen, "%s", why);
+        return -1;
+    }
+    return 0;
+}
+
+/* The attractors known to the early stop. */
+typedef struct {
+    int n, width;          /* attractors; points per attractor in the arrays (largest period) */
+    const int *period;     /* [n] */
+    const double *points;  /* [n][width][2] */
+    const int *entries;    /* [n][width]: wall entries of the period that ends on the point */
+    double tol;
+    int confirm;
+} Known;
+
+/* The point j of an attractor whose state z is within tol of it (with the same wall entries),
+ * searching every attractor; returns the attractor (and *j) or -1. */
+static int find_point(const Known *k, double u, double v, int entries, int *j) {
+    for (int a = 0; a < k->n; ++a)
+        for (int i = 0; i < k->period[a]; ++i) {
+            const double *p = k->points + 2 * ((size_t)a * k->width + i);
+            if (fabs(u - p[0]) <= k->tol && fabs(v - p[1]) <= k->tol &&
+                k->entries[(size_t)a * k->width + i] == entries) {
+                *j = i;
+                return a;
+            }
+        }
+    return -1;
+}
+
+/* Whether the state continues the recurrence on attractor a from point j (to j + 1). */
+static int next_point(const Known *k, int a, int j, double u, double v, int entries) {
+    const int i = (j + 1) % k->period[a];
+    const double *p = k->points + 2 * ((size_t)a * k->width + i);
+    return fabs(u - p[0]) <= k->tol && fabs(v - p[1]) <= k->tol &&
+           k->entries[(size_t)a * k->width + i] == entries;
+}
+
+typedef struct {
+    int label, periods, status;
+} Outcome;
+
+/* One start: the FMU's initialisation and doStep sequence (file comment), with the early stop. */
+static Outcome run_start(const ModelData *m0, double u0, double v0, double theta, int n_transient,
+                         int n_samples, const Known *known, double *us, double *vs, int *imp,
+                         unsigned char *stuck, char *err, int errlen) {
+    Outcome o = {-1, 0, BATCH_RAN};
+    ModelData m = *m0;
+    m.u0 = u0;
+    m.v0 = v0;
+    if (m.wall == WALL_RIGID && (u0 > m.u_wall || (u0 == m.u_wall && v0 > 0.0))) {
+        o.status = BATCH_INVALID; /* the FMU refuses a start inside a rigid wall */
+        return o;
+    }
+    Stepper st;
+    memset(&st, 0, sizeof st);
+    st.ops = &STEPPER_CLOSED_FORM;
+    st.ops->create(&st, &m);
+    stepper_start(&st, theta);
+    m.origin = st.clk.origin;
+    m.in_tau = st.clk.tau;
+    model_initialize_state(&m, st.clk.tau);
+    double t = theta;
+    int before = 0, cand = -1, cj = 0, run = 0;
+    const int total = n_transient + n_samples;
+    for (int k = 1; k <= total; ++k) {
+        const double target = theta + (double)k;
+        const double t_end = t + (target - t); /* what the FMU's doStep(t, target - t) reaches */
+        if (stepper_advance_to(&st, &m, t_end, 0) != 0) {
+            o.status = BATCH_FAILED;
+            snprintf(err, (size_t)errlen, "start (%.17g, %.17g), t = %.17g: %s", u0, v0, t_end, st.clk.msg);
+            break;
+        }
+        t = t_end;
+        o.periods = k;
+        if (!(fabs(m.u) <= ESCAPE_BOUND && fabs(m.v) <= ESCAPE_BOUND)) {
+            o.status = BATCH_ESCAPED;
+            break;
+        }
+        const int entries = m.impacts - before;
+        before = m.impacts;
+        if (k > n_transient) {
+            const int s = k - n_transient - 1;
+            us[s] = m.u;
+            vs[s] = m.v;
+            imp[s] = entries;
+            stuck[s] = m.mode == MODE_STICK;
+        }
+        if (known->n == 0) continue;
+        if (cand >= 0 && next_point(known, cand, cj, m.u, m.v, entries)) {
+            cj = (cj + 1) % known->period[cand];
+            ++run;
+        } else {
+            cand = find_point(known, m.u, m.v, entries, &cj);
+            run = cand >= 0;
+        }
+        if (cand >= 0 && run >= known->confirm) {
+            o.label = cand;
+            o.status = BATCH_MATCHED;
+            break;
+        }
+    }
+    stepper_free(&st);
+    return o;
+}
+
+/* Library version: the loader refuses a stale build. */
+BATCH_EXPORT int impact_batch_version(void) { return 1; }
+
+BATCH_EXPORT int impact_batch_threads(void) {
+#ifdef _OPENMP
+    return omp_get_max_threads();
+#else
+    return 1;
+#endif
+}
+
+/*
+ * Runs n starts (u0[i], v0[i]) at t = theta for n_transient + n_samples periods each, or until
+ * recognised as one of the n_known attractors (file comment; n_known = 0: no early stop).
+ * Outputs per start: label (the attractor, or -1), periods run, status (BATCH_*), and the
+ * samples of the last n_samples periods (u, v, wall entries, sticking at the sample), left as
+ * they were for periods not reached. Returns 0, or -1 with err set: the parameters are refused
+ * (nothing run), or some start failed (its status says which; err names the first).
+ */
+BATCH_EXPORT int impact_batch_run(int n_params, const char *const *names, const double *values,
+                                  long n, const double *u0, const double *v0, double theta,
+                                  int n_transient, int n_samples, int n_known, int width,
+                                  const int *known_period, const double *known_points,
+                                  const int *known_entries, double tol, int confirm, int threads,
+                                  int *label, int *periods, int *status, double *u_out,
+                                  double *v_out, int *imp_out, unsigned char *stuck_out, char *err,
+                                  int errlen) {
+    ModelData m0;
+    err[0] = '\0';
+    if (build_model(&m0, n_params, names, values, err, errlen) != 0) return -1;
+    const Known known = {n_known, width, known_period, known_points, known_entries, tol,
+                         confirm < 1 ? 1 : confirm};
+    int failed = 0;
+#ifdef _OPENMP
+#pragma omp parallel for schedule(dynamic, 8) num_threads(threads > 0 ? threads : 1)
+#else
+    (void)threads;
+#endif
+    for (long i = 0; i < n; ++i) {
+        char msg[600];
+        msg[0] = '\0';
+        const size_t off = (size_t)i * (size_t)n_samples;
+        const Outcome o = run_start(&m0, u0[i], v0[i], theta, n_transient, n_samples, &known,
+                                    u_out + off, v_out + off, imp_out + off, stuck_out + off, msg,
+                                    (int)sizeof msg);
+        label[i] = o.label;
+        periods[i] = o.periods;
+        status[i] = o.status;
+        if (o.status == BATCH_FAILED) {
+#ifdef _OPENMP
+#pragma omp critical
+#endif
+            {
+                if (!failed) snprintf(err, (size_t)errlen, "%s", msg);
+                failed = 1;
+            }
+        }
+    }
+    return failed ? -1 : 0;
+}
