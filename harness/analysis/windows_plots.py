@@ -148,12 +148,12 @@ def _window_rows(windows: dict[str, Any], applies: dict[str, str | None], every:
     if every is not None:
         for e in every:
             if e.get("resolved"):
-                rows.append((f"ODE: {attractor_label(e['M'], e['impacts'])}", [(e["lo"], e["hi"], e["M"])]))
+                rows.append((f"ODE: {attractor_label(e['M'], e['impacts'])}", [(e["lo"], e["hi"], e["M"])], False))
     else:
-        rows.append((labels["ode"], [(w[0], w[1], M) for M, w in windows["ode"].items() if w is not None]))
+        rows.append((labels["ode"], [(w[0], w[1], M) for M, w in windows["ode"].items() if w is not None], False))
     for k in ("theory_64", "map", "map_A_tilde"):
         if not applies.get(k):
-            rows.append((labels[k], [(w[0], w[1], M) for M, w in windows[k].items() if w is not None]))
+            rows.append((labels[k], [(w[0], w[1], M) for M, w in windows[k].items() if w is not None], True))
     return rows
 
 
@@ -164,18 +164,24 @@ def _plot_windows(ctx: Any, problem: Any, st: Any, windows: dict[str, Any], appl
     import matplotlib.pyplot as plt
 
     x_lo, x_hi = float(st.sigma_range[0]), float(st.sigma_range[1])
+    # the maps' windows are searched over their own (positive) sigma grid: an open lower end is
+    # below that grid's start, not below the plot's
+    map_lo = max(x_lo, float(st.table_grid[0]))
     rows = _window_rows(windows, applies, every, labels_for(problem))
     fig, ax = plt.subplots(figsize=(8, 1.6 + 0.45 * max(1, len(rows))))
     cmap = plt.get_cmap("tab10")
     seen: set[int] = set()
-    for i, (_, wins) in enumerate(rows):
+    for i, (_, wins, is_map) in enumerate(rows):
         for lo, hi, M in wins:
-            a, b = (x_lo if lo is None else lo), (x_hi if hi is None else hi)
+            a = (map_lo if is_map else x_lo) if lo is None else max(lo, x_lo)
+            b = x_hi if hi is None else min(hi, x_hi)
+            if b < a:
+                continue  # wholly outside the plotted range
             ax.plot([a, b], [i, i], lw=8, solid_capstyle="butt", color=cmap((M - 1) % 10),
                     label=f"period {M}" if M not in seen else None)
             seen.add(M)
-            for end, open_, sign in ((a, lo is None, -1), (b, hi is None, 1)):
-                if open_:  # beyond the searched range: an arrow to the axis' edge
+            for end, open_, sign in ((a, lo is None or lo < x_lo, -1), (b, hi is None or hi > x_hi, 1)):
+                if open_:  # beyond the searched (or plotted) range: an arrow to its end
                     ax.annotate("", xy=(end, i), xytext=(end - sign * 0.04 * (x_hi - x_lo), i),
                                 arrowprops=dict(arrowstyle="->", lw=1.5, color="k"))
     ax.set_yticks(range(len(rows)), [r[0] for r in rows], fontsize=8)
@@ -184,11 +190,14 @@ def _plot_windows(ctx: Any, problem: Any, st: Any, windows: dict[str, Any], appl
         ax.set_xscale("log")
     ax.set_xlim(x_lo, x_hi)
     ax.set_ylim(-0.6, len(rows) - 0.4)
-    if not any(w for _, w in rows):
+    if not any(w for _, w, _ in rows):
         ax.text(0.5, 0.5, "no stable window in the searched range", transform=ax.transAxes, ha="center")
     ax.set_title("Stable windows in sigma (an arrow: the window goes on beyond the searched range)\n"
                  f"{problem.describe()}", fontsize=9)
-    if seen:
-        ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.25), fontsize=8, ncol=8, frameon=False)
+    if seen:  # the periods in increasing order
+        h, lab = ax.get_legend_handles_labels()
+        order = sorted(range(len(lab)), key=lambda j: int(lab[j].split()[-1]))
+        ax.legend([h[j] for j in order], [lab[j] for j in order], loc="upper center", bbox_to_anchor=(0.5, -0.25),
+                  fontsize=8, ncol=8, frameon=False)
     fig.tight_layout()
     return _save(fig, ctx.out / f"{ctx.target}_windows.png")
