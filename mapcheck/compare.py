@@ -283,13 +283,21 @@ def window_differences(reference: Windows, other: Windows) -> dict[int, tuple[fl
 
 def best_variant(ode: Windows, variants: Mapping[str, Windows]) -> tuple[str, dict[str, float]]:
     """The variant whose edges are closest to the ODE's (largest absolute difference over
-    every finite edge); returns (name, {name: max |difference|})."""
+    every finite edge); returns (name, {name: max |difference|}).  Two ends that are both
+    unbounded (beyond the range in both) agree: they count as a difference of 0, not as no
+    comparison at all; a window the ODE has and the variant lacks is an infinite difference; a
+    variant with no end comparable to the ODE's scores nan (and is never the best)."""
     score: dict[str, float] = {}
     for name, w in variants.items():
         diffs = [abs(d) for pair in window_differences(ode, w).values() for d in pair if d is not None]
+        open_both = [0.0 for M, ref in ode.items() if ref is not None and w.get(M) is not None
+                     for i in (0, 1) if ref[i] is None and w[M][i] is None]
         missing = sum(1 for M in ode if ode[M] is not None and w.get(M) is None)
-        score[name] = math.inf if missing else (max(diffs) if diffs else math.inf)
-    return min(score, key=score.get), score
+        diffs += open_both
+        # nothing comparable (every window open where the other is bounded): nan, not a difference
+        score[name] = math.inf if missing else (max(diffs) if diffs else math.nan)
+    ranked = {k: v for k, v in score.items() if not math.isnan(v)} or score
+    return min(ranked, key=ranked.get), score
 
 
 def _fmt_window(w: Any, digits: int = 4) -> str:

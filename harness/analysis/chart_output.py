@@ -65,7 +65,16 @@ def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: st
     ax.set_ylim(problem.sigma_grid[0], top)
     ax.set_ylabel("forcing above grazing, sigma")
     ax.set_title(title, fontsize=9)
-    ax.legend(fontsize=7, ncol=3, loc="lower right")
+    grid = problem.sigma_grid
+    if ax.lines or ax.collections:
+        ax.legend(fontsize=7, ncol=3, loc="lower right")
+    else:  # a blank panel says why
+        ax.text(0.5, 0.5, f"no stable maximal window (one impact per period, M <= {problem.M_max})\nin sigma "
+                f"[{grid[0]:.3g}, {grid[-1]:.3g}] at any value of {problem.param2}: nothing to chart",
+                transform=ax.transAxes, ha="center", va="center", fontsize=9)
+    if not bx.lines:
+        bx.text(0.5, 0.5, "beta (43): compliant wall only, at the seed of a window found by the scans; none here",
+                transform=bx.transAxes, ha="center", va="center", fontsize=8)
     bx.axhline(1.0, color="k", lw=0.8, ls=":")
     bx.set_ylabel("beta = r v_c kappa / |A~|\n(at each window's seed)", fontsize=8)
     bx.set_yscale("log")
@@ -87,7 +96,7 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
     g = problem.sigma_grid
     cs = res["continuation_search"]
     lines = [f"# Chart: windows of the ODE over (sigma, {problem.param2})", "",
-             f"Parameters: {', '.join(f'{k} = {v:g}' if isinstance(v, float) else f'{k} = {v}' for k, v in problem.params.items())}; "
+             f"Parameters: {named_parameters(problem.params)}; "
              f"{problem.param2} from {problem.values[0]:g} to {problem.values[-1]:g}{' (log)' if problem.log else ''}.", "",
              "## Where each window closes (two-parameter continuation)", "",
              f"Method: at {problem.param2} = {problem.values[0]:g} the stable maximal orbits (one impact per period, "
@@ -107,7 +116,7 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
         wtxt = "none found" if win is None else f"{_edge_text(win[0])} .. {_edge_text(win[1])}"
         if cl["closes"] is None:
             why = cl.get("note") or "; ".join(f"{k}: {v}" for k, v in (cl.get("edges_end") or {}).items())
-            lines.append(f"| {M} | {wtxt} | null (searched {cl['searched'][0]:g} to {cl['searched'][1]:g}) | - | {why} |")
+            lines.append(f"| {M} | {wtxt} | does not close in {cl['searched'][0]:g} .. {cl['searched'][1]:g} | - | {why} |")
         else:
             lines.append(f"| {M} | {wtxt} | {cl['closes']:.6g} | {cl['sigma']:.5g} | {cl['how']} |")
     lines += ["", "Every edge curve (chart.json, `windows[*].curves`): its end and turning points:", ""]
@@ -182,8 +191,19 @@ def chart(problem: ChartProblem, out: str | Path, fmu_path: str | None = None, b
                                                                  float(problem.sigma_grid[-1]), len(problem.sigma_grid)]}
     (out / "chart.json").write_text(json.dumps(to_jsonable(res), indent=1) + "\n")
     title = (f"Edges of the ODE's windows continued in (sigma, {problem.param2}) (thick), per-value scans (bands), "
-             f"maps (48)/(39) (thin)\n" + ", ".join(f"{k} = {v:.4g}" for k, v in problem.params.items()
-                                                     if isinstance(v, float) and k != problem.param2))
+             f"maps (48)/(39) (thin)\n" + named_parameters({k: v for k, v in problem.params.items()
+                                                             if k != problem.param2}, 4))
     plot_chart(res, problem, out / "chart.png", title)
     (out / "report.md").write_text(chart_report(res, problem, command) + "\n")
     return res
+
+
+def named_parameters(params: dict[str, Any], digits: int = 6) -> str:
+    """'nu = 4.60517, ..., wall = compliant, solver = cvode': enums by name, numbers to ``digits``."""
+    from ..config.defaults import WALL_NAMES
+    from ..fmu.fmi import SOLVER_NAMES
+
+    names = {"wall": dict(enumerate(WALL_NAMES)), "solver": {v: k for k, v in SOLVER_NAMES.items()}}
+    return ", ".join(f"{k} = {names[k].get(int(v), v)}" if k in names else
+                     (f"{k} = {v:.{digits}g}" if isinstance(v, float) else f"{k} = {v}") for k, v in params.items())
+

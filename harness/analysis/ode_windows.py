@@ -56,14 +56,20 @@ class Family:
     found_by: list[str] = field(default_factory=list)
     #: (sigma, (u, v)) of every scan point classified as this family: Newton guesses near it
     track: list[tuple[float, np.ndarray]] = field(default_factory=list)
+    #: the scans' grid was geometric (sigma > 0); else evenly spaced (any sign of sigma)
+    geometric: bool = True
 
-    def guess(self, sigma: float, offset: Any, ratio: float) -> np.ndarray | None:
+    def guess(self, sigma: float, offset: Any, step: float) -> np.ndarray | None:
         """The scan's state nearest to ``sigma`` (in w = z - p(theta) coordinates); None outside
-        the range the scans saw the family in (widened by one grid ratio): beyond it the state
-        would belong to another sigma and Newton could land on a coexisting orbit."""
-        if not self.track or not self.lo / ratio <= sigma <= self.hi * ratio:
+        the range the scans saw the family in (widened by one grid step: a ratio on a geometric
+        grid, a difference on an even one): beyond it the state would belong to another sigma
+        and Newton could land on a coexisting orbit."""
+        inside = (self.lo / step <= sigma <= self.hi * step if self.geometric
+                  else self.lo - step <= sigma <= self.hi + step)
+        if not self.track or not inside:
             return None
-        s_k, z_k = min(self.track, key=lambda t: abs(math.log(t[0] / sigma)))
+        dist = (lambda t: abs(math.log(t[0] / sigma))) if self.geometric else (lambda t: abs(t[0] - sigma))
+        s_k, z_k = min(self.track, key=dist)
         return np.asarray(z_k) - offset(s_k)
 
     @property
@@ -71,8 +77,10 @@ class Family:
         return f"{self.M}/{self.impacts}"
 
 
-def families_from_scans(grid: np.ndarray, ds: Any, M_max: int | None = None) -> list[Family]:
-    """Families of impacting periodic attractors in the up/down scans (one per (M, k) and run).
+def families_from_scans(grid: np.ndarray, ds: Any, M_max: int | None = None,
+                        geometric: bool = True) -> list[Family]:
+    """Families of periodic attractors in the up/down scans (one per (M, k) and run), the
+    wall-free orbit (k = 0 impacts, sigma < 0) included: a window like any other.
 
     Parameters
     ----------
@@ -83,6 +91,8 @@ def families_from_scans(grid: np.ndarray, ds: Any, M_max: int | None = None) -> 
         over (sigma, direction, sample)).
     M_max : int, optional
         Highest period kept.
+    geometric : bool
+        Whether ``grid`` is geometric (the families' Newton guesses are looked up by ratio).
     """
     runs: list[Family] = []
     for d in [str(x) for x in ds["direction"].values]:
@@ -90,12 +100,13 @@ def families_from_scans(grid: np.ndarray, ds: Any, M_max: int | None = None) -> 
         per = np.asarray(sel["period"].values)
         imp = np.asarray(sel["orbit_impacts"].values)
         u, v = np.asarray(sel["u"].values), np.asarray(sel["v"].values)
-        keep = (per > 0) & (imp >= 1) & ((per <= M_max) if M_max else True)
+        keep = (per > 0) & (imp >= 0) & ((per <= M_max) if M_max else True)
         for k, j in equal_runs(keep, per, imp):
             mid = (k + j) // 2
             runs.append(Family(int(per[k]), int(imp[k]), float(grid[k]), float(grid[j]), float(grid[mid]),
                                np.array([u[mid, 0], v[mid, 0]], dtype=float), [d],
-                               [(float(grid[i]), np.array([u[i, 0], v[i, 0]], dtype=float)) for i in range(k, j + 1)]))
+                               [(float(grid[i]), np.array([u[i, 0], v[i, 0]], dtype=float)) for i in range(k, j + 1)],
+                               geometric))
     merged: list[Family] = []
     for f in sorted(runs, key=lambda f: (f.M, f.impacts, f.lo)):
         last = merged[-1] if merged else None
@@ -147,13 +158,15 @@ def orbit_edge_kind(orb: PeriodicOrbit | None, iterated_entries: int, M: int, im
     return "flip" if m.real < 0 else "fold"
 
 
-def impact_velocity(smap: Any, orb: PeriodicOrbit, sigma: float) -> float:
+def impact_velocity(smap: Any, orb: PeriodicOrbit, sigma: float) -> float | None:
     """v_c = sqrt(chi) of the orbit's (first) impact: the state at the section before the
     impacting period, propagated without the wall to t = n (the virtual state of the maps),
     chi = v^2 - 2 A~ u with A~ = (1 + sigma) A + sigma Omega^2 (docs/theory.md sections 3, 5)."""
     from mapcheck.coeffs import grazing_acceleration
     from mapcheck.compare import free_flight
 
+    if not np.any(np.asarray(orb.contacts) > 0):
+        return None  # the wall-free orbit: no impact
     j = int(np.argmax(np.asarray(orb.contacts) > 0))
     z = np.asarray(orb.z[j]) + smap.offset(sigma)
     nu, Om = float(smap.params["nu"]), float(smap.params["Omega"])
@@ -171,10 +184,12 @@ def _accept(M: int, impacts: int):
 
 def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_rel: float,
                  grid_ratio: float, relative: bool = True, c: Any = None) -> dict[str, Any]:
-    """Both edges of the family's window by Newton shooting on the FMU (geometric march).
+    """Both edges of the family's window by Newton shooting on the FMU (a geometric march on a
+    geometric grid, even steps on an even one: ``fam.geometric``).
 
-    ``xtol_rel`` is relative to the seed's sigma (absolute when ``relative`` is False); the march step is a fraction of the window the
-    scans saw (at least the scan grid's ratio ``grid_ratio``), never the tolerance.
+    ``xtol_rel`` is relative to the seed's |sigma| (absolute when ``relative`` is False); the march
+    step is a fraction of the window the scans saw (at least the scan grid's step ``grid_ratio``:
+    a ratio or a difference), never the tolerance.
     """
     from ..dynamics.shooting import MARCH_STEPS, window_edges, newton_for
 
@@ -190,9 +205,12 @@ def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_
     if not ok or orb is None:
         return {"family": fam, "lower": None, "upper": None, "resolved": False}
     w0 = orb.z[0]
-    width = math.log(max(fam.hi / fam.lo, grid_ratio))
+    if fam.geometric:
+        width, step = math.log(max(fam.hi / fam.lo, grid_ratio)), math.log(grid_ratio)
+    else:
+        width, step = max(fam.hi - fam.lo, grid_ratio), grid_ratio
     # at most half a scan step: a larger step near an edge can jump onto a coexisting orbit
-    dp = min(width / MARCH_STEPS, 0.5 * math.log(grid_ratio))
+    dp = min(width / MARCH_STEPS, 0.5 * step)
     try:
         # the scans' own states are the fallback guesses: continuation near a graze can land on a
         # neighbouring orbit, and a state the scan reached on the family is a better start
@@ -209,7 +227,7 @@ def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_
             return fam.guess(s, smap.offset, grid_ratio)
 
         e_lo, e_hi = window_edges(smap, fam.M, fam.seed_sigma, w0, guess_of, sigma_range, dp,
-                                  xtol_rel * (fam.seed_sigma if relative else 1.0), newton, True,
+                                  xtol_rel * (abs(fam.seed_sigma) if relative else 1.0), newton, fam.geometric,
                                   accept=_accept(fam.M, fam.impacts),
                                   kind_of=lambda o, n: orbit_edge_kind(o, n, fam.M, fam.impacts))
     except ValueError:
@@ -295,11 +313,15 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
         ``multipliers_at_lower_edge``, ``xtol`` {M: absolute bisection tolerance}, ``all``: every
         family's window (any number of impacts) as a list of dicts, ``fmu_periods``.
     """
-    fams = families_from_scans(grid, ds, M_max)
+    geometric = bool(grid[0] > 0)  # an even grid reaching sigma <= 0 is marched in even steps
+    fams = families_from_scans(grid, ds, M_max, geometric)
     if guide:
         cap = M_max or max([f.M for f in fams if f.impacts == 1] + [0]) + 2
-        fams += _map_started_families(smap, c, guide, {(f.M, f.impacts) for f in fams}, cap)
-    ratio = float(np.max(grid[1:] / grid[:-1]))
+        for f in _map_started_families(smap, c, guide, {(f.M, f.impacts) for f in fams}, cap):
+            if sigma_range[0] <= f.seed_sigma <= sigma_range[1]:
+                f.geometric = geometric  # marched like the scans' families
+                fams.append(f)
+    ratio = float(np.max(grid[1:] / grid[:-1])) if geometric else float(np.max(np.diff(grid)))
     results, n = shoot_families(smap, fams, sigma_range, xtol_rel, ratio, workers, relative, c)
     out: dict[str, Any] = {"windows": {}, "kinds": {}, "brackets": {}, "intervals": {}, "unresolved": {},
                            "multipliers_at_lower_edge": {}, "xtol": {}, "all": []}
@@ -314,7 +336,7 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
                           "multipliers_inside": r.get("multipliers"), "v_c": r.get("v_c"),
                           "multipliers_near_lower_edge": lo.multipliers,
                           "multipliers_near_upper_edge": hi.multipliers,
-                          "xtol": xtol_rel * (f.seed_sigma if relative else 1.0)})
+                          "xtol": xtol_rel * (abs(f.seed_sigma) if relative else 1.0)})
         out["all"].append(entry)
         if f.impacts == 1 and r["resolved"]:
             width = (hi.good if hi.good is not None else 0.0) - (lo.good if lo.good is not None else 0.0)
@@ -330,7 +352,7 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
         if missing:
             out["unresolved"][M] = missing
         out["multipliers_at_lower_edge"][M] = lo.multipliers
-        out["xtol"][M] = xtol_rel * (best[M]["r"]["family"].seed_sigma if relative else 1.0)
+        out["xtol"][M] = xtol_rel * (abs(best[M]["r"]["family"].seed_sigma) if relative else 1.0)
     out["fmu_periods"] = n
     out["derivatives"] = smap.derivatives
     return out

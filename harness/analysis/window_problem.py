@@ -15,6 +15,7 @@ from mapcheck.coeffs import Coefficients, coefficients
 from mapcheck.compare import predicted_windows
 from mapcheck.linear import alpha_gamma, invert_alpha_gamma
 
+from ..config.defaults import DEFAULT_SOLVER, SECTION_PHASE
 from ..errors import HarnessInputError
 
 __all__ = ["WindowProblem", "WindowSettings", "default_settings", "map_guide", "command_line"]
@@ -44,7 +45,8 @@ class WindowProblem:
         Highest period looked at; None ("auto"): until period adding truncates (no stable
         maximal window at M and M + 1), up to :data:`M_AUTO_LIMIT`.
     theta : float
-        Phase of the FMU's stroboscopic section (1/2: half a period from the impacts).
+        Phase of the FMU's stroboscopic section (the default of every command,
+        :data:`harness.config.SECTION_PHASE`: half a period from the impacts).
     """
 
     nu: float
@@ -53,7 +55,7 @@ class WindowProblem:
     wall: str = "compliant"
     Gamma: float = 10.0
     M_max: int | None = 4
-    theta: float = 0.5
+    theta: float = SECTION_PHASE
     map_wall: str = "auto"
 
     def __post_init__(self) -> None:
@@ -67,6 +69,8 @@ class WindowProblem:
             raise HarnessInputError("--Gamma", f"must be > 0, got {self.Gamma}")
         if not (self.nu > 0 and self.Omega > 0):
             raise HarnessInputError("--nu/--Omega", f"must be > 0, got nu = {self.nu}, Omega = {self.Omega}")
+        if not 0.0 <= self.theta < 1.0:
+            raise HarnessInputError("--theta", f"must lie in [0, 1), got {self.theta}")
         if self.M_max is not None and not 1 <= self.M_max <= M_AUTO_LIMIT:
             raise HarnessInputError("--M-max", f"must be 'auto' or in 1..{M_AUTO_LIMIT}, got {self.M_max}")
 
@@ -121,6 +125,8 @@ class WindowSettings:
 
     Attributes
     ----------
+    far_start : bool
+        Scan also from a large-amplitude start (``--sigma-range``'s runs).
     scan_grid : ndarray
         Sorted sigma values of the up/down scans (and of the map's bifurcation diagrams).
     transient, samples : int
@@ -145,6 +151,10 @@ class WindowSettings:
     log_sigma: bool = False
     extra: dict[str, Any] = field(default_factory=dict)
     xtol_rel: float = 1e-3
+    #: also scan up and down from a start far from the wall-free orbit (large amplitude, hitting
+    #: the wall): below grazing the wall-free orbit is an attractor, and scans started on it never
+    #: leave it, so an impacting attractor beside it is reached only from elsewhere
+    far_start: bool = False
 
 
 #: The sigma range every default scan covers, whatever the maps say (geometric grid): the
@@ -161,11 +171,45 @@ def map_guide(problem: WindowProblem, M_max: int) -> tuple[Coefficients | None, 
         return None, str(exc)
 
 
-def default_settings(problem: WindowProblem, quick: bool) -> WindowSettings:
+def default_settings(problem: WindowProblem, quick: bool, sigma_range: tuple[float, float] | None = None,
+                     xtol: float | None = None) -> WindowSettings:
     """Grids and tolerances: the ODE is scanned over :data:`BASE_RANGE`, widened to hold the
     maps' windows where the maps give finite ones, on a geometric grid (24 points per decade
     quick, 80 full); the shooting may follow an orbit beyond the grid, a decade below and a factor
-    4 above.  The bisection tolerance is relative to the window's sigma (1e-3 quick, 1e-4 full)."""
+    4 above.  The bisection tolerance is relative to the window's sigma (1e-3 quick, 1e-4 full).
+
+    ``sigma_range`` (lo, hi) replaces all that: the scans and the shooting cover exactly
+    [lo, hi], on a geometric grid when lo > 0, else on an even grid (120 points quick, 400 full)
+    with even marching steps: sigma <= 0 included (the wall-free orbit, which grazes at sigma =
+    0).  ``xtol``: an absolute bisection tolerance in sigma instead of the relative one (on an
+    even grid the default is 1e-6 (quick) or 1e-8 (full) of hi - lo).
+    """
+    table_grid, (lo, hi) = _map_range(problem)
+    if sigma_range is not None:
+        lo, hi = sigma_range
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi and lo > -1.0):
+            raise HarnessInputError("--sigma-range", f"needs -1 < LO < HI, both finite, got {lo:g}:{hi:g}")
+    else:
+        lo, hi = max(lo, 1e-6), min(hi, 1e3)
+    if xtol is not None and not (math.isfinite(xtol) and xtol > 0):
+        raise HarnessInputError("--xtol", f"must be a finite number > 0, got {xtol!r}")
+    rel = 1e-3 if quick else 1e-4
+    search = (lo, hi) if sigma_range is not None else (0.1 * lo, 4.0 * hi)
+    st = dict(transient=200 if quick else 300, samples=24 if quick else 40, sigma_range=search, xtol_rel=rel,
+              far_start=sigma_range is not None)
+    if lo <= 0:  # an even grid: a geometric one cannot reach sigma <= 0
+        grid = np.linspace(lo, hi, 121 if quick else 401)
+        return WindowSettings(scan_grid=grid, xtol=xtol if xtol is not None else (1e-6 if quick else 1e-8) * (hi - lo),
+                              table_grid=table_grid, log_sigma=False, **st)
+    # the maps are cheap: search them over the ODE's whole range too
+    table_grid = np.geomspace(min(table_grid[0], 0.01 * lo), max(table_grid[-1], 4.0 * hi), 16001)
+    per_decade = 24 if quick else 80
+    grid = np.geomspace(lo, hi, int(math.ceil(per_decade * math.log10(hi / lo))) + 1)
+    return WindowSettings(scan_grid=grid, xtol=xtol, table_grid=table_grid, log_sigma=True, **st)
+
+
+def _map_range(problem: WindowProblem) -> tuple[np.ndarray, tuple[float, float]]:
+    """The maps' sigma grid, and :data:`BASE_RANGE` widened to hold the maps' windows."""
     lo, hi = BASE_RANGE
     c, _ = map_guide(problem, problem.M_max or M_AUTO_LIMIT)
     table_grid = np.geomspace(1e-6, 1e3, 12001)
@@ -180,25 +224,24 @@ def default_settings(problem: WindowProblem, quick: bool) -> WindowSettings:
             los = [w[0] for w in guide.values() if w is not None and w[0] is not None]
             if los:
                 lo, hi = min(lo, 0.7 * min(los)), max(hi, 2.5 * s_1)
-    lo, hi = max(lo, 1e-6), min(hi, 1e3)
-    # the maps are cheap: search them over the ODE's whole range too
-    table_grid = np.geomspace(min(table_grid[0], 0.01 * lo), max(table_grid[-1], 4.0 * hi), 16001)
-    per_decade = 24 if quick else 80
-    n = int(math.ceil(per_decade * math.log10(hi / lo))) + 1
-    grid = np.geomspace(lo, hi, n)
-    return WindowSettings(scan_grid=grid, transient=200 if quick else 300, samples=24 if quick else 40,
-                          xtol=None, sigma_range=(0.1 * lo, 4.0 * hi), table_grid=table_grid, log_sigma=True,
-                          xtol_rel=1e-3 if quick else 1e-4)
+    return table_grid, (lo, hi)
 
 
 def problem_dict(problem: WindowProblem) -> dict[str, Any]:
     return asdict(problem)
 
 
-def command_line(problem: WindowProblem, quick: bool, out: Any) -> str:
-    a, g = problem.alpha_gamma
-    wall = f"--wall compliant --Gamma {problem.Gamma:g}" if problem.wall == "compliant" else "--wall rigid"
+def command_line(problem: WindowProblem, quick: bool, out: Any, solver: str = DEFAULT_SOLVER,
+                 sigma_range: tuple[float, float] | None = None, xtol: float | None = None,
+                 command: str = "windows") -> str:
+    """The ``impact-harness`` command line that asks the same question again: every model flag,
+    the range, the tolerance, the solver and the section phase, numbers written in full
+    (``repr``), so that running it gives the same JSON."""
+    wall = f"--wall compliant --Gamma {problem.Gamma!r}" if problem.wall == "compliant" else "--wall rigid"
     if problem.map_wall != "auto":
         wall += f" --map {problem.map_wall}"
-    return (f"windows --nu {problem.nu!r} --Omega {problem.Omega!r} --r {problem.r:g} {wall} --M-max {problem.M_max or 'auto'}"
+    extra = "" if sigma_range is None else f" --sigma-range={sigma_range[0]!r}:{sigma_range[1]!r}"
+    extra += "" if xtol is None else f" --xtol {xtol!r}"
+    return (f"{command} --nu {problem.nu!r} --Omega {problem.Omega!r} --r {problem.r!r} {wall} "
+            f"--M-max {problem.M_max or 'auto'} --theta {problem.theta!r} --solver {solver}{extra}"
             f"{' --quick' if quick else ''} --out {out}")

@@ -36,6 +36,7 @@ from mapcheck.compare import (
     window_differences,
 )
 
+from ..config.defaults import DEFAULT_SOLVER, SECTION_PHASE
 from ..errors import HarnessInputError
 from .context import Context, write_outputs
 from .window_problem import (  # noqa: F401  (the parameter set is part of this module's API)
@@ -72,8 +73,18 @@ def ode_scans(ctx: Context, problem: WindowProblem, st: WindowSettings):
     th = 2.0 * math.pi * problem.theta
     sin_th = math.sin(th) if abs(math.sin(th)) > 1e-12 else 0.0  # exactly 0 at theta = 1/2
     state0 = ((1.0 + mid) * math.cos(th) - 1.0, -2.0 * math.pi * (1.0 + mid) * sin_th)
-    return run_sweep(ctx.fmu, spec, ctx.params(**problem.fmu_params()), state0, sampling,
-                     workers=_workers(ctx), progress=ctx.progress)
+    params = ctx.params(**problem.fmu_params())
+    ds = run_sweep(ctx.fmu, spec, params, state0, sampling, workers=_workers(ctx), progress=ctx.progress)
+    if not st.far_start:
+        return ds
+    import xarray as xr
+
+    # three times the wall-free orbit's amplitude away, at rest: it hits the wall hard and settles
+    # on an impacting attractor where one coexists with the wall-free orbit
+    far = run_sweep(ctx.fmu, spec, params, (-3.0 * (1.0 + abs(mid)) - 1.0, 0.0), sampling, workers=_workers(ctx),
+                    progress=ctx.progress)
+    far = far.assign_coords(direction=[f"{d}-far" for d in far["direction"].values])
+    return xr.concat([ds, far], dim="direction", combine_attrs="override")
 
 
 def _safe_predictions(problem: WindowProblem, M_maps: int, st: WindowSettings) -> tuple[dict[str, dict], str | None]:
@@ -118,21 +129,6 @@ def _write_scans(ctx: Context, ds: Any) -> str:
     ds.attrs["reproduce.target"] = ctx.target
     write_netcdf(ds, ctx.out / f"{ctx.target}_ode_scans.nc")
     return f"{ctx.target}_ode_scans.nc"
-
-
-def _verdict(ode: dict[int, Any], variants: dict[str, Any], best: str | None, score: dict[str, float],
-             st: WindowSettings) -> str:
-    """One line: which map variant is closest to the ODE, or why none was compared."""
-    finite = {k: v for k, v in score.items() if math.isfinite(v)}
-    if finite and best is not None:
-        return (f"best map variant: {best} (largest edge difference to the ODE {score[best]:.2g} in sigma)"
-                + "".join(f"; {k}: {v:.2g}" for k, v in score.items() if k != best))
-    if not any(w is not None for w in ode.values()):
-        return (f"the ODE has no stable maximal (one impact per period) window in sigma "
-                f"[{st.sigma_range[0]:.3g}, {st.sigma_range[1]:.3g}]; maps not compared")
-    if not variants:
-        return "no map applies to this oscillator (reasons in report.md); ODE windows only"
-    return "the maps miss windows that the ODE has (differences in report.md)"
 
 
 def _parameters(problem: WindowProblem, st: WindowSettings, shoot: dict[str, Any],
@@ -186,11 +182,17 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
     scan = {d: sweep_windows(grid, ds["period"].sel(direction=d).values, ds["orbit_impacts"].sel(direction=d).values)
             for d in ("up", "down")}
     variants = {k: windows[k] for k in VARIANT_KEYS if applies[k] is None}
+    from .window_summary import coexistence, summary_lines
+    from .windows_plots import labels_for
+
     best, score = best_variant(ode, variants) if variants and any(w is not None for w in ode.values()) else (None, {})
+    from .edge_coincidence import reconcile
+
+    coincident = reconcile(shoot["all"])  # before the figures and the coexistence: one point, not two
     t1 = time.perf_counter()
     from .windows_plots import plot_all
 
-    files = plot_all(ctx, problem, st, ds, windows, applies)
+    files = plot_all(ctx, problem, st, ds, windows, applies, shoot["all"])
     timings["plots"] = time.perf_counter() - t1
     files.append(_write_scans(ctx, ds))
     result = {
@@ -211,11 +213,14 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
         "differences_to_ode": {k: window_differences(ode, w) for k, w in variants.items()},
         "max_abs_difference_to_ode": score,
         "best_variant": best,
-        "verdict": _verdict(ode, variants, best, score, st),
+        "coexistence": coexistence(shoot["all"], st.sigma_range),
+        "coincident_edges": coincident,
         "files": files,
         "timings_s": timings,
         "parameters": _parameters(problem, st, shoot, c),
     }
+    result["summary"] = summary_lines(result, labels_for(problem), VARIANT_KEYS)
+    result["verdict"] = result["summary"][0]
     return result, report(ctx, problem, result)
 
 
@@ -223,7 +228,9 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
                     Omega: float | None = None, r: float = 0.9, wall: str = "compliant", Gamma: float = 10.0,
                     M_max: int | None = None, quick: bool = False, out: str | Path = "results/windows",
                     workers: int | None = None, progress: bool = False, fmu_path: str | None = None,
-                    solver: str = "cvode", map_wall: str = "auto", branch: int | None = None) -> dict[str, Any]:
+                    solver: str = DEFAULT_SOLVER, map_wall: str = "auto", branch: int | None = None,
+                    sigma_range: tuple[float, float] | None = None, xtol: float | None = None,
+                    theta: float = SECTION_PHASE) -> dict[str, Any]:
     """Window edges of the maps and of the ODE (FMU) for one parameter set.
 
     Give either (``alpha``, ``gamma``) of the map (9) or (``nu``, ``Omega``) of the ODE.
@@ -233,6 +240,10 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     ``"map"``, ``"map_A_tilde"``; ``result["edge_kinds"]["ode"]``, ``result["parameters"]``.
     ``map_wall`` chooses the maps' coefficients: "auto" follows ``wall`` ((48) compliant, (39)
     rigid); "compliant-high" uses (39) with a compliant wall (high-velocity impacts, stiff wall).
+    ``sigma_range`` (lo, hi): scan and shoot exactly there, sigma <= 0 allowed (the wall-free
+    orbit is then a window, grazing at sigma = 0); ``xtol``: an absolute bisection tolerance in
+    sigma; ``theta``: the section phase. ``result["coexistence"]`` lists where attractors coexist,
+    ``result["summary"]`` the summary's sentences, each derived from the tables.
 
     A worker pool is used for the scans and the shooting: call it from a script under
     ``if __name__ == "__main__":`` (the workers re-import the main module).
@@ -240,13 +251,15 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     if (alpha is None) != (gamma is None) or (nu is None) != (Omega is None) or (alpha is None) == (nu is None):
         raise HarnessInputError("--alpha/--gamma, --nu/--Omega", "give exactly one pair: (alpha, gamma) or (nu, Omega)")
     kw = dict(r=float(r), wall=wall, Gamma=float(Gamma), M_max=None if M_max in (None, "auto") else int(M_max),
-              map_wall=map_wall)
+              map_wall=map_wall, theta=float(theta))
     problem = (WindowProblem.from_alpha_gamma(float(alpha), float(gamma), branch, **kw) if alpha is not None
                else WindowProblem(float(nu), float(Omega), **kw))
     if workers is not None and workers < 1:
         raise HarnessInputError("--workers", f"must be >= 1, got {workers}")
     ctx = Context("windows", out, quick, workers, progress, fmu_path, solver)
-    ctx.command = command_line(problem, quick, out)
-    result, text = run_windows(ctx, problem, default_settings(problem, quick))
+    rng = None if sigma_range is None else (float(sigma_range[0]), float(sigma_range[1]))
+    settings = default_settings(problem, quick, rng, xtol)
+    ctx.command = command_line(problem, quick, out, solver, rng, xtol)
+    result, text = run_windows(ctx, problem, settings)
     write_outputs(ctx, result, text)
     return result

@@ -39,11 +39,11 @@ def _save(fig, path) -> str:
 
 
 def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any],
-             applies: dict[str, str | None] | None = None) -> list[str]:
+             applies: dict[str, str | None] | None = None, every: list[dict[str, Any]] | None = None) -> list[str]:
     """TARGET_map.png (map, linear rho and A~), TARGET_ode.png (FMU up/down), TARGET_windows.png.
 
     A map variant that does not apply (``applies[variant]`` a reason) is not drawn: its panel
-    says why."""
+    says why; when neither 2D map applies, TARGET_map.png is not written."""
     applies = applies or {}
     from ..io import plots  # noqa: F401  (selects the Agg backend)
 
@@ -51,8 +51,11 @@ def plot_all(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str, Any],
         c = problem.coefficients()
     except (ValueError, ArithmeticError):
         c = None
-    return [_plot_maps(ctx, problem, st, c, applies), _plot_ode_scans(ctx, problem, st, ds, windows, c, applies),
-            _plot_windows(ctx, problem, st, windows, applies)]
+    # a figure of two "does not apply" panels shows nothing: left out (the report says why)
+    maps = ([_plot_maps(ctx, problem, st, c, applies)]
+            if c is not None and not (applies.get("map") and applies.get("map_A_tilde")) else [])
+    return maps + [_plot_ode_scans(ctx, problem, st, ds, windows, c, applies),
+                   _plot_windows(ctx, problem, st, windows, applies, every)]
 
 
 def _plot_maps(ctx: Any, problem: Any, st: Any, c: Any, applies: dict[str, str | None]) -> str:
@@ -135,30 +138,66 @@ def _plot_ode_scans(ctx: Any, problem: Any, st: Any, ds: Any, windows: dict[str,
     return _save(fig, ctx.out / f"{ctx.target}_ode.png")
 
 
-def _plot_windows(ctx: Any, problem: Any, st: Any, windows: dict[str, Any], applies: dict[str, str | None]) -> str:
-    """TARGET_windows.png: the windows of each source that applies, one row each."""
+def _window_rows(windows: dict[str, Any], applies: dict[str, str | None], every: list[dict[str, Any]] | None,
+                 labels: dict[str, str]) -> list[tuple[str, list[tuple[float | None, float | None, int]]]]:
+    """The rows of the windows figure: one per ODE attractor (period M, k impacts; the wall-free
+    orbit included), then one per map that applies (its maximal windows)."""
+    from .window_summary import attractor_label
+
+    rows = []
+    if every is not None:
+        for e in every:
+            if e.get("resolved"):
+                rows.append((f"ODE: {attractor_label(e['M'], e['impacts'])}", [(e["lo"], e["hi"], e["M"])], False))
+    else:
+        rows.append((labels["ode"], [(w[0], w[1], M) for M, w in windows["ode"].items() if w is not None], False))
+    for k in ("theory_64", "map", "map_A_tilde"):
+        if not applies.get(k):
+            rows.append((labels[k], [(w[0], w[1], M) for M, w in windows[k].items() if w is not None], True))
+    return rows
+
+
+def _plot_windows(ctx: Any, problem: Any, st: Any, windows: dict[str, Any], applies: dict[str, str | None],
+                  every: list[dict[str, Any]] | None = None) -> str:
+    """TARGET_windows.png: every window, one row per ODE attractor and per map that applies; an
+    end beyond the searched range is drawn to the axis' edge with an arrow, never left out."""
     import matplotlib.pyplot as plt
 
-    grid = st.scan_grid
-    fig, ax = plt.subplots(figsize=(8, 4.0))
-    labels = labels_for(problem)
-    names = ["ode"] + [k for k in ("theory_64", "map", "map_A_tilde") if not applies.get(k)]
+    x_lo, x_hi = float(st.sigma_range[0]), float(st.sigma_range[1])
+    # the maps' windows are searched over their own (positive) sigma grid: an open lower end is
+    # below that grid's start, not below the plot's
+    map_lo = max(x_lo, float(st.table_grid[0]))
+    rows = _window_rows(windows, applies, every, labels_for(problem))
+    fig, ax = plt.subplots(figsize=(8, 1.6 + 0.45 * max(1, len(rows))))
     cmap = plt.get_cmap("tab10")
-    x_hi = float(grid[-1])
-    for i, name in enumerate(names):
-        for M, w in windows[name].items():
-            if w is None or w[0] is None:
-                continue
-            hi = w[1] if w[1] is not None else x_hi
-            ax.plot([w[0], max(hi, w[0] * 1.01)], [i, i], lw=8, solid_capstyle="butt", color=cmap((M - 1) % 10),
-                    label=f"M = {M}" if i == 0 else None)
-    ax.set_yticks(range(len(names)), [labels[n] for n in names], fontsize=8)
+    seen: set[int] = set()
+    for i, (_, wins, is_map) in enumerate(rows):
+        for lo, hi, M in wins:
+            a = (map_lo if is_map else x_lo) if lo is None else max(lo, x_lo)
+            b = x_hi if hi is None else min(hi, x_hi)
+            if b < a:
+                continue  # wholly outside the plotted range
+            ax.plot([a, b], [i, i], lw=8, solid_capstyle="butt", color=cmap((M - 1) % 10),
+                    label=f"period {M}" if M not in seen else None)
+            seen.add(M)
+            for end, open_, sign in ((a, lo is None or lo < x_lo, -1), (b, hi is None or hi > x_hi, 1)):
+                if open_:  # beyond the searched (or plotted) range: an arrow to its end
+                    ax.annotate("", xy=(end, i), xytext=(end - sign * 0.04 * (x_hi - x_lo), i),
+                                arrowprops=dict(arrowstyle="->", lw=1.5, color="k"))
+    ax.set_yticks(range(len(rows)), [r[0] for r in rows], fontsize=8)
     ax.set_xlabel("forcing amplitude above grazing, sigma")
-    if st.log_sigma:
+    if st.log_sigma and x_lo > 0:
         ax.set_xscale("log")
-    ax.set_xlim(float(grid[0]), x_hi)
-    ax.set_ylim(-0.6, len(names) - 0.4)
-    ax.set_title(f"Stable maximal period-M windows (M = 1 extends beyond the plot)\n{problem.describe()}", fontsize=9)
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.2), fontsize=8, ncol=8, frameon=False)
+    ax.set_xlim(x_lo, x_hi)
+    ax.set_ylim(-0.6, len(rows) - 0.4)
+    if not any(w for _, w, _ in rows):
+        ax.text(0.5, 0.5, "no stable window in the searched range", transform=ax.transAxes, ha="center")
+    ax.set_title("Stable windows in sigma (an arrow: the window goes on beyond the searched range)\n"
+                 f"{problem.describe()}", fontsize=9)
+    if seen:  # the periods in increasing order
+        h, lab = ax.get_legend_handles_labels()
+        order = sorted(range(len(lab)), key=lambda j: int(lab[j].split()[-1]))
+        ax.legend([h[j] for j in order], [lab[j] for j in order], loc="upper center", bbox_to_anchor=(0.5, -0.25),
+                  fontsize=8, ncol=8, frameon=False)
     fig.tight_layout()
     return _save(fig, ctx.out / f"{ctx.target}_windows.png")

@@ -48,9 +48,15 @@ def _all_windows_table(res: dict[str, Any], f: str) -> list[str]:
             continue
         lo = "below the search range" if e["lo"] is None else format(e["lo"], f)
         hi = "above the search range" if e["hi"] is None else format(e["hi"], f)
-        out.append(f"| {e['M']} | {e['impacts']} | [{lo}, {hi}] | {e['kinds'][0]}/{e['kinds'][1]} | "
+        out.append(f"| {e['M']} | {e['impacts']} | [{lo}, {hi}]{_located(e)} | {e['kinds'][0]}/{e['kinds'][1]} | "
                    f"{_cmplx(e.get('multipliers_inside'))} (sigma = {e['seed_sigma']:{f}}) | {', '.join(e['found_by'])} |")
     return out
+
+
+def _located(e: dict[str, Any]) -> str:
+    """' (lower edge: the flip of period 2 (2/1))' where an edge was located once for two windows."""
+    by = e.get("located_by") or {}
+    return "".join(f" ({'lower' if k == 'lo' else 'upper'} edge: {v})" for k, v in by.items())
 
 
 def _how_found(ctx: Context, problem: Any, res: dict[str, Any], title: str | None) -> list[str]:
@@ -118,12 +124,6 @@ def _maximal_windows(res: dict[str, Any], labels: dict[str, str], digits: int) -
     kinds = res["edge_kinds"]["ode"]
     if kinds:
         lines += ["", "ODE edge kinds (lower/upper): " + ", ".join(f"M = {M}: {k[0]}/{k[1]}" for M, k in kinds.items())]
-    if p["M_max"] == "auto":
-        stop = res.get("period_adding_stop")
-        lines += ["", (f"--M-max auto: period adding truncates at M = {stop}: no stable maximal window at M = {stop} "
-                       f"and M = {stop + 1} (searched up to period {p['M_scan_limit']})." if stop is not None else
-                       f"--M-max auto: stable maximal windows up to the scan's limit M = {p['M_scan_limit']}; period "
-                       "adding did not truncate there.")]
     return lines
 
 
@@ -169,28 +169,36 @@ def _disagreement(res: dict[str, Any], labels: dict[str, str]) -> list[str]:
     for name, d in diffs.items():
         cells = [("-" if d[M][0] is None else f"{d[M][0]:+.4g}") + ", " + ("-" if d[M][1] is None else f"{d[M][1]:+.4g}")
                  for M in Ms]
-        lines.append(f"| {labels[name]} | " + " | ".join(cells) + f" | {res['max_abs_difference_to_ode'][name]:.4g} |")
-    return lines + ["", "(map edge minus ODE edge, in sigma; inf: a window the ODE has is missing in the map.)"]
+        score = res["max_abs_difference_to_ode"][name]
+        score_txt = "no end to compare" if score is None or math.isnan(score) else f"{score:.4g}"
+        lines.append(f"| {labels[name]} | " + " | ".join(cells) + f" | {score_txt} |")
+    return lines + ["", "(map edge minus ODE edge, in sigma; -: an end open (beyond the range) in one source and "
+                    "not in the other, or both open, which counts as agreement; inf: a window the ODE has is missing "
+                    "in the map.)"]
 
 
-def _verdict(ctx: Context, res: dict[str, Any], labels: dict[str, str]) -> list[str]:
-    """The closest variant, the highest period of each source's maximal windows, the figures."""
-    applies = res.get("map_applicability", {})
-    mmax = {k: max([M for M, w in ws.items() if w is not None and w[0] is not None and (w[1] is None or w[1] >= w[0])]
-                   or [0]) for k, ws in res["windows"].items()}
-    best = res["best_variant"]
-    lines = ["", "## Verdict", ""]
-    if best is not None and math.isfinite(res["max_abs_difference_to_ode"][best]):
-        lines.append(f"{labels[best]} agrees best with the ODE: largest edge difference "
-                     f"{res['max_abs_difference_to_ode'][best]:.2g} in sigma (variant `{best}`).")
-    else:
-        lines.append(res["verdict"] + ".")
-    lines.append("Highest period with a stable maximal window: ODE M = "
-                 f"{mmax['ode'] if mmax['ode'] else 'none'}" + "".join(
-                     f", {labels[k]} " + ("n/a" if applies.get(k) else f"M = {mmax[k] or 'none'}") for k in VARIANT_KEYS)
-                 + ".")
-    return lines + ["", f"Figures: `{ctx.target}_map.png` (the maps' bifurcation diagrams, where they apply), "
-                    f"`{ctx.target}_ode.png` (the FMU's up/down scans), `{ctx.target}_windows.png` (the window tables)."]
+def _coexistence(res: dict[str, Any]) -> list[str]:
+    """Where the ODE's attractors coexist (from the table of every window)."""
+    from .window_summary import fmt_sigma
+
+    rows = res.get("coexistence", [])
+    lines = ["", "## Coexisting attractors (bistability)", ""]
+    if not rows:
+        return lines + ["No two stable attractors coexist in the searched range (as far as the scans saw)."]
+    lines += ["| sigma from | to | attractors |", "|---|---|---|"]
+    lines += [f"| {fmt_sigma(c['lo'], 'below')} | {fmt_sigma(c['hi'], 'above')} | {'; '.join(c['attractors'])} |"
+              for c in rows]
+    return lines + ["", "Overlaps of the windows in the table above; which attractor a run reaches there depends on "
+                    "where it starts (`impact-harness basins`)."]
+
+
+def _verdict(ctx: Context, res: dict[str, Any]) -> list[str]:
+    """The summary (each sentence derived from the tables above) and the figures."""
+    lines = ["", "## Verdict", ""] + [f"- {line}" for line in res["summary"]]
+    what = {"map": "the maps' bifurcation diagrams", "ode": "the FMU's up/down scans", "windows": "the windows"}
+    figs = [f"`{f}` ({what.get(f[len(ctx.target) + 1:-4], 'figure')})" for f in res.get("files", []) if f.endswith(".png")]
+    return lines + ["", "Figures: " + ", ".join(figs) + ("" if any("_map.png" in f for f in figs) else
+                                                           "; no map figure: no 2D map applies (above)") + "."]
 
 
 def report(ctx: Context, problem: Any, res: dict[str, Any], title: str | None = None) -> str:
@@ -202,5 +210,5 @@ def report(ctx: Context, problem: Any, res: dict[str, Any], title: str | None = 
     f = f".{digits}f"
     lines = (_how_found(ctx, problem, res, title) + _where_maps_apply(res, labels)
              + _maximal_windows(res, labels, digits) + _every_window(res, f) + _scan_confirmation(res, f)
-             + _disagreement(res, labels) + _verdict(ctx, res, labels))
+             + _coexistence(res) + _disagreement(res, labels) + _verdict(ctx, res))
     return "\n".join(lines)

@@ -13,6 +13,7 @@ import numpy as np
 from ..analysis.chart import ChartProblem, parse_range
 from ..analysis.chart_output import chart
 from ..errors import HarnessInputError
+from .options import model_shortcuts, solver_option
 
 __all__ = ["register", "cmd_chart"]
 
@@ -41,19 +42,17 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
                        "chart.json, chart.png, report.md.")
     p.add_argument("--config", help="TOML with a [model] table (nu, Omega, r, Gamma, wall), e.g. "
                    "harness/experiments/fig9.toml")
-    for k in ("nu", "Omega", "r", "Gamma"):
-        p.add_argument(f"--{k}", type=float, help=f"{k} (overrides --config)")
-    p.add_argument("--wall", choices=sorted(WALLS), help="wall (overrides --config; default compliant)")
+    model_shortcuts(p, "", walls=tuple(sorted(WALLS)))
     p.add_argument("--param2", required=True, help="second parameter: Gamma, r, nu, Omega or any FMU parameter")
     p.add_argument("--range", required=True, dest="range_", metavar="START:STOP", help="its range")
     p.add_argument("--num", type=int, default=30, help="values of the second parameter (default 30)")
     p.add_argument("--log", action="store_true", help="geometric values, log axis")
     p.add_argument("--M-max", type=int, default=5, dest="M_max", help="highest period charted (default 5)")
-    p.add_argument("--sigma-range", default="0.05:400", help="sigma range of the scans (default 0.05:400)")
+    p.add_argument("--sigma-range", default="0.05:400", metavar="LO:HI",
+                   help="sigma range of the scans, LO > 0 (default 0.05:400; below grazing: windows --sigma-range)")
     p.add_argument("--per-decade", type=int, default=None, help="scan points per decade of sigma (default 16, quick 10)")
     p.add_argument("--quick", action="store_true", help="coarser scans and tolerances")
-    p.add_argument("--solver", choices=("cvode", "closed-form"), default="closed-form",
-                   help="the FMU's integrator (default closed-form)")
+    solver_option(p)
     p.add_argument("--backend", choices=("processes", "dask", "serial"), default=None)
     p.add_argument("--scheduler", help="Dask scheduler address (tcp://HOST:PORT)")
     p.add_argument("--workers", "-j", type=int, help="worker processes (default: all cores)")
@@ -88,7 +87,8 @@ def cmd_chart(args: argparse.Namespace) -> int:
         raise HarnessInputError("--M-max", f"must be in 1..12, got {args.M_max}")
     s0, s1 = parse_range(args.sigma_range)
     if s0 <= 0:
-        raise HarnessInputError("--sigma-range", "must be positive (geometric grid)")
+        raise HarnessInputError("--sigma-range", "chart needs LO > 0 (its edge curves are followed on a log sigma "
+                                "axis); below grazing use windows --sigma-range=LO:HI at each value")
     per = args.per_decade or (10 if args.quick else 16)
     grid = np.geomspace(s0, s1, int(math.ceil(per * math.log10(s1 / s0))) + 1)
     values = np.geomspace(a, b, args.num) if args.log else np.linspace(a, b, args.num)
@@ -96,12 +96,17 @@ def cmd_chart(args: argparse.Namespace) -> int:
                            transient=150 if args.quick else 250, samples=24,
                            xtol_rel=1e-3 if args.quick else 1e-4)
     t0 = time.perf_counter()
-    cmd = " ".join(["chart", *([f"--config {args.config}"] if args.config else []), f"--param2 {args.param2}",
-                    f"--range {args.range_}", f"--num {args.num}", *(["--log"] if args.log else []),
-                    f"--M-max {args.M_max}", f"--solver {args.solver}", f"--out {args.out}"])
+    # every model flag written out (not only --config, which may change or be missing later)
+    osc = [f"--{k} {params[k]!r}" for k in ("nu", "Omega", "r", "Gamma") if k in params]
+    cmd = " ".join(["chart", *osc, f"--wall {wall}", f"--param2 {args.param2}", f"--range={args.range_}",
+                    f"--num {args.num}", *(["--log"] if args.log else []), f"--M-max {args.M_max}",
+                    f"--sigma-range={args.sigma_range}", *([f"--per-decade {args.per_decade}"] if args.per_decade else []),
+                    *(["--quick"] if args.quick else []), f"--solver {args.solver}", f"--out {args.out}"])
     res = chart(problem, args.out, args.fmu, args.backend, args.workers, args.scheduler, cmd)
     for M, cl in res["closes"].items():
-        c = "null" if cl["closes"] is None else f"{cl['closes']:.6g} (sigma {cl['sigma']:.4g}): {cl['how']}"
-        print(f"M = {M}: closes at {c}")
+        if cl["closes"] is None:
+            print(f"M = {M}: does not close in {args.param2} in [{args.range_}]")
+        else:
+            print(f"M = {M}: closes at {args.param2} = {cl['closes']:.6g} (sigma {cl['sigma']:.4g}): {cl['how']}")
     print(f"wrote {Path(args.out) / 'chart.json'}, chart.png, report.md ({time.perf_counter() - t0:.1f} s)")
     return 0

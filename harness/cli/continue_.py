@@ -19,7 +19,7 @@ import numpy as np
 from ..errors import HarnessInputError
 from ..io.progress import progress_bar
 from .experiment_args import command_line, experiment_of, output_paths
-from .options import count
+from .options import count, theta_option
 
 __all__ = ["register", "cmd_continue", "branch_report"]
 
@@ -29,13 +29,7 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "continue", parents=[parents["common"]], help="continue a periodic orbit in a parameter (branches, bifurcations)",
         description="Pseudo-arclength continuation of a period-M orbit of the stroboscopic map in any FMU parameter, "
-        "stable and unstable parts alike, with flip, fold, Neimark-Sacker, grazing and sticking points located. "
-        "The closed-form solver is the default (exact and ~30x faster than CVODE; --solver cvode to compare).")
-    g = p.add_argument_group("oscillator (shortcuts for --set)")
-    for name, what in (("nu", "damping"), ("Omega", "natural frequency"), ("r", "restitution coefficient"),
-                       ("Gamma", "compliant wall stiffness ratio")):
-        g.add_argument(f"--{name}", dest=f"osc_{name}", type=float, metavar="X", help=what)
-    g.add_argument("--wall", dest="osc_wall", choices=("none", "compliant", "rigid"), help="wall model")
+        "stable and unstable parts alike, with flip, fold, Neimark-Sacker, grazing and sticking points located.")
     c = p.add_argument_group("continuation")
     c.add_argument("--param", default="sigma", metavar="NAME", help="continued FMU parameter (default sigma)")
     c.add_argument("--range", dest="p_range", required=True, metavar="LO:HI", help="parameter interval of the branch")
@@ -43,7 +37,7 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     c.add_argument("-M", "--period", dest="M", type=count, metavar="M",
                    help="period of the orbit (default: the shortest attractor found at --start)")
     c.add_argument("--state", metavar="U,V", help="a point of the orbit at t = theta (default: found by scans)")
-    c.add_argument("--theta", type=float, default=0.5, metavar="PHASE", help="section phase (default 0.5)")
+    theta_option(c)
     c.add_argument("--direction", choices=("both", "up", "down"), default="both", help="which way (default both)")
     c.add_argument("--max-points", type=count, default=200, metavar="N", help="steps per direction (default 200)")
     c.add_argument("--ds-max", type=float, default=0.05, metavar="DS", help="largest arclength step (default 0.05)")
@@ -51,14 +45,6 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     c.add_argument("--switch", action="store_true", help="also continue the period-2M branch from every flip")
     c.add_argument("--report", metavar="FILE.md", help="report file (default: next to --out)")
     p.set_defaults(func=cmd_continue)
-
-
-def _extra(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
-    model: dict[str, Any] = {k: getattr(args, f"osc_{k}") for k in ("nu", "Omega", "r", "Gamma", "wall")
-                             if getattr(args, f"osc_{k}") is not None}
-    if not getattr(args, "solver", None):
-        model.setdefault("solver", "closed-form")
-    return {"model": model}
 
 
 def _range(text: str) -> tuple[float, float]:
@@ -153,7 +139,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
     from ..fmu.simulator import FmuSimulator
     from ..io.results import provenance, write_netcdf
 
-    exp = experiment_of(args, _extra(args))
+    exp = experiment_of(args)
     lo, hi = _check_args(args, exp)
     out, plot = output_paths(args, exp, "continue")
     report_path = Path(args.report) if args.report else out.with_suffix(".md")
@@ -170,7 +156,7 @@ def cmd_continue(args: argparse.Namespace) -> int:
     from ..io.plots import parameter_title
 
     title = f"{parameter_title(ds.attrs, (args.param,))}: continuation in {args.param}"
-    text = branch_report(branches, kinds, title, search, command_line(args), params)
+    text = branch_report(branches, kinds, title, search, command_line(args), params, (lo, hi))
     try:
         report_path.write_text(text)
     except OSError as exc:
@@ -181,7 +167,23 @@ def cmd_continue(args: argparse.Namespace) -> int:
         from ..io.branch_plot import branch_figure
 
         print(f"plot: {branch_figure(branches, plot, title)}")
+    short = [br for br in branches if _budget_spent(br, (lo, hi))]
+    if short:  # a result, but not of the whole range asked for: say so in the exit status too
+        print(f"{len(short)} branch(es) stopped on the point budget short of --range: raise --max-points "
+              f"(now {args.max_points}); exit status {INCOMPLETE}")
+        return INCOMPLETE
     return 0
+
+
+#: Exit status of a run that wrote its results but did not cover what was asked (main's table).
+INCOMPLETE = 3
+
+
+def _budget_spent(br: Any, p_range: tuple[float, float]) -> bool:
+    """The branch ended because its point budget was spent, inside the range (not at its end)."""
+    end = br.events[-1] if br.events else None
+    return bool(end is not None and end.kind == "end" and end.note.endswith("steps done")
+                and p_range[0] < br.values[-1] < p_range[1])
 
 
 def _mu(m: Sequence[complex]) -> str:
@@ -189,14 +191,18 @@ def _mu(m: Sequence[complex]) -> str:
 
 
 def branch_report(branches: Sequence[Any], kinds: Sequence[str], title: str, search: str, command: str,
-                  params: dict) -> str:
+                  params: dict, p_range: tuple[float, float] | None = None) -> str:
     """The branches as Markdown: search, stable intervals, located events."""
     solver = {0: "CVODE", 1: "closed form"}.get(int(params.get("solver", 0)), "?")
     lines = [f"# Continuation: {title}", "", f"Command: `{command}`", "",
              f"FMU solver: {solver}; derivatives: {branches[0].derivatives if branches else '?'}; {search}.", ""]
     for br, kind in zip(branches, kinds):
+        end = br.events[-1].note if br.events and br.events[-1].kind == "end" else "?"
+        short = p_range is not None and _budget_spent(br, p_range)
         lines += [f"## Branch of period {br.M} ({kind}): {len(br)} points, {br.param} from "
-                  f"{br.values[0]:.8g} to {br.values[-1]:.8g}, {br.periods_run} FMU periods", ""]
+                  f"{br.values[0]:.8g} to {br.values[-1]:.8g}, {br.periods_run} FMU periods; ended: {end}"
+                  + (f" -- **short of the range [{p_range[0]:g}, {p_range[1]:g}]: the point budget ran out "
+                     "(raise --max-points)**" if short and p_range else ""), ""]
         iv = br.stable_intervals()
         if iv:
             lines.append("Stable parts (" + br.param + " from the first to the last stable point computed):")

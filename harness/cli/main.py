@@ -7,7 +7,9 @@ One module per subcommand (:data:`COMMANDS`, in the order ``--help`` lists them)
 Exit status: 0 success, 1 the FMU failed during a run, 2 bad input (a one-line message
 naming the argument, or quoting the FMU when it refuses the settings at initialization;
 also broken FMU binaries, unreadable files, unwritable outputs, runs over the memory or work
-limits of :mod:`harness.runs.budget`; never a traceback), 130 interrupted, 143 terminated.
+limits of :mod:`harness.runs.budget`; never a traceback), 3 results written but short of what was
+asked (``continue``: a branch stopped on its point budget inside ``--range``), 130 interrupted,
+143 terminated.
 """
 from __future__ import annotations
 

@@ -7,10 +7,17 @@ import argparse
 import builtins
 from typing import Any
 
+from ..config.defaults import DEFAULT_SOLVER, MODEL_SHORTCUTS, SECTION_PHASE, SOLVERS, WALL_NAMES
 from ..errors import HarnessInputError
 
 __all__ = ["OneLineParser", "count", "size", "positive", "common_parent", "sampling_parent", "execution_options",
-           "overrides_from_args"]
+           "overrides_from_args", "model_shortcuts", "solver_option", "theta_option", "SOLVER_HELP", "THETA_HELP"]
+
+#: --help of the shared defaults, written once (harness/config/defaults.py holds the values).
+SOLVER_HELP = (f"the FMU's integrator: {DEFAULT_SOLVER} (default, every command; every FMU and contact law) or "
+               "closed-form (the exact flow of the linear contact law, ~30x faster)")
+THETA_HELP = (f"section phase in [0, 1): samples at t = n + theta (default {SECTION_PHASE:g}, every command: half a "
+              "period from the impacts of near-grazing orbits, where the stroboscopic map is smooth)")
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -67,9 +74,8 @@ def common_parent() -> argparse.ArgumentParser:
                    "simulate: t = --t0); default: the FMU's start value")
     g.add_argument("--v0", dest="initial__v0", type=float, metavar="V",
                    help="initial velocity v at the start time t = theta (simulate: t = --t0); default: the FMU's start value")
-    g.add_argument("--solver", choices=("cvode", "closed-form"),
-                   help="the FMU's integrator: cvode (default) or closed-form (exact propagation of the linear "
-                   "contact law; an FMU without the parameter 'solver' has CVODE only)")
+    solver_option(g, default=None)  # None: the FMU's own start value, which is the default solver
+    model_shortcuts(p, "model__")
     o = p.add_argument_group("output")
     o.add_argument("--out", "-o", dest="run__out", metavar="FILE.nc", help="NetCDF result file")
     o.add_argument("--plot", dest="run__plot", metavar="FILE.png", help="PNG plot (default: next to --out)")
@@ -88,8 +94,7 @@ def sampling_parent() -> argparse.ArgumentParser:
     """Options of stroboscopic sampling (strobe, sweep)."""
     p = OneLineParser(add_help=False)
     g = p.add_argument_group("stroboscopic sampling")
-    g.add_argument("--theta", dest="sampling__theta", type=float, metavar="PHASE",
-                   help="section phase in [0, 1): samples at t = n + theta (default 0)")
+    theta_option(g, "sampling__theta", default=None)
     g.add_argument("--transient", dest="sampling__transient", type=count, metavar="N",
                    help="periods discarded before sampling (default 300)")
     g.add_argument("--samples", dest="sampling__samples", type=count, metavar="N",
@@ -138,3 +143,30 @@ def execution_options(p: argparse.ArgumentParser, what: str) -> None:
     b.add_argument("--checkpoint", dest="run__checkpoint", metavar="DIR",
                    help=f"directory of finished points, to resume an interrupted {what} (default: OUT.partial)")
     b.add_argument("--no-resume", action="store_true", help="discard an existing checkpoint and start over")
+
+
+def solver_option(g: Any, default: str | None = DEFAULT_SOLVER) -> None:
+    """``--solver``: the same choices, default and help in every command."""
+    g.add_argument("--solver", choices=SOLVERS, default=default, help=SOLVER_HELP)
+
+
+def theta_option(g: Any, dest: str = "theta", default: float | None = SECTION_PHASE) -> None:
+    """``--theta``: the section phase, the same default and help in every command (``default``
+    None: the settings' layers supply it, from the same constant)."""
+    g.add_argument("--theta", dest=dest, type=float, default=default, metavar="PHASE", help=THETA_HELP)
+
+
+def model_shortcuts(p: argparse.ArgumentParser, prefix: str = "", defaults: dict[str, Any] | None = None,
+                    walls: tuple[str, ...] = WALL_NAMES) -> None:
+    """The oscillator's flags (``--nu --Omega --r --Gamma --wall``), the same in every command:
+    shortcuts for ``--set NAME=VALUE``; ``prefix`` is put before each dest (``model__``: a
+    settings layer), ``defaults`` are the command's own (stated in the help)."""
+    defaults = defaults or {}
+    g = p.add_argument_group("oscillator (shortcuts for --set NAME=VALUE)")
+    for name, what in MODEL_SHORTCUTS.items():
+        d = defaults.get(name)
+        g.add_argument(f"--{name}", dest=f"{prefix}{name}", type=float, default=d, metavar="X",
+                       help=what + (f" (default {d:g})" if d is not None else ""))
+    d = defaults.get("wall")
+    g.add_argument("--wall", dest=f"{prefix}wall", choices=walls, default=d,
+                   help="wall model" + (f" (default {d})" if d is not None else ""))

@@ -11,6 +11,7 @@ from mapcheck.compare import markdown_window_table
 
 from ..analysis.window_problem import MAP_WALLS, WALL_CODES
 from ..analysis.windows import compare_windows
+from .options import model_shortcuts, positive, solver_option, theta_option
 
 __all__ = ["register", "cmd_windows"]
 
@@ -23,32 +24,44 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
         "period-M windows from (64), the 2D map (37)/(38), the 2D map with A~(sigma), and the ODE (FMU; Newton "
         "shooting, every edge bracketed and bisected, confirmed by up/down scans). Writes report.md, windows.json "
         "(fig9.json's format), PNG plots and the scans' NetCDF into --out.")
-    g = p.add_argument_group("parameter set (one pair)")
+    g = p.add_argument_group("parameter set: --alpha/--gamma, or --nu/--Omega (below)")
     g.add_argument("--alpha", type=float, help="map parameter alpha of (9), in (0, 1)")
     g.add_argument("--gamma", type=float, help="map parameter gamma of (9), in (0, 1)")
-    g.add_argument("--nu", type=float, help="FMU parameter nu (instead of --alpha/--gamma)")
-    g.add_argument("--Omega", type=float, help="FMU parameter Omega (with --nu)")
-    p.add_argument("--r", type=float, default=0.9, help="coefficient of restitution (default 0.9)")
-    p.add_argument("--wall", choices=sorted(WALL_CODES), default="compliant",
-                   help="compliant (map coefficients (48)) or rigid ((39)); default compliant")
-    p.add_argument("--Gamma", type=float, default=10.0, help="compliant wall stiffness (default 10)")
+    g.add_argument("--branch", type=int, default=None,
+                   help="with an underdamped --alpha/--gamma: the psi branch (0, 1, ...; sets sign(P12) = c1)")
+    model_shortcuts(p, "", {"r": 0.9, "Gamma": 10.0, "wall": "compliant"}, walls=tuple(sorted(WALL_CODES)))
     p.add_argument("--map", choices=MAP_WALLS, default="auto", dest="map_wall",
                    help="the maps' coefficients: auto (from --wall: (48) compliant, (39) rigid), or "
                    "compliant ((48), low-velocity impacts), compliant-high ((39), high-velocity impacts on a stiff "
                    "compliant wall), rigid ((39))")
-    p.add_argument("--M-max", type=_m_max, default=None, dest="M_max", metavar="{auto,1..12}",
+    s = p.add_argument_group("where and how closely")
+    s.add_argument("--sigma-range", type=sigma_range, metavar="LO:HI",
+                   help="sigma interval of the scans and the shooting, negative values allowed (--sigma-range=-0.2:1; "
+                   "default: 1e-3 to 3, widened to the maps' windows, edges followed down to 1e-4 and up to 12)")
+    s.add_argument("--xtol", type=positive, metavar="DS",
+                   help="absolute bisection tolerance of every edge, in sigma (default: 1e-4 x the window's sigma, "
+                   "1e-3 with --quick; with a --sigma-range reaching sigma <= 0: 1e-8 x its width, 1e-6 quick)")
+    theta_option(s)
+    s.add_argument("--M-max", type=_m_max, default=None, dest="M_max", metavar="{auto,1..12}",
                    help="highest period; auto (default): until period adding truncates (no stable window at M "
                    "and M + 1)")
-    p.add_argument("--branch", type=int, default=None,
-                   help="with an underdamped --alpha/--gamma: the psi branch (0, 1, ...; sets sign(P12) = c1)")
-    p.add_argument("--out", "-o", metavar="DIR", default="results/windows", help="output directory")
-    p.add_argument("--quick", action="store_true", help="coarse scans and tolerances (seconds to a minute)")
-    p.add_argument("--workers", "-j", type=int, metavar="N", help="worker processes (default: up to 2)")
-    p.add_argument("--fmu", metavar="PATH", help="FMU (default build/fmu/ImpactOscillator.fmu)")
-    p.add_argument("--no-progress", action="store_true", help="no progress bars")
-    p.add_argument("--solver", choices=("cvode", "closed-form"), default="cvode",
-                   help="the FMU's integrator (default cvode; closed-form: exact propagation, linear contact law)")
+    o = p.add_argument_group("run")
+    o.add_argument("--out", "-o", metavar="DIR", default="results/windows", help="output directory")
+    o.add_argument("--quick", action="store_true", help="coarse scans and tolerances (seconds to a minute)")
+    o.add_argument("--workers", "-j", type=int, metavar="N", help="worker processes (default: up to 2)")
+    o.add_argument("--fmu", metavar="PATH", help="FMU (default build/fmu/ImpactOscillator.fmu)")
+    o.add_argument("--no-progress", action="store_true", help="no progress bars")
+    solver_option(o)
     p.set_defaults(func=cmd_windows)
+
+
+def sigma_range(text: str) -> tuple[float, float]:
+    """argparse type of ``LO:HI`` (any signs; checked by the analysis: -1 < LO < HI)."""
+    try:
+        lo, hi = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected LO:HI (two numbers), got {text!r}") from None
+    return lo, hi
 
 
 def _m_max(text: str) -> int | None:
@@ -65,8 +78,10 @@ def cmd_windows(args: argparse.Namespace) -> int:
     res = compare_windows(args.alpha, args.gamma, nu=args.nu, Omega=args.Omega, r=args.r, wall=args.wall,
                           Gamma=args.Gamma, M_max=args.M_max, quick=args.quick, out=args.out, workers=args.workers,
                           progress=not args.no_progress, fmu_path=args.fmu, solver=args.solver,
-                          map_wall=args.map_wall, branch=args.branch)
-    print(res["verdict"])
+                          map_wall=args.map_wall, branch=args.branch, sigma_range=args.sigma_range,
+                          xtol=args.xtol, theta=args.theta)
+    for line in res["summary"]:
+        print(line)
     print(markdown_window_table(res["windows"], na=res["map_applicability"]))
     print(f"wrote {Path(args.out) / 'report.md'} and {Path(args.out) / 'windows.json'} "
           f"({time.perf_counter() - t0:.1f} s)")

@@ -18,7 +18,7 @@ An experiment file holds every parameter of a run::
     v0 = 0.0
 
     [sampling]
-    theta = 0.0        # section phase in [0, 1)
+    theta = 0.5        # section phase in [0, 1) (SECTION_PHASE: every command's default)
     transient = 300    # periods discarded
     samples = 40       # periods sampled
     tol = 1e-5         # periodicity tolerance (relative)
@@ -64,12 +64,14 @@ What binds these settings to an FMU (parameters of the right type, the initial s
 Layer: the ground (with :mod:`harness.errors`); imports nothing from the subpackages.
 """
 from .checks import _count, _number, check_count, check_theta
-from .defaults import BACKENDS, CLI_FLAGS, DEFAULTS, SWEEP_MODES, default_fmu_path, default_workers, project_root
+from .defaults import (BACKENDS, CLI_FLAGS, DEFAULT_SOLVER, DEFAULTS, MODEL_SHORTCUTS, SECTION_PHASE, SOLVERS,
+                       SWEEP_MODES, WALL_NAMES, default_fmu_path, default_workers, project_root)
 from .layers import Layered, load_toml
 from .specs import RunSpec, SamplingSpec, SweepSpec, parameter_values, parse_modes, sweep_directions
 
 __all__ = [
-    "BACKENDS", "CLI_FLAGS", "DEFAULTS", "SWEEP_MODES", "Layered", "RunSpec", "SamplingSpec", "SweepSpec",
+    "BACKENDS", "CLI_FLAGS", "DEFAULTS", "DEFAULT_SOLVER", "MODEL_SHORTCUTS", "SECTION_PHASE", "SOLVERS",
+    "SWEEP_MODES", "WALL_NAMES", "Layered", "RunSpec", "SamplingSpec", "SweepSpec",
     "check_count", "check_theta", "default_fmu_path", "default_workers", "load_toml", "parameter_values",
     "parse_modes", "project_root", "sweep_directions",
 ]

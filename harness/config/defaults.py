@@ -6,7 +6,8 @@ import os
 from pathlib import Path
 from typing import Any
 
-__all__ = ["SWEEP_MODES", "BACKENDS", "DEFAULTS", "CLI_FLAGS", "project_root", "default_fmu_path", "default_workers"]
+__all__ = ["SWEEP_MODES", "BACKENDS", "DEFAULTS", "CLI_FLAGS", "SECTION_PHASE", "DEFAULT_SOLVER", "SOLVERS",
+           "MODEL_SHORTCUTS", "WALL_NAMES", "project_root", "default_fmu_path", "default_workers"]
 
 SWEEP_MODES = ("fresh", "up", "down", "both")
 BACKENDS = ("serial", "processes", "dask")
@@ -33,6 +34,30 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+#: The section phase of every command (sweep, strobe, basins, continue, windows, chart, the
+#: paper's figures unless their experiment file says otherwise): samples at t = n + 1/2.  The
+#: near-grazing orbits hit the wall near t = n (the wall-free orbit (1 + sigma) cos(2 pi t) - 1
+#: is highest there), so a section at phase 0 would sit on the impacts, where the stroboscopic
+#: map is not smooth and Newton shooting stalls; half a period away it is smooth.
+SECTION_PHASE = 0.5
+
+#: The FMU's integrators by CLI name, and the one default of every command: CVODE, the FMU's own
+#: default, which every FMU and every contact law has (the closed form is exact and ~30x faster,
+#: for the linear contact law: ``--solver closed-form``).
+SOLVERS = ("cvode", "closed-form")
+DEFAULT_SOLVER = "cvode"
+
+#: The oscillator's parameters every command takes as flags (shortcuts for ``--set NAME=VALUE``),
+#: with their meaning for ``--help``.
+MODEL_SHORTCUTS: dict[str, str] = {
+    "nu": "damping nu (the FMU parameter)",
+    "Omega": "natural frequency Omega over the forcing frequency",
+    "r": "coefficient of restitution r in (0, 1]",
+    "Gamma": "compliant wall stiffness ratio Gamma = kappa^2/Omega^2",
+}
+#: The wall models by name (the FMU's ``wall`` parameter: 0 none, 1 compliant, 2 rigid).
+WALL_NAMES = ("none", "compliant", "rigid")
+
 #: Built-in defaults of every section except ``[model]`` (which come from the FMU).
 DEFAULTS: dict[str, dict[str, Any]] = {
     "fmu": {"path": None},
@@ -40,7 +65,7 @@ DEFAULTS: dict[str, dict[str, Any]] = {
     "initial": {"u0": None, "v0": None},
     # 300 transient periods: the slow free-flight mode decays like 0.98^n at Figure 9's
     # parameters, and orbits near window edges converge slowly.
-    "sampling": {"theta": 0.0, "transient": 300, "samples": 40, "tol": 1e-5, "max_period": None, "extend": 0,
+    "sampling": {"theta": SECTION_PHASE, "transient": 300, "samples": 40, "tol": 1e-5, "max_period": None, "extend": 0,
                  "lyapunov": 0},
     # Default sweep: Figure 9 from period 1 (sigma > ~0.85) down through period 2 and 3.
     "sweep": {

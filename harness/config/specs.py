@@ -23,6 +23,8 @@ class SamplingSpec:
     Keyword-only, and checked on creation (theta in [0, 1), counts >= 0, tol > 0).
     """
 
+    #: the library's default is the paper's section t = n; every command passes the CLI's
+    #: default, :data:`harness.config.SECTION_PHASE`, through the settings' layers
     theta: float = 0.0
     n_transient: int = 300
     n_samples: int = 40

@@ -259,7 +259,8 @@ def newton_for(sigma: float) -> dict[str, Any]:
     steps) shrinks like sqrt(10 sigma) (Figure 1's windows accumulate at sigma -> 0; the
     steps must stay below the penetration ~ sigma); the residual target stays >= 1e-9
     absolute, above the FMU's own error near grazing."""
-    shrink = min(1.0, (10.0 * sigma) ** 0.5)
+    # |sigma|: below sigma = 0 the wall-free orbit misses the wall by -sigma, the same scale
+    shrink = min(1.0, (10.0 * max(abs(sigma), 1e-10)) ** 0.5)
     scale = np.array([1e-2, 1e-1]) * shrink
     tol = NEWTON["tol"] if shrink >= 1.0 else 1e-9 / float(scale.max())
     return {**NEWTON, "scale": scale, "tol": tol}

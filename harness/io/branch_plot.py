@@ -14,43 +14,87 @@ MARKERS = {"flip": ("s", "tab:red"), "fold": ("o", "tab:green"), "ns": ("D", "ta
            "graze": ("^", "tab:orange"), "stick": ("v", "tab:brown"), "end": ("x", "grey")}
 
 
+def _fmt(value: float, span: float) -> str:
+    """A parameter value to 6 digits, round-off below 1e-12 of the axis' span shown as 0 (not
+    5.37764e-17)."""
+    return "0" if abs(value) < 1e-12 * max(span, 1e-300) else f"{value:.6g}"
+
+
+def _event_labels(branches: Sequence[Any], span: float) -> list[tuple[float, float, str, str]]:
+    """One label per place: events of all branches at the same point (within 1e-9 of the span;
+    a flip found from both sides, a fold on a graze) joined into one text."""
+    placed: list[list[Any]] = []
+    for br in branches:
+        for e in br.events:
+            if e.kind == "end":
+                continue
+            text = f"{e.kind} {_fmt(e.value, span)}"
+            for p in placed:
+                if abs(p[0] - e.value) <= 1e-9 * span and abs(p[1] - e.point[0]) <= 1e-9 * max(1.0, abs(p[1])):
+                    if text not in p[2]:
+                        p[2].append(text)
+                    break
+            else:
+                placed.append([e.value, float(e.point[0]), [text], MARKERS.get(e.kind, ("*", "k"))[1]])
+    return [(x, y, ", ".join(t), c) for x, y, t, c in placed]
+
+
+def _annotate(ax: Any, labels: list[tuple[float, float, str, str]], span: float) -> None:
+    """Write each label, raised in steps of 9 points where an earlier one lies within a tenth of
+    the axis (so that labels of nearby events do not print over each other)."""
+    done: list[tuple[float, int]] = []
+    for x, y, text, colour in sorted(labels):
+        level = 0
+        while any(abs(x - x0) < 0.1 * span and lv == level for x0, lv in done):
+            level += 1
+        done.append((x, level))
+        ax.annotate(text, (x, y), textcoords="offset points", xytext=(4, 6 + 9 * level), fontsize=7, color=colour,
+                    arrowprops=dict(arrowstyle="-", lw=0.4, color=colour) if level else None)
+
+
 def branch_figure(branches: Sequence[Any], path: str | Path, title: str) -> Path:
     """Draw u at the section of every branch (:class:`harness.dynamics.branch.Branch`) against its
-    parameter, and max |multiplier| below; write ``path``."""
+    parameter, and max |multiplier| below; write ``path``.  One colour and one legend entry per
+    (period, impacts per period) of the stable parts; solid stable, dashed unstable (in the legend
+    too); event labels that do not print over each other."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     fig, (ax, axm) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.3]})
     colors = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    keys: dict[tuple[int, int], str] = {}  # (period, impacts) -> colour, in order of appearance
     seen: set[str] = set()
-    for b_i, br in enumerate(branches):
-        c = colors[b_i % len(colors)]
-        x, stable = br.values, br.stable
+    span = max((float(np.ptp(br.values)) for br in branches if len(br)), default=1.0) or 1.0
+    for br in branches:
+        x, stable, imp = br.values, br.stable, br.impacts
         mu = np.abs(br.multipliers).max(axis=1)
-        for k in range(br.M):
-            y = br.points[:, k, 0]
-            for i in range(len(x) - 1):
-                style = "-" if (stable[i] and stable[i + 1]) else "--"
-                ax.plot(x[i:i + 2], y[i:i + 2], style, color=c, lw=1.4,
-                        label=f"period {br.M}" if (k == 0 and i == 0) else None)
         for i in range(len(x) - 1):
-            axm.plot(x[i:i + 2], mu[i:i + 2], "-" if (stable[i] and stable[i + 1]) else "--", color=c, lw=1.2)
+            key = (br.M, int(imp[i]))
+            c = keys.setdefault(key, colors[len(keys) % len(colors)])
+            style = "-" if (stable[i] and stable[i + 1]) else "--"
+            for k in range(br.M):
+                y = br.points[:, k, 0]
+                ax.plot(x[i:i + 2], y[i:i + 2], style, color=c, lw=1.4)
+            axm.plot(x[i:i + 2], mu[i:i + 2], style, color=c, lw=1.2)
         for e in br.events:
             m, ec = MARKERS.get(e.kind, ("*", "k"))
-            lab = e.kind if e.kind not in seen else None
+            ax.plot([e.value], [e.point[0]], m, color=ec, ms=7, mfc="none", mew=1.6,
+                    label=("end of a branch" if e.kind == "end" else e.kind) if e.kind not in seen else None)
             seen.add(e.kind)
-            ax.plot([e.value], [e.point[0]], m, color=ec, ms=7, mfc="none", mew=1.6, label=lab)
-            if e.kind != "end":
-                ax.annotate(f"{e.kind} {e.value:.6g}", (e.value, e.point[0]), textcoords="offset points",
-                            xytext=(4, 6), fontsize=7, color=ec)
+    _annotate(ax, _event_labels(branches, span), span)
+    handles = [Line2D([], [], color=c, lw=1.4, label=f"period {M}, {n} impact{'s' if n != 1 else ''} per period")
+               for (M, n), c in keys.items()]
+    handles += [Line2D([], [], color="k", lw=1.2, ls="-", label="stable"),
+                Line2D([], [], color="k", lw=1.2, ls="--", label="unstable")]
     axm.axhline(1.0, color="k", lw=0.6, ls=":")
     ax.set_ylabel("u at t = theta + k")
     axm.set_ylabel("max |multiplier|")
     axm.set_yscale("log")
     axm.set_xlabel(branches[0].param if branches else "parameter")
-    ax.legend(fontsize=7, loc="best")
+    ax.legend(handles=handles + ax.get_legend_handles_labels()[0], fontsize=7, loc="best")
     ax.set_title("\n".join(textwrap.wrap(title, 90)), fontsize=8)
     fig.tight_layout()
     from .plots import _save

@@ -3,8 +3,8 @@
 
 * :func:`bifurcation_diagram`: u (or v) at the section against the swept parameter, one colour
   per direction; below it the period M as a number on a linear axis (filled markers: one impact
-  per orbit period, the paper's maximal orbits; open: more, the count written at the start of
-  each run); and, when the sweep has Lyapunov exponents, lambda_1 with its error bars, the zero
+  per orbit period, the paper's maximal orbits; open circles: more, the count written at the
+  start of each run; open squares: no impact, the wall-free orbit); and, when the sweep has Lyapunov exponents, lambda_1 with its error bars, the zero
   line and the chaotic points marked.
 * :func:`period_map`: a 2D scan, one panel per direction, one colour per class (each period
   with its impact count, quasi-periodic, chaotic, not converged, invalid start) and a legend
@@ -34,20 +34,23 @@ def _scan_slice(ds: xr.Dataset, scan_index: int) -> tuple[xr.Dataset, str | None
 
 
 def _period_panel(axp: plt.Axes, x: np.ndarray, period: np.ndarray, impacts: np.ndarray, style: dict) -> None:
-    """Period M against x: 0 is "none"; open markers where an orbit has more than one impact,
-    with the count written where such a run starts."""
+    """Period M against x: 0 is "none"; open circles where an orbit has more than one impact,
+    with the count written where such a run starts; open squares where it has none."""
     colour = style.get("color")
     axp.plot(x, np.where(period >= 0, period, np.nan), linestyle="-", drawstyle="steps-mid", color=colour,
              lw=0.8, alpha=0.5)
     maximal = (period > 0) & (impacts == 1)
-    other = (period > 0) & (impacts != 1)
+    other = (period > 0) & (impacts > 1)
+    free = (period > 0) & (impacts == 0)
     axp.plot(x[maximal], period[maximal], linestyle="none", marker="o", ms=4, color=colour)
     axp.plot(x[other], period[other], linestyle="none", marker="o", ms=4, markerfacecolor="white",
+             markeredgecolor=colour)
+    axp.plot(x[free], period[free], linestyle="none", marker="s", ms=4, markerfacecolor="white",
              markeredgecolor=colour)
     axp.plot(x[period == 0], period[period == 0], linestyle="none", marker="x", ms=4, color=colour)
     previous = None
     for xi, p, k in zip(x, period, impacts):
-        if p > 0 and k != 1 and (p, k) != previous:
+        if p > 0 and k > 1 and (p, k) != previous:
             axp.annotate(f"{k}", (xi, p), textcoords="offset points", xytext=(0, 4), ha="center", fontsize=7,
                          color=colour)
         previous = (p, k)
@@ -104,7 +107,8 @@ def bifurcation_diagram(ds: xr.Dataset, path: str | os.PathLike, variable: str =
     top = max(1, int(np.max(data["period"].values, initial=1)))
     axp.set_ylim(-0.6, top * 1.15 + 0.6)
     axp.set_ylabel("period M", fontsize=9)
-    axp.text(1.0, 1.02, "filled: 1 impact per orbit; open: more (count written); x: no period",
+    axp.text(1.0, 1.02, "filled: 1 impact per orbit; open circle: more (count written); open square: no impact; "
+             "x: no period",
              transform=axp.transAxes, ha="right", va="bottom", fontsize=7, color="0.3")
     if lyap:
         axl = axes[2]

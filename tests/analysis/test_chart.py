@@ -26,6 +26,7 @@ def chart(tmp_path_factory):
     out = tmp_path_factory.mktemp("chart")
     assert main(["chart", "--config", "harness/experiments/fig9.toml", "--param2", "Gamma", "--range", "10:1000",
                  "--num", "2", "--log", "--M-max", "3", "--quick", "--sigma-range", "0.1:1.5", "--per-decade", "24", "--workers", "2",
+                 "--solver", "closed-form",
                  "--out", str(out)]) == 0
     return out, json.loads((out / "chart.json").read_text())
 
@@ -56,7 +57,7 @@ def test_chart_edges_at_gamma_10_match_the_exact_flow(chart) -> None:
 def test_continued_windows_at_gamma_10_are_the_exact_flows_and_closing_says_what_was_searched(chart) -> None:
     """The windows the continuation starts from (found by the ODE alone, edges located by the
     one-parameter continuation) are the exact flow's, period 1 included; none of them closes below
-    Gamma = 1000 (they close near 1600, tests/harness/test_event_curves.py), and null comes with the range."""
+    Gamma = 1000 (they close near 1600, tests/harness/test_event_curves.py), and the report says what was searched."""
     out, res = chart
     for M, (lo, hi) in EXACT_GAMMA_10.items():
         cl = res["closes"][M]
@@ -73,7 +74,7 @@ def test_continued_windows_at_gamma_10_are_the_exact_flows_and_closing_says_what
     assert all(c["checked"] > 0 and c["confirmed"] == c["checked"] for c in res["edge_check"].values())
     assert set(res["scan_check"]) <= set(res["scans"])
     report = (out / "report.md").read_text()
-    assert "null (searched 10 to 1000)" in report and "| 2 | flip 0.2899707" in report
+    assert "does not close in 10 .. 1000" in report and "| 2 | flip 0.2899707" in report
 
 
 def test_beta_grows_like_kappa_and_closes_says_what_was_searched(chart) -> None:
@@ -114,3 +115,25 @@ def test_bad_chart_input_is_an_input_error(tmp_path) -> None:
                  "--out", str(tmp_path)]) == 2
     assert main(["chart", "--config", "harness/experiments/fig9.toml", "--param2", "Gamma", "--range", "0:2",
                  "--log", "--out", str(tmp_path)]) == 2
+
+
+def test_the_run_line_names_the_whole_model_and_parses_to_the_same_problem(chart) -> None:
+    """The report's "Run:" line does not lean on --config: parsed again, it sets the same model,
+    ranges, solver and phase as the run (chart.json's parameters); enums print by name."""
+    import re
+    import shlex
+
+    from harness.cli.main import build_parser
+    from harness.fmu.fmi import SOLVER_NAMES
+
+    out, res = chart
+    report = (out / "report.md").read_text()
+    line = re.search(r"Run: `impact-harness (.+?)`", report).group(1)
+    assert "--config" not in line and "null" not in report
+    args = build_parser().parse_args(shlex.split(line))
+    p = res["parameters"]
+    for k in ("nu", "Omega", "r", "Gamma"):
+        assert getattr(args, k) == p[k]
+    assert {"compliant": 1, "rigid": 2}[args.wall] == p["wall"] and SOLVER_NAMES[args.solver] == p["solver"]
+    assert args.sigma_range == "0.1:1.5" and args.quick and args.per_decade == 24
+    assert "wall = compliant" in report and "solver = closed-form" in report

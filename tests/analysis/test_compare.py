@@ -56,3 +56,13 @@ def test_best_variant_uses_the_largest_edge_difference() -> None:
     variants = {"a": {1: (0.45, None), 2: (0.22, 0.45)}, "b": {1: (0.81, None), 2: (0.29, 0.82)}}
     best, score = best_variant(ode, variants)
     assert best == "b" and score["b"] == pytest.approx(0.02) and math.isclose(score["a"], 0.35)
+
+
+def test_best_variant_counts_ends_unbounded_in_both_as_agreement() -> None:
+    """Identical rows with open ends (beyond the range in the ODE and in the map) agree (0), while
+    a window the map lacks stays an infinite difference."""
+    ode = {1: (None, None), 2: (0.3, None)}
+    same = {1: (None, None), 2: (0.3, None)}
+    lacking = {1: (None, None), 2: None}
+    best, score = best_variant(ode, {"same": same, "lacking": lacking})
+    assert best == "same" and score["same"] == 0.0 and math.isinf(score["lacking"])

@@ -7,6 +7,8 @@ from pathlib import Path
 import pytest
 
 from harness.io.results import read_netcdf
+from harness.config import DEFAULT_SOLVER
+from harness.fmu.fmi import SOLVER_NAMES
 from tests.cli_support import run_main
 
 FIG9 = ["--nu", "4.605170185988091", "--Omega", "0.3059238689620112", "--r", "0.9", "--wall", "compliant",
@@ -24,7 +26,7 @@ def test_continue_writes_branch_plot_report(tmp_path: Path, capsys) -> None:
     # the period-1 flip, located on the down branch (Figure 9's M = 1 lower edge)
     assert flips and abs(flips[0]["value"] - 0.8120764) < 1e-6
     assert set(json.loads(ds.attrs["continuation.branches"])) >= {"down", "up"}
-    assert ds.attrs["model.solver"] == 1  # closed form by default
+    assert ds.attrs["model.solver"] == SOLVER_NAMES[DEFAULT_SOLVER]  # the one default of every command
     assert "fmu.sha256" in ds.attrs or any("sha256" in k for k in ds.attrs)
     assert (tmp_path / "c.png").stat().st_size > 0
     report = (tmp_path / "c.md").read_text()
@@ -45,3 +47,15 @@ def test_continue_refuses_bad_input(tmp_path: Path, capsys, argv: list[str], nee
     assert code == 2
     assert needle in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "x.nc").exists()
+
+
+def test_a_branch_stopped_by_its_point_budget_says_so_and_exits_3(tmp_path: Path, capsys) -> None:
+    """Three points cannot cover [0.7, 1.1] from 1.0: the summary line of each branch names the
+    point budget as the reason it ended short of the range, and the exit status is 3 (not 0)."""
+    out = tmp_path / "c.nc"
+    code, stdout, err = run_main(["continue", *FIG9, "--solver", "closed-form", "--range", "0.7:1.1", "--start",
+                                  "1.0", "--max-points", "3", "--out", str(out), "--no-progress", "--no-plot"], capsys)
+    assert code == 3, err
+    heads = [line for line in stdout.splitlines() if line.startswith("## Branch")]
+    assert heads and all("3 steps done" in h and "short of the range" in h for h in heads)
+    assert "raise --max-points" in stdout

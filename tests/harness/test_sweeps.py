@@ -17,6 +17,7 @@ import xarray as xr
 from scipy.optimize import brentq
 
 from harness import FmuModel, HarnessInputError, MappingSimulator, SamplingSpec, SweepSpec, SweepStats, run_sweep
+from harness.config import SECTION_PHASE
 from harness.runs.backends import ProcessBackend
 from harness.runs.tasks import TEST_HOOK_ENV
 
@@ -139,7 +140,8 @@ def test_interrupted_cli_sweep_resumes_without_recomputing(tmp_path: Path, model
     with xr.open_dataset(out) as resumed:
         assert int(resumed.attrs["tasks_resumed"]) == 2
         reference = run_sweep(model, SweepSpec("sigma", np.array([float(x) for x in values.split(",")]), ("fresh",)),
-                              sampling=SamplingSpec(n_transient=300, n_samples=10), backend="serial", progress=False)
+                              sampling=SamplingSpec(theta=SECTION_PHASE, n_transient=300, n_samples=10),
+                              backend="serial", progress=False)  # at the command's section phase
         assert_same_results(resumed, reference)
 
 
