@@ -16,6 +16,7 @@ import pytest
 import xarray as xr
 
 from harness import FmuModel, FmuSimulator, SamplingSpec, SweepSpec, run_sweep
+from harness.config.defaults import SECTION_PHASE
 from harness.dynamics.sampling import sample_periods
 from harness.runs.tasks import TEST_HOOK_ENV
 from harness.io.tempdirs import PREFIX, remove_stale
@@ -125,7 +126,8 @@ def test_interrupted_loop_keeps_its_points_and_resumes(tmp_path: Path, model: Fm
     assert not ckpt.exists()
     grid = np.array([float(x) for x in values.split(",")])
     reference = run_sweep(model, SweepSpec("sigma", grid, ("both",)), params=LOOP_PARAMS, state0=(-0.03, 0.0),
-                          sampling=SamplingSpec(n_transient=60, n_samples=8), backend="serial", progress=False)
+                          sampling=SamplingSpec(theta=SECTION_PHASE, n_transient=60, n_samples=8),
+                          backend="serial", progress=False)  # the command's section phase
     with xr.open_dataset(out) as resumed:
         for name in ("period", "orbit_impacts", "impacts", "t"):
             np.testing.assert_array_equal(resumed[name].values, reference[name].values, err_msg=name)
