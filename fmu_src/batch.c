@@ -23,6 +23,7 @@
  */
 #include <math.h>
 #include <stdio.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "closed_form.h"
@@ -41,24 +42,31 @@ enum { BATCH_RAN = 0, BATCH_MATCHED = 1, BATCH_INVALID = 2, BATCH_FAILED = 3, BA
 /* Above this |u| or |v| a start has escaped (the FMU's own bound is 1e15, CORE_MAX_STATE). */
 static const double ESCAPE_BOUND = 1e12;
 
+/* The settable values ModelData stores, by name: generated from fmu_src/variables.py, so a
+ * parameter added there is known here without an edit. */
+typedef struct {
+    const char *name;
+    size_t offset; /* in ModelData */
+    int integer;   /* stored as int (Integer, Boolean), else double */
+} ParamField;
+static const ParamField PARAMS[] = {
+#include "model_params.inc"
+};
+
+/* The method's own settings: this kernel is the closed form from the given start, whatever they say. */
+static const char *const IGNORED[] = {"solver", "rtol", "atol", "sensitivities", "u0", "v0"};
+
 static int set_param(ModelData *m, const char *name, double x) {
-    if (!strcmp(name, "nu")) m->nu = x;
-    else if (!strcmp(name, "Omega")) m->Omega = x;
-    else if (!strcmp(name, "sigma")) m->sigma = x;
-    else if (!strcmp(name, "r")) m->r = x;
-    else if (!strcmp(name, "Gamma")) m->Gamma = x;
-    else if (!strcmp(name, "wall")) m->wall = (int)x;
-    else if (!strcmp(name, "contact")) m->contact = (int)x;
-    else if (!strcmp(name, "alpha_hc")) m->alpha_hc = x;
-    else if (!strcmp(name, "F_ext")) m->F_ext = x;
-    else if (!strcmp(name, "u_wall")) m->u_wall = x;
-    else if (!strcmp(name, "max_events_per_time")) m->max_events_per_time = x;
-    else if (!strcmp(name, "max_steps_per_time")) m->max_steps_per_time = x;
-    /* the method's own settings: this kernel is the closed form, whatever they say */
-    else if (!strcmp(name, "solver") || !strcmp(name, "rtol") || !strcmp(name, "atol") ||
-             !strcmp(name, "sensitivities") || !strcmp(name, "u0") || !strcmp(name, "v0")) {
-    } else return -1;
-    return 0;
+    for (size_t i = 0; i < sizeof IGNORED / sizeof IGNORED[0]; ++i)
+        if (!strcmp(name, IGNORED[i])) return 0;
+    for (size_t i = 0; i < sizeof PARAMS / sizeof PARAMS[0]; ++i) {
+        if (strcmp(name, PARAMS[i].name)) continue;
+        char *field = (char *)m + PARAMS[i].offset;
+        if (PARAMS[i].integer) *(int *)field = (int)x;
+        else *(double *)field = x;
+        return 0;
+    }
+    return -1;
 }
 
 /* The model of every start, checked as the FMU checks it at the end of initialisation. */

@@ -10,6 +10,8 @@ Generated (and committed, so that the FMU builds with CMake alone, without Pytho
 - ``fmu_src/variables.h``: the C value-reference enum (included by ``model.h``);
 - ``fmu_src/variables_table.inc``: the rows of ``VARS[]`` (included by ``fmu_vars.c``);
 - ``fmu_src/model_defaults.inc``: the start values (included by ``model_set_defaults``);
+- ``fmu_src/model_params.inc``: the settable values ModelData stores, by name (included by
+  ``batch.c``, which sets a model's parameters by name without the FMI core);
 - ``fmu_src/modelDescription.xml``, ``fmu_src/modelDescription3.xml``: from ``<ModelVariables>``
   to ``</ModelStructure>``; the rest of each file (capabilities, log categories, the model's
   description) is written by hand and kept as it is;
@@ -110,6 +112,15 @@ def c_defaults(variables) -> str:
     lines = [C_BANNER.rstrip("\n")]
     lines += [f"    m->{v.field} = {_c_literal(v)};" for v in variables
               if v.field and v.start is not None]
+    return "\n".join(lines) + "\n"
+
+
+def c_params(variables) -> str:
+    """``model_params.inc``: name, ModelData offset and int-ness of every parameter and input
+    that ModelData stores (what a program without the FMI core may set by name)."""
+    lines = [C_BANNER.rstrip("\n"), "/* {name, offsetof(ModelData, field), stored as int} */"]
+    lines += [f'    {{"{v.name}", offsetof(ModelData, {v.field}), {int(v.type != "Real")}}},' for v in variables
+              if v.field and v.causality in ("parameter", "input")]
     return "\n".join(lines) + "\n"
 
 
@@ -305,6 +316,7 @@ def render(root: Path = ROOT) -> dict[str, str]:
         "fmu_src/variables.h": c_enum(variables),
         "fmu_src/variables_table.inc": c_table_rows(variables),
         "fmu_src/model_defaults.inc": c_defaults(variables),
+        "fmu_src/model_params.inc": c_params(variables),
         md2: edited(md2, lambda t: _replace_xml_variables(t, fmi2_variables(variables), md2)),
         md3: edited(md3, lambda t: _replace_xml_variables(t, fmi3_variables(variables), md3)),
         doc: edited(doc, lambda t: _replace_between(

@@ -3,10 +3,11 @@
 ``fmu_src/generate_variables.py`` writes, from ``VARIABLES`` below, the C value-reference enum
 (``variables.h``), the rows of the C variable table (``variables_table.inc``, included by
 ``VARS[]`` in ``fmu_vars.c``), the C defaults (``model_defaults.inc``, included by
-``model_set_defaults`` in ``model.c``), both modelDescription files, the variable and
+``model_set_defaults`` in ``model.c``), the settable values by name (``model_params.inc``,
+included by the basins' batch kernel ``batch.c``), both modelDescription files, the variable and
 valid-range tables of ``docs/fmu.md`` and the Python twin's declarations
 (``pytwin/twin_variables.py``).  Edit this file, then run
-``python fmu_src/generate_variables.py``; ``tests/test_fmu_generated.py`` fails while a
+``python fmu_src/generate_variables.py``; ``tests/fmu/test_generated.py`` fails while a
 generated file is stale.
 
 A Python module rather than TOML: the project's Python (3.11) reads it without a dependency,

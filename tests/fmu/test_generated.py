@@ -20,6 +20,7 @@ GENERATED = (
     "fmu_src/variables.h",
     "fmu_src/variables_table.inc",
     "fmu_src/model_defaults.inc",
+    "fmu_src/model_params.inc",
     "fmu_src/modelDescription.xml",
     "fmu_src/modelDescription3.xml",
     "docs/fmu.md",
