@@ -54,6 +54,11 @@ class ChartProblem:
         Highest period charted.
     sigma_grid : ndarray
         The scans' geometric sigma grid (every value uses the same).
+    xtol_rel : float
+        Bisection tolerance of every edge, relative to its sigma.
+    xtol : float or None
+        An absolute bisection tolerance in sigma instead (None: ``xtol_rel``); an edge near
+        sigma = 0, or two edges closer than ``xtol_rel`` x sigma, needs one.
     """
 
     params: dict[str, Any]
@@ -66,6 +71,7 @@ class ChartProblem:
     samples: int = 24
     xtol_rel: float = 1e-3
     theta: float = 0.5
+    xtol: float | None = None
 
 
 def chart_value_task(task: Mapping[str, Any], source: Any, progress: Any = None) -> dict[str, Any]:
@@ -90,7 +96,10 @@ def chart_value_task(task: Mapping[str, Any], source: Any, progress: Any = None)
                    progress=False)
     smap = StroboscopicMap(FmuSimulator(source, instance_name="chart"), params, task["theta"])
     sigma_range = (0.1 * float(grid[0]), 4.0 * float(grid[-1]))
-    res = measure(smap, grid, ds, sigma_range, task["xtol_rel"], task["M_max"], workers=1)
+    # an absolute tolerance, where given, replaces the relative one (as in ``windows --xtol``)
+    xtol = task.get("xtol")
+    res = measure(smap, grid, ds, sigma_range, task["xtol_rel"] if xtol is None else xtol, task["M_max"],
+                  workers=1, relative=xtol is None)
     return {"value": task["value"], "all": res["all"], "fmu_periods": res["fmu_periods"],
             "seconds": time.perf_counter() - t0}
 
@@ -193,7 +202,8 @@ def run_chart(problem: ChartProblem, source: Any, backend: Any = None, workers: 
 
     tasks = {i: {"params": {**problem.params, problem.param2: float(v)}, "value": float(v),
                  "grid": problem.sigma_grid.tolist(), "theta": problem.theta, "transient": problem.transient,
-                 "samples": problem.samples, "xtol_rel": problem.xtol_rel, "M_max": problem.M_max}
+                 "samples": problem.samples, "xtol_rel": problem.xtol_rel, "xtol": problem.xtol,
+                 "M_max": problem.M_max}
              for i, v in enumerate(problem.values)}
     results: dict[int, Any] = {}
     be = make_backend(backend, workers, scheduler)

@@ -3,6 +3,7 @@ and the report (:func:`chart_report`) of :func:`harness.analysis.chart.run_chart
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -11,13 +12,22 @@ import numpy as np
 from ..errors import HarnessInputError
 from .chart import ChartProblem, run_chart
 
-__all__ = ["plot_chart", "chart_report", "chart"]
+__all__ = ["plot_chart", "chart_figure", "chart_report", "chart"]
 
 
 LINESTYLES = {"flip": "-", "fold": "-.", "ns": ":", "graze": "--", "stick": "--"}
 
 
 def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: str) -> None:
+    """Draw :func:`chart_figure` into ``path``."""
+    import matplotlib.pyplot as plt
+
+    fig = chart_figure(res, problem, title)
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
+def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
     """sigma against the second parameter: the windows' edges continued in two parameters (lines,
     by kind; where each window closes starred), the per-value scans' windows beneath as bands (the
     brute-force check), the windows of maps (48) and (39) as thin lines, and beta in a second panel."""
@@ -26,15 +36,16 @@ def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: st
 
     fig, (ax, bx) = plt.subplots(2, 1, figsize=(9, 9.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.2]})
     cmap = plt.get_cmap("tab10")
-    top = problem.sigma_grid[-1] * 4.0
+    bottom, top = float(problem.sigma_grid[0]), problem.sigma_grid[-1] * 4.0
     for M, cv in res["scans"].items():
         col = cmap((int(M) - 1) % 10)
         if cv["value"]:
             v = np.array(cv["value"])
             lo = np.array([np.nan if x is None else x for x in cv["lower"]], float)
             hi = np.array([np.nan if x is None else x for x in cv["upper"]], float)
-            ax.fill_between(v, lo, np.where(np.isfinite(hi), hi, top), color=col, alpha=0.15, lw=0,
-                            label=f"scans, M = {M}")
+            ax.fill_between(v, np.where(np.isfinite(lo), lo, bottom), np.where(np.isfinite(hi), hi, top), color=col,
+                            alpha=0.15, lw=0, label=f"scans, M = {M}")
+            _open_end_arrows(ax, v, lo, hi, bottom, top, col)
             beta = np.array([np.nan if b is None else b for b in cv["beta"]], float)
             if np.any(np.isfinite(beta)):
                 bx.plot(v, beta, "o-", color=col, ms=3, label=f"M = {M}")
@@ -62,7 +73,7 @@ def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: st
                         textcoords="offset points", xytext=(12, -30 if clipped else -4), fontsize=7, color=col,
                         bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": col, "lw": 0.5, "alpha": 0.85})
     ax.set_yscale("log")
-    ax.set_ylim(problem.sigma_grid[0], top)
+    ax.set_ylim(bottom, top)
     ax.set_ylabel("forcing above grazing, sigma")
     ax.set_title(title, fontsize=9)
     grid = problem.sigma_grid
@@ -84,8 +95,25 @@ def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: st
     if bx.get_legend_handles_labels()[0]:
         bx.legend(fontsize=7, ncol=5)
     fig.tight_layout()
-    fig.savefig(path, dpi=130)
-    plt.close(fig)
+    return fig
+
+
+def _open_end_arrows(ax: Any, v: np.ndarray, lo: np.ndarray, hi: np.ndarray, bottom: float, top: float,
+                     col: Any) -> None:
+    """An arrow to the axis' edge at each value whose window goes on beyond the plotted sigma
+    range (an end not found in the searched range, or beyond the axis), as windows_windows.png
+    draws them: the band then reaches the edge, and the arrow says it does not end there."""
+    span = math.log(top / bottom)  # the sigma axis is logarithmic: arrows of one length in axes units
+    for x, a, b in zip(v, lo, hi):  # a value is listed only where the window is present
+        for end, beyond, sign in ((bottom, not np.isfinite(a) or a < bottom, -1), (top, not np.isfinite(b) or b > top, 1)):
+            if beyond:
+                ax.annotate("", xy=(x, end), xytext=(x, end * math.exp(-sign * 0.06 * span)),
+                            arrowprops=dict(arrowstyle="->", lw=1.2, color=col))
+
+
+def tolerance_text(problem: ChartProblem) -> str:
+    """The edges' bisection tolerance in words: absolute where ``--xtol`` set one."""
+    return f"{problem.xtol_rel:g} x sigma" if problem.xtol is None else f"{problem.xtol:g} in sigma"
 
 
 def _edge_text(e: Any) -> str:
@@ -146,7 +174,7 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
     lines += ["", "## Brute-force check: windows measured per value", "",
               f"For {len(problem.values)} values, up/down scans of the FMU over sigma in [{g[0]:.3g}, {g[-1]:.3g}] "
               f"({len(g)} points, geometric), every attractor seen shot by Newton to its edges (bisected to "
-              f"{problem.xtol_rel:g} x sigma). Where a window disappears is bracketed between neighbouring values.", "",
+              f"{tolerance_text(problem)}). Where a window disappears is bracketed between neighbouring values.", "",
               "| M | present at | disappears (bracket) | edge kinds at the last value | beta range |",
               "|---|---|---|---|---|"]
     for M, cv in res["scans"].items():
@@ -187,7 +215,8 @@ def chart(problem: ChartProblem, out: str | Path, fmu_path: str | None = None, b
             raise HarnessInputError("--param2" if k == problem.param2 else k, f"{fmu.path.name} has no parameter {k!r}")
     res = run_chart(problem, fmu.source(), backend, workers, scheduler)
     res["parameters"] = {**problem.params, "param2": problem.param2, "values": problem.values, "log": problem.log,
-                         "M_max": problem.M_max, "sigma_grid": [float(problem.sigma_grid[0]),
+                         "M_max": problem.M_max, "xtol_rel": problem.xtol_rel, "xtol": problem.xtol,
+                         "sigma_grid": [float(problem.sigma_grid[0]),
                                                                  float(problem.sigma_grid[-1]), len(problem.sigma_grid)]}
     (out / "chart.json").write_text(json.dumps(to_jsonable(res), indent=1) + "\n")
     title = (f"Edges of the ODE's windows continued in (sigma, {problem.param2}) (thick), per-value scans (bands), "

@@ -13,7 +13,7 @@ import numpy as np
 from ..analysis.chart import ChartProblem, parse_range
 from ..analysis.chart_output import chart
 from ..errors import HarnessInputError
-from .options import model_shortcuts, solver_option
+from .options import model_shortcuts, positive, solver_option
 
 __all__ = ["register", "cmd_chart"]
 
@@ -50,6 +50,9 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     p.add_argument("--M-max", type=int, default=5, dest="M_max", help="highest period charted (default 5)")
     p.add_argument("--sigma-range", default="0.05:400", metavar="LO:HI",
                    help="sigma range of the scans, LO > 0 (default 0.05:400; below grazing: windows --sigma-range)")
+    p.add_argument("--xtol", type=positive, metavar="DS",
+                   help="absolute bisection tolerance of every edge, in sigma (default: 1e-4 x the edge's sigma, "
+                   "1e-3 with --quick)")
     p.add_argument("--per-decade", type=int, default=None, help="scan points per decade of sigma (default 16, quick 10)")
     p.add_argument("--quick", action="store_true", help="coarser scans and tolerances")
     solver_option(p)
@@ -94,14 +97,15 @@ def cmd_chart(args: argparse.Namespace) -> int:
     values = np.geomspace(a, b, args.num) if args.log else np.linspace(a, b, args.num)
     problem = ChartProblem(params, args.param2, values, args.log, args.M_max, grid,
                            transient=150 if args.quick else 250, samples=24,
-                           xtol_rel=1e-3 if args.quick else 1e-4)
+                           xtol_rel=1e-3 if args.quick else 1e-4, xtol=args.xtol)
     t0 = time.perf_counter()
     # every model flag written out (not only --config, which may change or be missing later)
     osc = [f"--{k} {params[k]!r}" for k in ("nu", "Omega", "r", "Gamma") if k in params]
     cmd = " ".join(["chart", *osc, f"--wall {wall}", f"--param2 {args.param2}", f"--range={args.range_}",
                     f"--num {args.num}", *(["--log"] if args.log else []), f"--M-max {args.M_max}",
                     f"--sigma-range={args.sigma_range}", *([f"--per-decade {args.per_decade}"] if args.per_decade else []),
-                    *(["--quick"] if args.quick else []), f"--solver {args.solver}", f"--out {args.out}"])
+                    *(["--quick"] if args.quick else []),
+                    *([f"--xtol {args.xtol!r}"] if args.xtol is not None else []), f"--solver {args.solver}", f"--out {args.out}"])
     res = chart(problem, args.out, args.fmu, args.backend, args.workers, args.scheduler, cmd)
     for M, cl in res["closes"].items():
         if cl["closes"] is None:

@@ -137,3 +137,63 @@ def test_the_run_line_names_the_whole_model_and_parses_to_the_same_problem(chart
     assert {"compliant": 1, "rigid": 2}[args.wall] == p["wall"] and SOLVER_NAMES[args.solver] == p["solver"]
     assert args.sigma_range == "0.1:1.5" and args.quick and args.per_decade == 24
     assert "wall = compliant" in report and "solver = closed-form" in report
+
+
+def test_xtol_is_an_absolute_tolerance_that_meets_the_exact_flows_edges(tmp_path) -> None:
+    """``--xtol`` replaces the relative tolerance (1e-3 x sigma with --quick, ~3e-4 at the
+    period-2 flip): the period-2 window's edges at Gamma = 10 then agree with Newton on the exact
+    flow (fig9_maps.ode_windows, Newton on mapcheck.exact) to the tolerance asked for, and the
+    Run line carries the option."""
+    import re
+    import shlex
+
+    from harness.cli.main import build_parser
+    from harness.reproduce.fig9_maps import ode_windows
+
+    xtol = 1e-7
+    argv = ["chart", "--config", "harness/experiments/fig9.toml", "--param2", "Gamma", "--range", "10:20", "--num", "2",
+            "--M-max", "2", "--quick", "--sigma-range", "0.2:1.2", "--per-decade", "24", "--workers", "1",
+            "--solver", "closed-form", "--xtol", repr(xtol), "--out", str(tmp_path)]
+    assert main(argv) == 0
+    res = json.loads((tmp_path / "chart.json").read_text())
+    lo, hi = ode_windows(Gamma=10.0, M_max=2, xtol=1e-10)[2]
+    cv = res["scans"]["2"]
+    assert cv["value"][0] == pytest.approx(10.0)
+    # the bisection's bracket is xtol wide; Newton's residual adds far less
+    assert abs(cv["lower"][0] - lo) < 2 * xtol and abs(cv["upper"][0] - hi) < 2 * xtol
+    assert res["parameters"]["xtol"] == xtol
+    report = (tmp_path / "report.md").read_text()
+    assert f"bisected to {xtol:g} in sigma" in report
+    line = re.search(r"Run: `impact-harness (.+?)`", report).group(1)
+    assert build_parser().parse_args(shlex.split(line)).xtol == xtol
+    with pytest.raises(SystemExit) as exc:  # argparse: a one-line error, exit status 2
+        main([*argv[:-4], "--xtol", "0", "--out", str(tmp_path)])
+    assert exc.value.code == 2
+
+
+def test_a_window_beyond_the_sigma_axis_is_drawn_to_its_edge_with_an_arrow(chart) -> None:
+    """chart.png: a window whose edge was not found in the searched sigma range (kind "range"), or
+    lies beyond the axes, has its band reach the axes' edge with an arrow there, at that value of
+    the second parameter and only there (as windows_windows.png draws them); at Gamma = 1000 the
+    period-2 window goes on beyond the searched range, so the figure has at least one."""
+    import numpy as np
+    from matplotlib.text import Annotation
+
+    from harness.analysis.chart import ChartProblem
+    from harness.analysis.chart_output import chart_figure
+
+    _, res = chart
+    p = res["parameters"]
+    lo, hi, n = p["sigma_grid"]
+    problem = ChartProblem(p, p["param2"], np.array(p["values"]), p["log"], p["M_max"], np.geomspace(lo, hi, n))
+    ax = chart_figure(res, problem, "t").axes[0]
+    bottom, top = ax.get_ylim()
+    drawn = sorted((round(a.xy[0], 9), "up" if a.xy[1] == pytest.approx(top) else "down") for a in ax.texts
+                   if isinstance(a, Annotation) and a.get_text() == "")
+    expected = []
+    for cv in res["scans"].values():
+        for v, a, b, kind in zip(cv["value"], cv["lower"], cv["upper"], cv["kind_upper"]):
+            expected += [(round(v, 9), "down")] * bool(a is None or a < bottom)
+            expected += [(round(v, 9), "up")] * bool(b is None or b > top)
+            assert (b is None) == (kind == "range")
+    assert drawn == sorted(expected) and (1000.0, "up") in drawn
