@@ -3,8 +3,8 @@ Neimark-Sacker curves in the plane of sigma and a second FMU parameter, graze cu
 
 A located event of a branch (:func:`harness.dynamics.continuation.continue_orbit`) is a point of a
 curve in the plane (sigma, p2).  Smooth events (flip, fold, NS) are continued on the extended
-system in the unknowns X = (w1, w2, s, q) / (1 + sigma, 1 + sigma, 1, 1), with s = ln sigma and
-q = p2 (ln p2 on a log axis):
+system in the unknowns X = (w1, w2, s, q) / (1 + sigma, 1 + sigma, 1, 1), with s = ln sigma
+(sigma itself on a range reaching sigma <= 0: :mod:`.sigma_axis`) and q = p2 (ln p2 on a log axis):
 
     F^M(w; sigma, p2) - w = 0            the period-M orbit (w: coordinates of .periodic_map)
     phi(w; sigma, p2)     = 0            its test function: det(D + I) (flip), det(D - I) (fold),
@@ -42,6 +42,7 @@ import numpy as np
 from .arclength import illinois_update
 from .curves import CurvePoint, EventCurve, significant_turns
 from .periodic_map import MapEvaluation, PeriodMap
+from .sigma_axis import LOG, SigmaAxis, sigma_axis
 from .step_control import StepControl
 from ..errors import HarnessInputError
 from ..fmu.simulator import Simulator
@@ -59,7 +60,7 @@ GRAZE_GAP = 1e-5
 
 
 class PlaneMap:
-    """F^M of the FMU over X = (w, ln sigma, q), with the test functions and their derivatives.
+    """F^M of the FMU over X = (w, s, q), with the test functions and their derivatives.
 
     Parameters
     ----------
@@ -70,14 +71,16 @@ class PlaneMap:
     log2 : bool
         q = ln p2 (True) or p2.
     M : int
+    axis : SigmaAxis
+        s = ln sigma (the default) or sigma (a range reaching sigma <= 0).
     """
 
-    def __init__(self, pmap: PeriodMap, param2: str, log2: bool, M: int) -> None:
+    def __init__(self, pmap: PeriodMap, param2: str, log2: bool, M: int, axis: SigmaAxis = LOG) -> None:
         if pmap.param != "sigma":
             raise HarnessInputError("pmap", "event curves are continued in sigma and a second parameter")
         if param2 in ("sigma", "u0", "v0", "wall", "solver", "contact", "sensitivities"):
             raise HarnessInputError("param2", f"{param2!r} cannot be the second parameter")
-        self.pmap, self.param2, self.log2, self.M = pmap, param2, log2, M
+        self.pmap, self.param2, self.log2, self.M, self.axis = pmap, param2, log2, M, axis
         self.base = dict(pmap.params)
 
     def p2(self, q: float) -> float:
@@ -86,11 +89,10 @@ class PlaneMap:
     def q(self, p2: float) -> float:
         return math.log(p2) if self.log2 else float(p2)
 
-    @staticmethod
-    def scale(X: np.ndarray) -> float:
-        """c = 1 + sigma: the orbit's w is stored as w / c, since the orbit grows like the forcing
-        (so that steps in ln sigma are not throttled by the orbit's size at large sigma)."""
-        return 1.0 + math.exp(float(X[2]))
+    def scale(self, X: np.ndarray) -> float:
+        """c = 1 + sigma (> 0): the orbit's w is stored as w / c, since the orbit grows like the
+        forcing (so that steps in ln sigma are not throttled by the orbit's size at large sigma)."""
+        return 1.0 + self.axis.of(float(X[2]))
 
     def w(self, X: np.ndarray) -> np.ndarray:
         return np.asarray(X[:2]) * self.scale(X)
@@ -98,7 +100,7 @@ class PlaneMap:
     def evaluate(self, X: np.ndarray, derivatives: bool = True) -> MapEvaluation:
         """F^M at X (in w coordinates), with D(F^M) and d/dsigma when ``derivatives``."""
         self.pmap.params = {**self.base, self.param2: self.p2(float(X[3]))}
-        return self.pmap.evaluate(self.w(X), math.exp(float(X[2])), self.M, derivatives)
+        return self.pmap.evaluate(self.w(X), self.axis.of(float(X[2])), self.M, derivatives)
 
     def test(self, kind: str, ev: MapEvaluation, X: np.ndarray) -> float:
         """The event's test function at an evaluation."""
@@ -118,14 +120,13 @@ class PlaneMap:
     def jacobian(self, kind: str, X: np.ndarray, ev: MapEvaluation) -> np.ndarray:
         """3 x 4: the orbit's rows (exact in w and sigma, a central difference in q) and the test
         function's gradient (central differences).  With c = 1 + sigma and w = c X[:2], the orbit's
-        residual (F^M(w) - w) / c has d/dX[:2] = D - I and d/d ln sigma = (sigma / c) ((D - I) X[:2] +
-        dF^M/dsigma - residual)."""
-        sigma = math.exp(float(X[2]))
-        c = 1.0 + sigma
+        residual (F^M(w) - w) / c has d/dX[:2] = D - I and d/ds = (dsigma/ds / c) ((D - I) X[:2] +
+        dF^M/dsigma - residual), dsigma/ds = sigma on the log axis."""
+        c = 1.0 + self.axis.of(float(X[2]))
         A = np.zeros((3, 4))
         A[:2, :2] = ev.J - np.eye(2)
         res = (ev.image - self.w(X)) / c
-        A[:2, 2] = (sigma / c) * ((ev.J - np.eye(2)) @ X[:2] + ev.dp - res)
+        A[:2, 2] = (self.axis.dsigma_ds(float(X[2])) / c) * ((ev.J - np.eye(2)) @ X[:2] + ev.dp - res)
         hq = 1e-6 * max(1.0, abs(float(X[3])))
         e = np.zeros(4)
         e[3] = hq
@@ -176,7 +177,7 @@ class _Corrector:
             X = X + dX
             if (float(np.max(np.abs(H[:2]))) < ORBIT_TOL and abs(H[2]) < TEST_TOL and big < 1e-9):
                 ev = self.plane.evaluate(X)
-                return CurvePoint(X, math.exp(float(X[2])), self.plane.p2(float(X[3])), ev,
+                return CurvePoint(X, self.plane.axis.of(float(X[2])), self.plane.p2(float(X[3])), ev,
                                   _tangent(self.plane.jacobian(self.kind, X, ev), t))
         return None
 
@@ -186,7 +187,7 @@ class _Corrector:
 
 def _start(corr: _Corrector, w0: np.ndarray, sigma0: float, p2_0: float, direction: float) -> CurvePoint:
     plane = corr.plane
-    X0 = np.array([w0[0] / (1.0 + sigma0), w0[1] / (1.0 + sigma0), math.log(sigma0), plane.q(p2_0)])
+    X0 = np.array([w0[0] / (1.0 + sigma0), w0[1] / (1.0 + sigma0), plane.axis.to(sigma0), plane.q(p2_0)])
     H, ev = plane.residual(corr.kind, X0)
     if not np.all(np.isfinite(H)):
         raise HarnessInputError("sigma0", f"the FMU's map is not finite at sigma = {sigma0:g}")
@@ -228,9 +229,10 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
     direction : float
         Sign of the first step in p2.
     sigma_range : (float, float)
-        The curve stops when sigma leaves it.
+        The curve stops when sigma leaves it.  Positive: sigma is continued as ln sigma; reaching
+        sigma <= 0: as sigma itself (:func:`.sigma_axis.sigma_axis`).
     ds, ds_min, ds_max : float
-        Arclength steps in X = (w / (1 + sigma), ln sigma, q).
+        Arclength steps in X = (w / (1 + sigma), s, q), s = ln sigma or sigma.
     max_points : int
     locate_tol : float
         Turning points and the end at a graze are located to this width in the arclength.
@@ -243,7 +245,7 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
         raise HarnessInputError("p2_range", f"{param2} = {p2_0:g} lies outside [{lo2:g}, {hi2:g}]")
     tol2 = 1e-9 * max(abs(lo2), abs(hi2), 1.0)  # the start may sit on the range's end up to rounding
     pmap = pmap or PeriodMap(sim, params, "sigma", theta)
-    plane = PlaneMap(pmap, param2, log2, M)
+    plane = PlaneMap(pmap, param2, log2, M, sigma_axis(sigma_range))
     corr = _Corrector(plane, kind)
     w0 = np.asarray(z0, dtype=float) - pmap.offset(sigma0)
     a = _start(corr, w0, sigma0, p2_0, direction)

@@ -2,8 +2,9 @@
 
 A graze (a free passage of the orbit reaching the wall) is not a smooth event of the FMU's flow:
 a passage that penetrates the wall by d changes the orbit by ~sqrt(d), so it is not continued on an
-extended system (:mod:`.event_curves` says why).  It is followed in the plane Y = (ln sigma, q)
-(q = ln p2 on a log axis) by steps along the curve's secant and a location across it: from the
+extended system (:mod:`.event_curves` says why).  It is followed in the plane Y = (s, q),
+s = ln sigma (sigma itself on a range reaching sigma <= 0: :mod:`.sigma_axis`), q = p2 (ln p2 on
+a log axis), by steps along the curve's secant and a location across it: from the
 last graze point, a step of length h along the secant T of the last two points, then a bisection
 along the normal N on "Newton converges to an orbit with the same contact pattern", to a width
 ``locate_tol``.  The gap of the last orbit with the pattern (:meth:`PeriodMap.gap`, which vanishes
@@ -26,6 +27,7 @@ import numpy as np
 from .curves import EventCurve, significant_turns
 from .periodic_map import MapEvaluation, PeriodMap, refine_orbit
 from .step_control import StepControl
+from .sigma_axis import LOG, SigmaAxis, sigma_axis
 from ..fmu.simulator import Simulator
 
 __all__ = ["continue_graze", "GAP_TOL"]
@@ -43,21 +45,22 @@ def _same(a: np.ndarray, b: np.ndarray) -> bool:
 
 
 class _Plane:
-    """The orbit with a fixed contact pattern at points Y = (ln sigma, q) of the plane."""
+    """The orbit with a fixed contact pattern at points Y = (s, q) of the plane (s: ``axis``)."""
 
     def __init__(self, pmap: PeriodMap, param2: str, of_q: Callable[[float], float], M: int,
-                 pattern: np.ndarray) -> None:
+                 pattern: np.ndarray, axis: SigmaAxis = LOG) -> None:
         self.pmap, self.param2, self.of_q, self.M, self.pattern = pmap, param2, of_q, M, pattern
+        self.axis = axis
         self.base = dict(pmap.params)
 
     def orbit(self, Y: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, MapEvaluation] | None:
         self.pmap.params = {**self.base, self.param2: self.of_q(float(Y[1]))}
-        w1, ev, ok, _ = refine_orbit(self.pmap, w, math.exp(float(Y[0])), self.M)
+        w1, ev, ok, _ = refine_orbit(self.pmap, w, self.axis.of(float(Y[0])), self.M)
         return (w1, ev) if ok and _same(ev.contacts, self.pattern) else None
 
     def gap(self, Y: np.ndarray, ev: MapEvaluation) -> float:
         self.pmap.params = {**self.base, self.param2: self.of_q(float(Y[1]))}
-        return self.pmap.gap(ev.points, ev.contacts, math.exp(float(Y[0])))
+        return self.pmap.gap(ev.points, ev.contacts, self.axis.of(float(Y[0])))
 
     def locate(self, P: np.ndarray, N: np.ndarray, w_guess: np.ndarray,
                tol: float) -> tuple[np.ndarray, np.ndarray, MapEvaluation] | None:
@@ -105,7 +108,7 @@ class _Plane:
         if found is not None:
             g_prev = self.gap(P + t_prev * N, found[1])
         for _ in range(8):
-            if g_prev is None or g <= 1e-12 * (1.0 + math.exp(float(P[0]))) or g_prev == g:
+            if g_prev is None or g <= 1e-12 * (1.0 + self.axis.of(float(P[0]))) or g_prev == g:
                 break
             t_new = t_in - g * (t_in - t_prev) / (g - g_prev)
             found = self.orbit(P + t_new * N, w)
@@ -118,7 +121,7 @@ class _Plane:
             t_in, (w, ev) = t_new, found
             g = self.gap(P + t_in * N, ev)
         Y = P + t_in * N
-        if self.gap(Y, ev) > GAP_TOL * (1.0 + math.exp(float(Y[0]))):
+        if self.gap(Y, ev) > GAP_TOL * (1.0 + self.axis.of(float(Y[0]))):
             return None  # Newton failed for another reason than a graze
         return Y, w, ev
 
@@ -143,7 +146,8 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
     param2, p2_range, log2, direction
         As in :func:`harness.dynamics.event_curves.continue_event`.
     h, h_min, h_max : float
-        Steps along the curve in Y = (ln sigma, q).
+        Steps along the curve in Y = (s, q): s = ln sigma where ``sigma_range`` is positive,
+        else sigma (:func:`.sigma_axis.sigma_axis`).
     locate_tol : float
         Width of each location across the curve, in Y.
 
@@ -156,7 +160,8 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
     pmap = PeriodMap(sim, params, "sigma", theta)
     of_q = math.exp if log2 else float
     q0 = (math.log if log2 else float)(float(params[param2]))
-    walk = _first_graze(pmap, M, sigma_in, z_in, sigma_out, param2, of_q, q0, locate_tol)
+    axis = sigma_axis(sigma_range)
+    walk = _first_graze(pmap, M, sigma_in, z_in, sigma_out, param2, of_q, q0, locate_tol, axis)
     walk.T = np.array([0.0, 1.0 if direction > 0 else -1.0])  # first step along p2
     lo2, hi2 = min(p2_range), max(p2_range)
     control = StepControl(h, h_min, h_max, max_points)
@@ -170,7 +175,7 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
             continue
         walk.add(res, control.size)
         control.accept()
-        p2, sg = of_q(float(res[0][1])), math.exp(float(res[0][0]))
+        p2, sg = of_q(float(res[0][1])), axis.of(float(res[0][0]))
         tol2 = 1e-9 * max(abs(lo2), abs(hi2), 1.0)
         if not (lo2 - tol2 <= p2 <= hi2 + tol2 and sigma_range[0] <= sg <= sigma_range[1]):
             control.stop("range", f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
@@ -180,9 +185,10 @@ def continue_graze(sim: Simulator, params: Mapping[str, Any], M: int, sigma_in: 
 
 
 def _first_graze(pmap: PeriodMap, M: int, sigma_in: float, z_in: Any, sigma_out: float, param2: str,
-                 of_q: Callable[[float], float], q0: float, locate_tol: float) -> _GrazeWalk:
+                 of_q: Callable[[float], float], q0: float, locate_tol: float, axis: SigmaAxis = LOG) -> _GrazeWalk:
     """The walk started at the first point of the curve: the graze located by bisection across
-    the curve along ln sigma, between ``sigma_in`` (the orbit with its pattern) and ``sigma_out``."""
+    the curve along s (``axis``: ln sigma or sigma), between ``sigma_in`` (the orbit with its
+    pattern) and ``sigma_out``."""
     w0, ev0, ok = np.zeros(2), None, False
     for k in (0.0, 1.0, 4.0, 16.0):
         # a graze event's value is the zero of its defining quantity, where the orbit with the
@@ -195,10 +201,12 @@ def _first_graze(pmap: PeriodMap, M: int, sigma_in: float, z_in: Any, sigma_out:
             break
     if not ok:
         raise ValueError(f"no period-{M} orbit at sigma = {sigma_in:g} near the given point")
-    plane = _Plane(pmap, param2, of_q, M, ev0.contacts.copy())
+    plane = _Plane(pmap, param2, of_q, M, ev0.contacts.copy(), axis)
     N = np.array([1.0 if sigma_in > sigma_out else -1.0, 0.0])
-    mid = np.array([0.5 * (math.log(sigma_in) + math.log(sigma_out)), q0])
-    half = abs(math.log(sigma_in / sigma_out)) / 2
+    s_in, s_out = axis.to(sigma_in), axis.to(sigma_out)
+    mid = np.array([0.5 * (s_in + s_out), q0])
+    # the log axis keeps its one-division half-width, so positive ranges locate as they always did
+    half = abs(math.log(sigma_in / sigma_out)) / 2 if axis.log else abs(s_in - s_out) / 2
     first = plane.bisect(mid, N, half, -half, w0, ev0, locate_tol)
     if first is None:
         raise ValueError(f"the period-{M} orbit's change between sigma = {sigma_in:.10g} and {sigma_out:.10g} "
@@ -253,10 +261,10 @@ class _GrazeWalk:
         of_q = self.plane.of_q
         if _stable(ev) != _stable(self.evs[-1]):
             self.turns.append(_stability_change(self.next_point, step, _stable(self.evs[-1]), of_q,
-                                                self.locate_tol, _stable))
+                                                self.locate_tol, _stable, self.plane.axis))
         T_new = (Y - self.Ys[-1]) / np.linalg.norm(Y - self.Ys[-1])
         if T_new[1] * self.T[1] < 0 and len(self.Ys) >= 2:
-            self.turns.append({"sigma": float(math.exp(self.Ys[-1][0])), "p2": float(of_q(self.Ys[-1][1])),
+            self.turns.append({"sigma": float(self.plane.axis.of(self.Ys[-1][0])), "p2": float(of_q(self.Ys[-1][1])),
                                "side": "max" if self.T[1] > 0 else "min", "multipliers": _mults(self.evs[-1])})
         self.N = self.normal(T_new)
         self.T = T_new
@@ -268,7 +276,7 @@ class _GrazeWalk:
         """The curve walked, why it ended, and the map's p2 put back to ``p2_0``."""
         plane, of_q = self.plane, self.plane.of_q
         plane.pmap.params = {**plane.base, plane.param2: p2_0}
-        sig = np.exp(np.array([Y[0] for Y in self.Ys]))
+        sig = plane.axis.of_array(np.array([Y[0] for Y in self.Ys]))
         p2s = np.array([of_q(float(Y[1])) for Y in self.Ys])
         end: dict[str, Any] = {"reason": control.reason, "note": control.note,
                                "sigma": float(sig[-1]), "p2": float(p2s[-1])}
@@ -285,7 +293,7 @@ def _mults(ev: MapEvaluation) -> list[list[float]]:
 
 
 def _stability_change(next_point: Callable[[float], Any], step: float, stable_a: bool, of_q: Callable[[float], float],
-                      tol: float, stable: Callable[[MapEvaluation], bool]) -> dict[str, Any]:
+                      tol: float, stable: Callable[[MapEvaluation], bool], axis: SigmaAxis = LOG) -> dict[str, Any]:
     """Bisection along the curve (the step from the last point) for where the grazing orbit's
     stability changes."""
     lo, hi = 0.0, step
@@ -305,5 +313,5 @@ def _stability_change(next_point: Callable[[float], Any], step: float, stable_a:
     if best is None:
         return {"sigma": math.nan, "p2": math.nan, "side": "loses" if stable_a else "gains", "multipliers": []}
     Y, _, ev = best
-    return {"sigma": float(math.exp(Y[0])), "p2": float(of_q(float(Y[1]))), "side": "loses" if stable_a else "gains",
+    return {"sigma": float(axis.of(Y[0])), "p2": float(of_q(float(Y[1]))), "side": "loses" if stable_a else "gains",
             "multipliers": _mults(ev)}
