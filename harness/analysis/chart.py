@@ -31,7 +31,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ..errors import HarnessInputError
-from .chart_curves import chart_curves, edge_check, scan_check
+from .chart_curves import chart_curves, edge_check, scan_check, widened
 
 __all__ = ["ChartProblem", "run_chart", "chart_value_task", "curves_from_values", "closing"]
 
@@ -88,14 +88,15 @@ def chart_value_task(task: Mapping[str, Any], source: Any, progress: Any = None)
     params = dict(task["params"])
     grid = np.asarray(task["grid"], dtype=float)
     _, model = open_source(source)
-    mid = float(np.sqrt(grid[0] * grid[-1]))
+    above = bool(grid[0] > 0)  # a geometric grid above grazing, else an even one reaching sigma <= 0
+    mid = float(np.sqrt(grid[0] * grid[-1])) if above else float(0.5 * (grid[0] + grid[-1]))
     state0 = (-(1.0 + mid) - 1.0, 0.0)  # on the wall-free orbit (4) at t = 1/2
     sampling = SamplingSpec(theta=task["theta"], n_transient=task["transient"], n_samples=task["samples"],
-                            tol=1e-4 * min(1.0, 10.0 * float(grid[0])))
+                            tol=1e-4 * min(1.0, 10.0 * float(grid[0])) if above else 1e-5)
     ds = run_sweep(model, SweepSpec("sigma", grid, ("up", "down")), params, state0, sampling, backend="serial",
                    progress=False)
     smap = StroboscopicMap(FmuSimulator(source, instance_name="chart"), params, task["theta"])
-    sigma_range = (0.1 * float(grid[0]), 4.0 * float(grid[-1]))
+    sigma_range = (0.1 * float(grid[0]), 4.0 * float(grid[-1])) if above else widened(grid)
     # an absolute tolerance, where given, replaces the relative one (as in ``windows --xtol``)
     xtol = task.get("xtol")
     res = measure(smap, grid, ds, sigma_range, task["xtol_rel"] if xtol is None else xtol, task["M_max"],
@@ -173,7 +174,9 @@ def map_overlays(problem: ChartProblem) -> dict[str, Any]:
     from mapcheck.compare import map_windows
     from mapcheck.coeffs import coefficients
 
-    grid = np.geomspace(problem.sigma_grid[0] * 0.1, problem.sigma_grid[-1] * 4.0, 8001)
+    # the maps' windows lie above grazing: their grid starts at 1e-4 where the chart's reaches sigma <= 0
+    lo = problem.sigma_grid[0] * 0.1 if problem.sigma_grid[0] > 0 else 1e-4
+    grid = np.geomspace(lo, max(problem.sigma_grid[-1] * 4.0, 10.0 * lo), 8001)
     out: dict[str, Any] = {}
     for key, wall in (("map_48", "compliant"), ("map_39", "compliant-high")):
         rows: dict[str, dict[str, list]] = {str(M): {"value": [], "lower": [], "upper": []}
@@ -220,7 +223,8 @@ def run_chart(problem: ChartProblem, source: Any, backend: Any = None, workers: 
                         problem.log, problem.sigma_grid, problem.M_max, problem.theta)
     out["windows"], out["closes"], out["continuation_search"] = cont["windows"], cont["closes"], cont["search"]
     out["scan_check"] = scan_check(cont["windows"], out["scans"])
-    out["edge_check"] = edge_check(source, problem.params, problem.param2, cont["windows"], problem.log, problem.theta)
+    out["edge_check"] = edge_check(source, problem.params, problem.param2, cont["windows"], problem.log, problem.theta,
+                                   sigma_log=bool(problem.sigma_grid[0] > 0))
     out["continuation_seconds"] = time.perf_counter() - t1
     out["maps"] = map_overlays(problem)
     out["backend"] = be.describe()

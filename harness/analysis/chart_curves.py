@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import FmuError
 
-__all__ = ["windows_at", "continue_window", "window_closing", "chart_curves", "scan_check", "edge_check"]
+__all__ = ["windows_at", "widened", "continue_window", "window_closing", "chart_curves", "scan_check", "edge_check"]
 
 EDGE_KINDS = ("flip", "fold", "ns", "graze", "stick")
 
@@ -62,7 +62,8 @@ def windows_at(sim: Any, params: Mapping[str, Any], grid: np.ndarray, M_max: int
     labels = [frozenset(a.label for a in scan.at(float(v))) for v in grid]
     changes = [i for i in range(len(grid) - 1) if labels[i] != labels[i + 1] or not labels[i] or not labels[i + 1]]
     found = list(scan.attractors)
-    extra = np.concatenate([np.geomspace(grid[i], grid[i + 1], refine + 2)[1:-1] for i in changes]) if changes \
+    between = np.geomspace if grid[0] > 0 else np.linspace  # an even grid where it reaches sigma <= 0
+    extra = np.concatenate([between(grid[i], grid[i + 1], refine + 2)[1:-1] for i in changes]) if changes \
         else np.zeros(0)
     if refine > 0 and extra.size:
         fine = find_attractors(sim, params, extra, "sigma", M_max=M_max, theta=theta, transient=transient)
@@ -84,6 +85,13 @@ def windows_at(sim: Any, params: Mapping[str, Any], grid: np.ndarray, M_max: int
     search = {"sigma": [lo, hi], "values": len(grid), "refined_intervals": len(changes), "refined_values": int(extra.size),
               "scans": scan.scans, "transient": scan.transient, "M_max": M_max}
     return sorted(windows, key=lambda w: (w["M"], w["seed_sigma"])), search
+
+
+def widened(grid: Sequence[float]) -> tuple[float, float]:
+    """The sigma interval the edges are followed over, for an even grid reaching sigma <= 0: a
+    half-width beyond each end, never down to sigma = -1 (where the forcing vanishes)."""
+    lo, hi = float(grid[0]), float(grid[-1])
+    return max(lo - 0.5 * (hi - lo), -0.99), hi + 0.5 * (hi - lo)
 
 
 def _inside(sigma: float, w: Mapping[str, Any]) -> bool:
@@ -188,7 +196,10 @@ def chart_curves(source: Any, params: Mapping[str, Any], param2: str, p2_range: 
     sim = FmuSimulator(source, instance_name="chart-curves")
     p0 = {**params, param2: float(p2_range[0])}
     windows, search = windows_at(sim, p0, grid, M_max, theta)
-    sigma_range = (float(grid[0]) * 0.1, float(grid[-1]) * 10.0)
+    if grid[0] > 0:
+        sigma_range = (float(grid[0]) * 0.1, float(grid[-1]) * 10.0)
+    else:
+        sigma_range = widened(grid)
     for w in windows:
         w["curves"] = continue_window(sim, p0, w, param2, p2_range, log2, sigma_range, theta)
         w["closing"] = window_closing(w["curves"], p2_range, sigma_range)
@@ -223,6 +234,8 @@ def _edge_at(curve: Mapping[str, Any] | None, p2: float) -> float | None:
         x, y = x[::-1], y[::-1]
     if not x[0] <= p2 <= x[-1]:
         return None
+    if np.any(y <= 0):  # below grazing: sigma interpolated as itself
+        return float(np.interp(np.log(p2), np.log(x), y))
     return float(np.exp(np.interp(np.log(p2), np.log(x), np.log(y))))
 
 
@@ -243,7 +256,7 @@ def scan_check(windows: Sequence[Mapping[str, Any]], scans: Mapping[str, Any], r
                 s_scan, s_cont = sc[key][i], _edge_at(cur.get(side), float(v))
                 if s_scan is None or s_cont is None:
                     continue
-                d = abs(s_scan - s_cont) / s_cont
+                d = abs(s_scan - s_cont) / max(abs(s_cont), 1e-12)
                 worst = max(worst, d)
                 if d > rel:
                     rows.append({"p2": float(v), "side": side, "scan": s_scan, "continued": s_cont,
@@ -253,11 +266,12 @@ def scan_check(windows: Sequence[Mapping[str, Any]], scans: Mapping[str, Any], r
 
 
 def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Sequence[Mapping[str, Any]],
-               log2: bool = True, theta: float = 0.5, d: float = 1e-5) -> dict[str, Any]:
+               log2: bool = True, theta: float = 0.5, d: float = 1e-5, sigma_log: bool = True) -> dict[str, Any]:
     """Check the continued edges across themselves, at every point of every edge curve.
 
     At a point of a curve, the orbit is solved by Newton (from the curve's own point) at the two
-    points d away across the curve (along its normal in the plane (ln sigma, q), q = ln p2 on a
+    points d away across the curve (along its normal in the plane (s, q), s = ln sigma (sigma itself
+    with ``sigma_log`` False, a chart reaching sigma <= 0), q = ln p2 on a
     log axis; the tangent from the neighbouring points): a flip/fold/NS point must have a stable
     orbit on one side and an unstable one with the same contacts on the other; a graze point a
     stable orbit on one side and no orbit with its contacts on the other.  Points beyond the
@@ -269,6 +283,7 @@ def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Seq
 
     sim = FmuSimulator(source, instance_name="chart-edge-check")
     to_q, of_q = (np.log, np.exp) if log2 else (np.asarray, np.asarray)
+    to_s, of_s = (np.log, np.exp) if sigma_log else (np.asarray, np.asarray)
     out: dict[str, Any] = {}
     for w in windows:
         M, closes = w["M"], w["closing"]["closes"]
@@ -277,7 +292,7 @@ def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Seq
             c = w["curves"].get(side)
             if not c or "failed" in c or len(c["sigma"]) < 2:
                 continue
-            Y = np.column_stack([np.log(np.asarray(c["sigma"], float)), to_q(np.asarray(c["p2"], float))])
+            Y = np.column_stack([to_s(np.asarray(c["sigma"], float)), to_q(np.asarray(c["p2"], float))])
             for i, z in enumerate(c["points"]):
                 if closes is not None and c["p2"][i] > closes * (1.0 - 1e-3):
                     continue
@@ -286,7 +301,7 @@ def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Seq
                 sides = []
                 for sgn in (1.0, -1.0):
                     ls, q = Y[i] + sgn * d * n
-                    s, v = float(np.exp(ls)), float(of_q(q))
+                    s, v = float(of_s(ls)), float(of_q(q))
                     pmap = PeriodMap(sim, {**params, param2: v}, "sigma", theta)
                     # the residual relative to the orbit's size (1 + sigma), as on the curve itself:
                     # an absolute 1e-10 is below CVODE's accuracy on an orbit of size 1e3

@@ -36,7 +36,10 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
 
     fig, (ax, bx) = plt.subplots(2, 1, figsize=(9, 9.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.2]})
     cmap = plt.get_cmap("tab10")
-    bottom, top = float(problem.sigma_grid[0]), problem.sigma_grid[-1] * 4.0
+    g0, g1 = float(problem.sigma_grid[0]), float(problem.sigma_grid[-1])
+    # a log sigma axis above grazing; an even one where the chart reaches sigma <= 0
+    log_sigma = g0 > 0
+    bottom, top = (g0, g1 * 4.0) if log_sigma else (g0, g1 + 0.25 * (g1 - g0))
     for M, cv in res["scans"].items():
         col = cmap((int(M) - 1) % 10)
         if cv["value"]:
@@ -45,7 +48,7 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
             hi = np.array([np.nan if x is None else x for x in cv["upper"]], float)
             ax.fill_between(v, np.where(np.isfinite(lo), lo, bottom), np.where(np.isfinite(hi), hi, top), color=col,
                             alpha=0.15, lw=0, label=f"scans, M = {M}")
-            _open_end_arrows(ax, v, lo, hi, bottom, top, col)
+            _open_end_arrows(ax, v, lo, hi, bottom, top, col, log_sigma)
             beta = np.array([np.nan if b is None else b for b in cv["beta"]], float)
             if np.any(np.isfinite(beta)):
                 bx.plot(v, beta, "o-", color=col, ms=3, label=f"M = {M}")
@@ -72,7 +75,10 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
             ax.annotate(f"M = {w['M']} closes\n{problem.param2} = {cl['closes']:.5g}", (cl["closes"], min(cl["sigma"], top)),
                         textcoords="offset points", xytext=(12, -30 if clipped else -4), fontsize=7, color=col,
                         bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": col, "lw": 0.5, "alpha": 0.85})
-    ax.set_yscale("log")
+    if log_sigma:
+        ax.set_yscale("log")
+    else:
+        ax.axhline(0.0, color="0.5", lw=0.6, ls=":")  # grazing: the wall-free orbit touches the wall
     ax.set_ylim(bottom, top)
     ax.set_ylabel("forcing above grazing, sigma")
     ax.set_title(title, fontsize=9)
@@ -99,15 +105,17 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
 
 
 def _open_end_arrows(ax: Any, v: np.ndarray, lo: np.ndarray, hi: np.ndarray, bottom: float, top: float,
-                     col: Any) -> None:
+                     col: Any, log_sigma: bool = True) -> None:
     """An arrow to the axis' edge at each value whose window goes on beyond the plotted sigma
     range (an end not found in the searched range, or beyond the axis), as windows_windows.png
     draws them: the band then reaches the edge, and the arrow says it does not end there."""
-    span = math.log(top / bottom)  # the sigma axis is logarithmic: arrows of one length in axes units
+    # arrows of one length in axes units, on a log or an even sigma axis
+    span = math.log(top / bottom) if log_sigma else top - bottom
     for x, a, b in zip(v, lo, hi):  # a value is listed only where the window is present
         for end, beyond, sign in ((bottom, not np.isfinite(a) or a < bottom, -1), (top, not np.isfinite(b) or b > top, 1)):
             if beyond:
-                ax.annotate("", xy=(x, end), xytext=(x, end * math.exp(-sign * 0.06 * span)),
+                tail = end * math.exp(-sign * 0.06 * span) if log_sigma else end - sign * 0.06 * span
+                ax.annotate("", xy=(x, end), xytext=(x, tail),
                             arrowprops=dict(arrowstyle="->", lw=1.2, color=col))
 
 

@@ -49,7 +49,8 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     p.add_argument("--log", action="store_true", help="geometric values, log axis")
     p.add_argument("--M-max", type=int, default=5, dest="M_max", help="highest period charted (default 5)")
     p.add_argument("--sigma-range", default="0.05:400", metavar="LO:HI",
-                   help="sigma range of the scans, LO > 0 (default 0.05:400; below grazing: windows --sigma-range)")
+                   help="sigma range of the scans (default 0.05:400, geometric); LO <= 0 (> -1) reaches below "
+                   "grazing, an even grid of 4 x --per-decade intervals (--sigma-range=-0.3:0.3)")
     p.add_argument("--xtol", type=positive, metavar="DS",
                    help="absolute bisection tolerance of every edge, in sigma (default: 1e-4 x the edge's sigma, "
                    "1e-3 with --quick)")
@@ -89,11 +90,13 @@ def cmd_chart(args: argparse.Namespace) -> int:
     if not 1 <= args.M_max <= 12:
         raise HarnessInputError("--M-max", f"must be in 1..12, got {args.M_max}")
     s0, s1 = parse_range(args.sigma_range)
-    if s0 <= 0:
-        raise HarnessInputError("--sigma-range", "chart needs LO > 0 (its edge curves are followed on a log sigma "
-                                "axis); below grazing use windows --sigma-range=LO:HI at each value")
+    if s0 <= -1.0 or s1 <= s0:
+        raise HarnessInputError("--sigma-range", f"needs -1 < LO < HI (sigma = -1: no forcing), got {args.sigma_range}")
     per = args.per_decade or (10 if args.quick else 16)
-    grid = np.geomspace(s0, s1, int(math.ceil(per * math.log10(s1 / s0))) + 1)
+    if s0 > 0:
+        grid = np.geomspace(s0, s1, int(math.ceil(per * math.log10(s1 / s0))) + 1)
+    else:  # below grazing: an even grid (its edges are followed in sigma itself, not ln sigma)
+        grid = np.linspace(s0, s1, 4 * per + 1)
     values = np.geomspace(a, b, args.num) if args.log else np.linspace(a, b, args.num)
     problem = ChartProblem(params, args.param2, values, args.log, args.M_max, grid,
                            transient=150 if args.quick else 250, samples=24,

@@ -197,3 +197,33 @@ def test_a_window_beyond_the_sigma_axis_is_drawn_to_its_edge_with_an_arrow(chart
             expected += [(round(v, 9), "up")] * bool(b is None or b > top)
             assert (b is None) == (kind == "range")
     assert drawn == sorted(expected) and (1000.0, "up") in drawn
+
+
+def test_a_chart_below_grazing_continues_the_flip_of_the_coexisting_orbit_on_the_exact_flow(tmp_path) -> None:
+    """A rigid wall with r close to 1 (docs/examples/windows-rigid): below grazing a period-2 orbit
+    with one impact coexists with the wall-free orbit up to its flip (sigma = -0.2211 at r = 0.95).
+    With --sigma-range reaching below 0 the chart finds it at the start of the range, continues its
+    flip over r in sigma itself, and every point of that curve is a flip of the exact flow
+    (mapcheck's own Newton: a multiplier -1, one impact per period), across the range of r."""
+    import numpy as np
+
+    from tests.edge_support import ExactFlow
+
+    assert main(["chart", "--nu", "0.8", "--Omega", "2.5", "--r", "0.95", "--wall", "rigid", "--param2", "r",
+                 "--range", "0.85:0.95", "--num", "3", "--M-max", "4", "--quick", "--sigma-range=-0.3:0.3",
+                 "--workers", "2", "--solver", "closed-form", "--out", str(tmp_path)]) == 0
+    res = json.loads((tmp_path / "chart.json").read_text())
+    (w2,) = [w for w in res["windows"] if w["M"] == 2]
+    flip = w2["curves"]["upper"]
+    assert flip["kind"] == "flip" and max(flip["p2"]) >= 0.95 and min(flip["p2"]) == pytest.approx(0.85)
+    assert max(flip["sigma"]) < -0.1 and np.ptp(flip["sigma"]) > 0.05  # below grazing, and it moves with r
+    for s, r, z in zip(flip["sigma"], flip["p2"], flip["points"]):
+        orb = ExactFlow(0.8, 2.5, r, 10.0, "rigid").orbit(s, 2, z)
+        assert orb.converged and int(np.sum(orb.contacts)) == 1, (r, s)
+        assert np.min(np.abs(orb.multipliers + 1.0)) < 1e-6, (r, s, orb.multipliers)
+    # the checks across the curve (the FMU's own Newton on both sides) and the per-value scans agree
+    assert res["edge_check"]["2"]["checked"] == len(flip["sigma"]) == res["edge_check"]["2"]["confirmed"]
+    sc = res["scans"]["2"]
+    assert sc["value"] == pytest.approx([0.85, 0.90, 0.95]) and all(k == "flip" for k in sc["kind_upper"])
+    assert sc["upper"][-1] == pytest.approx(-0.22108, abs=1e-3)  # the exact flow's flip (docs/examples)
+    assert (tmp_path / "chart.png").stat().st_size > 0
