@@ -272,8 +272,8 @@ def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Seq
     At a point of a curve, the orbit is solved by Newton (from the curve's own point) at the two
     points d away across the curve (along its normal in the plane (s, q), s = ln sigma (sigma itself
     with ``sigma_log`` False, a chart reaching sigma <= 0), q = ln p2 on a
-    log axis; the tangent from the neighbouring points): a flip/fold/NS point must have a stable
-    orbit on one side and an unstable one with the same contacts on the other; a graze point a
+    log axis; the tangent from the neighbouring points): a flip/NS point must have a stable
+    orbit on one side and an unstable one with the same contacts on the other; a fold or graze point a
     stable orbit on one side and no orbit with its contacts on the other.  Points beyond the
     window's closing (where the edge no longer bounds a window) are not checked.  Returns per M:
     ``{"checked", "confirmed", "failed": [...]}``.
@@ -309,7 +309,9 @@ def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Seq
                     same = ok and int(ev.contacts.sum()) == c["impacts"]
                     sides.append((same, same and bool(np.all(np.abs(np.linalg.eigvals(ev.J)) < 1.0))))
                 (a_same, a_stable), (b_same, b_stable) = sides
-                if c["kind"] in ("graze", "stick"):
+                if c["kind"] in ("graze", "stick", "fold"):
+                    # a fold: the stable orbit meets its unstable partner and both end there, so
+                    # across it there is no orbit at all (not an unstable one, as across a flip)
                     good = (a_stable and not b_same) or (b_stable and not a_same)
                 else:
                     good = a_same and b_same and a_stable != b_stable

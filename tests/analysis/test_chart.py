@@ -227,3 +227,31 @@ def test_a_chart_below_grazing_continues_the_flip_of_the_coexisting_orbit_on_the
     assert sc["value"] == pytest.approx([0.85, 0.90, 0.95]) and all(k == "flip" for k in sc["kind_upper"])
     assert sc["upper"][-1] == pytest.approx(-0.22108, abs=1e-3)  # the exact flow's flip (docs/examples)
     assert (tmp_path / "chart.png").stat().st_size > 0
+
+
+def test_a_fold_below_grazing_continued_over_gamma_is_the_exact_flows_fold(tmp_path) -> None:
+    """An underdamped oscillator on a compliant wall (docs/examples/windows-underdamped): its
+    period-3 orbit with one impact is born in a fold at sigma = -0.00706, before the wall-free orbit
+    grazes.  The chart continues that fold over Gamma in sigma itself, and at every point the exact
+    flow (mapcheck's own Newton) has the stable orbit 1e-6 above it, with a multiplier near +1 (a
+    fold: 1 - |z| ~ sqrt(distance)), and no such orbit 1e-6 below; the check across the curve
+    confirms every point (a fold has no orbit beyond it, stable or not)."""
+    import numpy as np
+
+    from tests.edge_support import ExactFlow
+
+    assert main(["chart", "--nu", "0.3", "--Omega", "1.2", "--r", "0.8", "--wall", "compliant", "--Gamma", "10",
+                 "--param2", "Gamma", "--range", "10:40", "--log", "--num", "3", "--M-max", "3", "--quick",
+                 "--sigma-range=-0.05:0.3", "--workers", "2", "--solver", "closed-form", "--out", str(tmp_path)]) == 0
+    res = json.loads((tmp_path / "chart.json").read_text())
+    (w3,) = [w for w in res["windows"] if w["M"] == 3]
+    fold = w3["curves"]["lower"]
+    assert fold["kind"] == "fold" and fold["p2"][0] == pytest.approx(10.0) and max(fold["p2"]) >= 40.0
+    assert max(fold["sigma"]) < 0 and fold["sigma"][0] == pytest.approx(-0.00706, abs=2e-5)
+    for s, G, z in zip(fold["sigma"], fold["p2"], fold["points"]):
+        flow = ExactFlow(0.3, 1.2, 0.8, G, "compliant")
+        inside, outside = flow.orbit(s + 1e-6, 3, z), flow.orbit(s - 1e-6, 3, z)
+        assert inside.converged and inside.stable and int(np.sum(inside.contacts)) == 1, (G, s)
+        assert 0.9 < np.max(np.abs(inside.multipliers)) < 1.0, (G, s, inside.multipliers)
+        assert not (outside.converged and int(np.sum(outside.contacts)) == 1), (G, s)
+    assert res["edge_check"]["3"]["confirmed"] == res["edge_check"]["3"]["checked"] == len(fold["sigma"])
