@@ -148,25 +148,32 @@ def _scale(a: np.ndarray) -> float:
     return max(1.0, float(np.abs(a).max()))
 
 
+def _grid(x):
+    """Put ``x`` at every state of U_GRID x V_GRID with every input pair of INPUTS (crossing
+    each contact region); yields (u, v, inputs) at each."""
+    for u in U_GRID:
+        for v in V_GRID:
+            for inputs in INPUTS:
+                x.set_states(u, v)
+                x.set_inputs(F_ext=inputs[0], u_wall=inputs[1])
+                yield u, v, inputs
+
+
 @pytest.mark.parametrize("interface", ["fmi2-me", "fmi3-me"])
 @pytest.mark.parametrize("case,params", CASES, ids=[c[0] for c in CASES])
 def test_model_exchange_partials_equal_differences_and_the_closed_form(interface, case, params):
     for x in _instances(interface, params):
         mode, unknowns = _mode(x, params), _unknowns(x)
         try:
-            for u in U_GRID:
-                for v in V_GRID:
-                    for inputs in INPUTS:
-                        x.set_states(u, v)
-                        x.set_inputs(F_ext=inputs[0], u_wall=inputs[1])
-                        J = x.jacobian(unknowns)
-                        exact = _exact(params, mode, (u, v), inputs, x.fmi3)
-                        assert np.abs(J - exact).max() <= 1e-11 * _scale(exact), (mode, u, v)
-                        d = u - inputs[1]
-                        if params.get("contact", 0) and mode == "contact" and abs(d) < 1e-2:
-                            continue  # d^(3/2): a difference across d = 0 is not a derivative
-                        fd = _central_differences(x, unknowns, (u, v), inputs)
-                        assert np.abs(J - fd).max() <= 1e-6 * _scale(J), (mode, u, v, J, fd)
+            for u, v, inputs in _grid(x):
+                J = x.jacobian(unknowns)
+                exact = _exact(params, mode, (u, v), inputs, x.fmi3)
+                assert np.abs(J - exact).max() <= 1e-11 * _scale(exact), (mode, u, v)
+                d = u - inputs[1]
+                if params.get("contact", 0) and mode == "contact" and abs(d) < 1e-2:
+                    continue  # d^(3/2): a difference across d = 0 is not a derivative
+                fd = _central_differences(x, unknowns, (u, v), inputs)
+                assert np.abs(J - fd).max() <= 1e-6 * _scale(J), (mode, u, v, J, fd)
         finally:
             x.close()
 
@@ -249,15 +256,11 @@ def test_declared_dependency_pattern_equals_the_measured_one(interface):
     for _, params in CASES:
         for x in _instances(interface, params):
             try:
-                for u in U_GRID:
-                    for v in V_GRID:
-                        for inputs in INPUTS:
-                            x.set_states(u, v)
-                            x.set_inputs(F_ext=inputs[0], u_wall=inputs[1])
-                            names = tuple(declared)
-                            J = x.jacobian(names)
-                            for i, name in enumerate(names):
-                                measured[name] |= {KNOWNS[j] for j in np.flatnonzero(J[i])}
+                for _ in _grid(x):
+                    names = tuple(declared)
+                    J = x.jacobian(names)
+                    for i, name in enumerate(names):
+                        measured[name] |= {KNOWNS[j] for j in np.flatnonzero(J[i])}
             finally:
                 x.close()
     assert measured == declared
