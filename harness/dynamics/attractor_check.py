@@ -17,6 +17,7 @@ from mapcheck.orbits import solve_periodic_orbit
 
 from ..errors import FmuRejectedInput
 from ..fmu.simulator import Simulator
+from .basins import hausdorff
 
 
 @dataclass(frozen=True)
@@ -93,7 +94,5 @@ def shoot_attractor(sim: Simulator, params: Mapping[str, Any], theta: float, poi
             sim.track_derivatives(False)
     if not orb.converged:
         return ShotOrbit(False, float(orb.residual), float("nan"), -1, float("inf"))
-    d = np.max(np.abs(orb.z[:, None, :] - pts[None, :, :]), axis=2)
-    distance = float(max(d.min(axis=1).max(), d.min(axis=0).max()))
     return ShotOrbit(True, float(orb.residual), float(np.max(np.abs(orb.multipliers))), int(orb.contacts.sum()),
-                     distance)
+                     hausdorff(orb.z, pts))
