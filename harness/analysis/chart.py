@@ -101,8 +101,11 @@ def chart_value_task(task: Mapping[str, Any], source: Any, progress: Any = None)
     xtol = task.get("xtol")
     res = measure(smap, grid, ds, sigma_range, task["xtol_rel"] if xtol is None else xtol, task["M_max"],
                   workers=1, relative=xtol is None)
+    from .chart_contradictions import scan_seeds
+
+    # the scans' own states: where the shooting that settles a contradiction starts
     return {"value": task["value"], "all": res["all"], "fmu_periods": res["fmu_periods"],
-            "seconds": time.perf_counter() - t0}
+            "seeds": scan_seeds(grid, ds, task["M_max"]), "seconds": time.perf_counter() - t0}
 
 
 def closing(values: Sequence[float], present: Sequence[bool], log: bool) -> dict[str, Any]:
@@ -226,6 +229,13 @@ def run_chart(problem: ChartProblem, source: Any, backend: Any = None, workers: 
     out["edge_check"] = edge_check(source, problem.params, problem.param2, cont["windows"], problem.log, problem.theta,
                                    sigma_log=bool(problem.sigma_grid[0] > 0))
     out["continuation_seconds"] = time.perf_counter() - t1
+    from .chart_contradictions import cross_checks
+
+    # the wall-free window, contradictions settled by shooting, coexistence per value
+    scan_range = (0.1 * float(problem.sigma_grid[0]), 4.0 * float(problem.sigma_grid[-1])) \
+        if problem.sigma_grid[0] > 0 else widened(problem.sigma_grid)
+    cross_checks(source, problem, out, per_value, scan_range)
+    out["cross_check_seconds"] = time.perf_counter() - t1 - out["continuation_seconds"]
     out["maps"] = map_overlays(problem)
     out["backend"] = be.describe()
     out["seconds"] = wall_s

@@ -34,6 +34,8 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
     from ..io import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
 
+    from .chart_wall_free import WALL_FREE, WALL_FREE_LABEL, draw_wall_free
+
     fig, (ax, bx) = plt.subplots(2, 1, figsize=(9, 9.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.2]})
     cmap = plt.get_cmap("tab10")
     g0, g1 = float(problem.sigma_grid[0]), float(problem.sigma_grid[-1])
@@ -41,19 +43,20 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
     log_sigma = g0 > 0
     bottom, top = (g0, g1 * 4.0) if log_sigma else (g0, g1 + 0.25 * (g1 - g0))
     for M, cv in res["scans"].items():
-        col = cmap((int(M) - 1) % 10)
+        # the wall-free window ("1/0") in grey, apart from period 1 with an impact
+        col = cmap((int(M) - 1) % 10) if M != WALL_FREE else "0.45"
         if cv["value"]:
             v = np.array(cv["value"])
             lo = np.array([np.nan if x is None else x for x in cv["lower"]], float)
             hi = np.array([np.nan if x is None else x for x in cv["upper"]], float)
             ax.fill_between(v, np.where(np.isfinite(lo), lo, bottom), np.where(np.isfinite(hi), hi, top), color=col,
-                            alpha=0.15, lw=0, label=f"scans, M = {M}")
+                            alpha=0.15, lw=0, label=f"scans, M = {M}" if M != WALL_FREE else f"scans, {WALL_FREE_LABEL}")
             _open_end_arrows(ax, v, lo, hi, bottom, top, col, log_sigma)
             beta = np.array([np.nan if b is None else b for b in cv["beta"]], float)
             if np.any(np.isfinite(beta)):
                 bx.plot(v, beta, "o-", color=col, ms=3, label=f"M = {M}")
         for key, ls in (("map_48", (0, (1, 1))), ("map_39", (0, (3, 1, 1, 1)))):
-            mw = res["maps"][key][M]
+            mw = res["maps"][key].get(M, {"value": []})
             for edge in ("lower", "upper") if mw["value"] else ():
                 y = np.array([np.nan if x is None else x for x in mw[edge]], float)
                 ax.plot(mw["value"], y, ls=ls, color=col, lw=0.7, alpha=0.8,
@@ -75,6 +78,7 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
             ax.annotate(f"M = {w['M']} closes\n{problem.param2} = {cl['closes']:.5g}", (cl["closes"], min(cl["sigma"], top)),
                         textcoords="offset points", xytext=(12, -30 if clipped else -4), fontsize=7, color=col,
                         bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": col, "lw": 0.5, "alpha": 0.85})
+    draw_wall_free(ax, res.get("wall_free"))
     if log_sigma:
         ax.set_yscale("log")
     else:
@@ -131,7 +135,12 @@ def _edge_text(e: Any) -> str:
 def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> str:
     g = problem.sigma_grid
     cs = res["continuation_search"]
+    from .chart_contradictions import contradiction_lines
+    from .chart_wall_free import coexistence_lines, row_label
+
     lines = [f"# Chart: windows of the ODE over (sigma, {problem.param2})", "",
+             # disagreements between the two routes first, each with what settled it
+             *contradiction_lines(res.get("contradictions", {"found": [], "compared": None}), problem.param2),
              f"Parameters: {named_parameters(problem.params)}; "
              f"{problem.param2} from {problem.values[0]:g} to {problem.values[-1]:g}{' (log)' if problem.log else ''}.", "",
              "## Where each window closes (two-parameter continuation)", "",
@@ -152,9 +161,9 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
         wtxt = "none found" if win is None else f"{_edge_text(win[0])} .. {_edge_text(win[1])}"
         if cl["closes"] is None:
             why = cl.get("note") or "; ".join(f"{k}: {v}" for k, v in (cl.get("edges_end") or {}).items())
-            lines.append(f"| {M} | {wtxt} | does not close in {cl['searched'][0]:g} .. {cl['searched'][1]:g} | - | {why} |")
+            lines.append(f"| {row_label(M)} | {wtxt} | does not close in {cl['searched'][0]:g} .. {cl['searched'][1]:g} | - | {why} |")
         else:
-            lines.append(f"| {M} | {wtxt} | {cl['closes']:.6g} | {cl['sigma']:.5g} | {cl['how']} |")
+            lines.append(f"| {row_label(M)} | {wtxt} | {cl['closes']:.6g} | {cl['sigma']:.5g} | {cl['how']} |")
     lines += ["", "Every edge curve (chart.json, `windows[*].curves`): its end and turning points:", ""]
     for w in res["windows"]:
         for side in ("lower", "upper"):
@@ -193,7 +202,7 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
         kinds = "-" if not cv["value"] else f"{cv['kind_lower'][-1]}/{cv['kind_upper'][-1]}"
         b = [x for x in cv["beta"] if x is not None]
         br = "-" if not b else f"{min(b):.3g} to {max(b):.3g}"
-        lines.append(f"| {M} | {pres} | {cl} | {kinds} | {br} |")
+        lines.append(f"| {row_label(M)} | {pres} | {cl} | {kinds} | {br} |")
     lines += ["", "Scans against the continued edges (at each scanned value, on the edge curves' first monotone "
               "stretch; `scan_check` in chart.json):", ""]
     for M, chk in res["scan_check"].items():
@@ -202,9 +211,11 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
                      + ("all within 1 %" if not bad else f"{len(bad)} edge(s) differ by more than 1 %: " + "; ".join(
                          f"{problem.param2} = {b['p2']:.4g} {b['side']}: scan {b['scan']:.5g} ({b['scan_kind']}) vs "
                          f"{b['continued']:.5g}" for b in bad[:6]) + (" ..." if len(bad) > 6 else "")))
+    lines += coexistence_lines(res.get("coexistence"), problem.param2)
     lines += ["", f"Other windows (more than one impact per period): {len(res['other_windows'])} found (chart.json).",
               "", f"Backend: {res['backend']}; scans {res['seconds']:.1f} s wall ({sum(res['task_seconds']):.1f} s in "
-              f"tasks); continuation {res['continuation_seconds']:.1f} s.", "", f"Run: `impact-harness {command}`."]
+              f"tasks); continuation {res['continuation_seconds']:.1f} s; the wall-free window, contradictions and coexistence "
+              f"{res.get('cross_check_seconds', 0.0):.1f} s.", "", f"Run: `impact-harness {command}`."]
     return "\n".join(lines)
 
 

@@ -110,10 +110,14 @@ def cmd_chart(args: argparse.Namespace) -> int:
                     *(["--quick"] if args.quick else []),
                     *([f"--xtol {args.xtol!r}"] if args.xtol is not None else []), f"--solver {args.solver}", f"--out {args.out}"])
     res = chart(problem, args.out, args.fmu, args.backend, args.workers, args.scheduler, cmd)
+    from ..analysis.chart_contradictions import count_line
+    from ..analysis.chart_wall_free import row_label
+
     for M, cl in res["closes"].items():
         if cl["closes"] is None:
-            print(f"M = {M}: does not close in {args.param2} in [{args.range_}]")
+            print(f"M = {row_label(M)}: does not close in {args.param2} in [{args.range_}]")
         else:
-            print(f"M = {M}: closes at {args.param2} = {cl['closes']:.6g} (sigma {cl['sigma']:.4g}): {cl['how']}")
+            print(f"M = {row_label(M)}: closes at {args.param2} = {cl['closes']:.6g} (sigma {cl['sigma']:.4g}): {cl['how']}")
+    print(count_line(res["contradictions"]))
     print(f"wrote {Path(args.out) / 'chart.json'}, chart.png, report.md ({time.perf_counter() - t0:.1f} s)")
     return 0
