@@ -28,7 +28,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .chart_wall_free import WALL_FREE, continued_intervals, window_key_label
+from .chart_wall_free import WALL_FREE, continued_intervals, why_not_continued, window_key_label
 
 __all__ = ["scan_seeds", "search_orbit", "contradictions", "contradiction_lines", "cross_checks", "count_line", "EDGE_REL"]
 
@@ -136,7 +136,8 @@ def _grid_interval(lo: float | None, hi: float | None, g0: float, g1: float) -> 
     b = g1 if hi is None else min(hi, g1)
     if b <= a:
         a, b = (g0 if lo is None else lo), (g1 if hi is None else hi)
-    return list(np.linspace(a, b, SEARCH_SIGMAS + 2)[1:-1])
+    between = np.geomspace if a > 0 else np.linspace  # as the scans' grid: geometric above grazing
+    return list(between(a, b, SEARCH_SIGMAS + 2)[1:-1])
 
 
 def _scan_windows(res: Mapping[str, Any], M: int, impacts: int) -> list[dict[str, Any]]:
@@ -148,7 +149,7 @@ def _in_grid(lo: float | None, hi: float | None, g0: float, g1: float) -> bool:
 
 
 def _presence(sim: Any, problem: Any, v: float, key: str, cont: list, scans: list,
-              seeds: list) -> dict[str, Any]:
+              seeds: list, windows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
     """A presence contradiction at ``v``, settled by :func:`search_orbit`."""
     from ..dynamics.periodic_map import PeriodMap
 
@@ -167,6 +168,8 @@ def _presence(sim: Any, problem: Any, v: float, key: str, cont: list, scans: lis
     right = saw if ev["found"] else ("scans" if saw == "continuation" else "continuation")
     return {"p2": v, "window": key, "label": window_key_label(key), "type": "presence",
             "continuation": bool(cont), "scans": bool(scans), "right": right,
+            "why": (why_not_continued(windows, M, impacts, v) if not cont else
+                    "the scans saw no such attractor at this value"),
             "continued": None if not cont else [cont[0]["lo"], cont[0]["hi"]],
             "scanned": None if not scans else [scans[0]["lo"], scans[0]["hi"]], "evidence": ev}
 
@@ -218,7 +221,7 @@ def contradictions(source: Any, problem: Any, windows: Sequence[Mapping[str, Any
             scans = _scan_windows(res, M, impacts)
             n_pres += 1
             if bool(cont) != bool(scans):
-                found.append(_presence(sim, problem, v, key, cont, scans, res.get("seeds", [])))
+                found.append(_presence(sim, problem, v, key, cont, scans, res.get("seeds", []), windows))
                 continue
             for c in cont:  # each continued window against the scanned window overlapping it most
                 e = max(scans, key=lambda e: _overlap_len(c, e), default=None)
@@ -267,9 +270,10 @@ def contradiction_lines(con: Mapping[str, Any], param2: str) -> list[str]:
         if c["type"] == "presence":
             said = ("the continuation has it " + f"[{_fmt(c['continued'][0])}, {_fmt(c['continued'][1])}], the scans do not"
                     if c["continuation"] else
-                    "the scans found it " + f"[{_fmt(c['scanned'][0])}, {_fmt(c['scanned'][1])}], the continuation does not")
+                    "the scans found it " + f"[{_fmt(c['scanned'][0])}, {_fmt(c['scanned'][1])}], the continuation does "
+                    f"not ({c['why']})")
         else:
-            said = (f"{c['side']} edge: continued {c['continued_edge']:.7g}, scans {c['scan_edge']:.7g} "
+            said = (f"{c['side']} edge: continued {c['continued_edge']:.7g} (interpolated between its curve's points), scans {c['scan_edge']:.7g} "
                     f"({c['scan_kind']}), tolerance {c['tolerance']:.2g}")
         lines.append(f"- {param2} = {c['p2']:.6g}, {c['label']}: {said}. **{c['right']} right**: "
                      f"{_evidence_text(c['evidence'])}.")

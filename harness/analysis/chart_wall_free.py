@@ -27,7 +27,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 __all__ = ["WALL_FREE", "WALL_FREE_LABEL", "window_key_label", "row_label", "coexistence_lines", "draw_wall_free", "wall_free_window", "wall_free_scans",
-           "continued_intervals", "coexistence_by_value"]
+           "continued_intervals", "why_not_continued", "coexistence_by_value"]
 
 #: key of the wall-free window in chart.json's ``closes``, ``scans``, ``contradictions``
 WALL_FREE = "1/0"
@@ -152,12 +152,50 @@ def continued_intervals(windows: Sequence[Mapping[str, Any]], v: float) -> list[
             if w[side] is None:
                 ends.append(None)  # open: no edge in the range at the start, none later
                 continue
-            s = _edge_at(w["curves"].get(side), v)
+            s = _edge_at_end(w["curves"].get(side), v)
             ends.append(s if s is not None else "missing")
         if "missing" in ends:
             continue
         out.append({"M": w["M"], "impacts": w.get("impacts", 1), "lo": ends[0], "hi": ends[1], "window": w})
     return out
+
+
+def _edge_at_end(curve: Mapping[str, Any] | None, v: float) -> float | None:
+    """:func:`harness.analysis.chart_curves._edge_at`, and at the curve's first point where ``v``
+    is its p2 to round-off (a curve starts at the start value of p2 to ~1e-12 relative, not exactly)."""
+    from .chart_curves import _edge_at
+
+    s = _edge_at(curve, v)
+    if s is None and curve and "failed" not in curve and curve.get("p2"):
+        if abs(curve["p2"][0] - v) <= 1e-9 * max(abs(v), 1e-300):
+            return float(curve["sigma"][0])
+    return s
+
+
+def why_not_continued(windows: Sequence[Mapping[str, Any]], M: int, impacts: int, v: float) -> str:
+    """Why the continuation has no window (M, impacts) at ``v``, in words."""
+    mine = [w for w in windows if w["M"] == M and w.get("impacts", 1) == impacts]
+    if not mine:
+        return "no such window at the start of the range"
+    out = []
+    for w in mine:
+        closes = w["closing"]["closes"]
+        if closes is not None and v >= closes:
+            out.append(f"beyond its closing at {closes:.6g}")
+            continue
+        for side in ("lower", "upper"):
+            c = w["curves"].get(side)
+            if w[side] is None or _edge_at_end(c, v) is not None:
+                continue
+            if not c or "failed" in c:
+                out.append(f"its {side} edge was not continued")
+            elif c["turns"] and any(t["side"] == "max" for t in c["turns"]):
+                t = next(t for t in c["turns"] if t["side"] == "max")
+                out.append(f"its {side} {c['kind']} edge turns back at {t['p2']:.6g} (the boundary then hands over "
+                           "to another curve)")
+            else:
+                out.append(f"its {side} {c['kind']} edge curve ends at {c['end']['p2']:.6g} ({c['end'].get('note')})")
+    return "; ".join(out) or "its window lies outside the scanned sigma grid"
 
 
 def coexistence_by_value(values: Sequence[float], per_value: Sequence[Mapping[str, Any]],
