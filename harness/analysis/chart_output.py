@@ -190,7 +190,7 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
                          f"(one side: {b['one_side']}, other: {b['other_side']})" for b in bad[:6])))
     lines += ["", "## Brute-force check: windows measured per value", "",
               f"For {len(problem.values)} values, up/down scans of the FMU over sigma in [{g[0]:.3g}, {g[-1]:.3g}] "
-              f"({len(g)} points, geometric), every attractor seen shot by Newton to its edges (bisected to "
+              f"({len(g)} points, {'geometric' if g[0] > 0 else 'evenly spaced'}), every attractor seen shot by Newton to its edges (bisected to "
               f"{tolerance_text(problem)}). Where a window disappears is bracketed between neighbouring values.", "",
               "| M | present at | disappears (bracket) | edge kinds at the last value | beta range |",
               "|---|---|---|---|---|"]

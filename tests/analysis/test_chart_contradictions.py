@@ -159,7 +159,7 @@ def test_a_window_removed_from_the_scans_is_restored_by_shooting(bistable) -> No
     the shooting finds the stable orbit, which the exact flow confirms; the continuation is right.
     Then the other way: the continued window removed, the scans' window found by shooting."""
     from harness.analysis.chart import ChartProblem, chart_value_task
-    from harness.analysis.chart_contradictions import contradictions
+    from harness.analysis.chart_contradictions import contradiction_lines, contradictions
     from harness.config import default_fmu_path
     from harness.fmu.fmi import FmuModel
 
@@ -173,9 +173,13 @@ def test_a_window_removed_from_the_scans_is_restored_by_shooting(bistable) -> No
             "samples": 24, "xtol_rel": 1e-3, "xtol": None, "M_max": 2}
     scan = chart_value_task(task, source)
     assert any(e["M"] == 1 and e["impacts"] == 1 and e["resolved"] for e in scan["all"])
+    windows = res["windows"] + [res["wall_free"]]
+    # as run, the two routes agree at nu = 1 (both the exact flow's, test above): none, said with what was compared
+    con = contradictions(source, problem, windows, [scan])
+    assert con["found"] == [] and con["compared"]["presence"] == 3 and con["compared"]["edges"] >= 4
+    assert contradiction_lines(con, "nu")[2].startswith("None: compared the presence of 3 windows")
     cut = {**scan, "all": [e for e in scan["all"] if not (e["M"] == 1 and e["impacts"] == 1)],
            "seeds": [s for s in scan["seeds"] if not (s["M"] == 1 and s["impacts"] == 1)]}
-    windows = res["windows"] + [res["wall_free"]]
     con = contradictions(source, problem, windows, [cut])
     (c,) = [c for c in con["found"] if c["window"] == "1"]
     assert c["type"] == "presence" and c["continuation"] and not c["scans"] and c["right"] == "continuation"
