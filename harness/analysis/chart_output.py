@@ -132,6 +132,20 @@ def _edge_text(e: Any) -> str:
     return "none in the range" if e is None else f"{e['kind']} {e['sigma']:.7g}"
 
 
+def _scan_check_lines(res: dict[str, Any], problem: ChartProblem) -> list[str]:
+    """The scans' edges against the continued ones, more than 1 % apart (settled at the report's top)."""
+    lines = ["", "Scans against the continued edges (at each scanned value, on the edge curves' first monotone "
+             "stretch; `scan_check` in chart.json; each disagreement beyond the tolerance is settled by shooting in "
+             "the contradictions at the top):", ""]
+    for M, chk in res["scan_check"].items():
+        bad = chk["disagree"]
+        lines.append(f"- M = {M}: largest relative difference {chk['max_rel_diff']:.2g}; "
+                     + ("all within 1 %" if not bad else f"{len(bad)} edge(s) differ by more than 1 %: " + "; ".join(
+                         f"{problem.param2} = {b['p2']:.4g} {b['side']}: scan {b['scan']:.5g} ({b['scan_kind']}) vs "
+                         f"{b['continued']:.5g}" for b in bad[:6]) + (" ..." if len(bad) > 6 else "")))
+    return lines
+
+
 def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> str:
     g = problem.sigma_grid
     cs = res["continuation_search"]
@@ -203,14 +217,7 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
         b = [x for x in cv["beta"] if x is not None]
         br = "-" if not b else f"{min(b):.3g} to {max(b):.3g}"
         lines.append(f"| {row_label(M)} | {pres} | {cl} | {kinds} | {br} |")
-    lines += ["", "Scans against the continued edges (at each scanned value, on the edge curves' first monotone "
-              "stretch; `scan_check` in chart.json):", ""]
-    for M, chk in res["scan_check"].items():
-        bad = chk["disagree"]
-        lines.append(f"- M = {M}: largest relative difference {chk['max_rel_diff']:.2g}; "
-                     + ("all within 1 %" if not bad else f"{len(bad)} edge(s) differ by more than 1 %: " + "; ".join(
-                         f"{problem.param2} = {b['p2']:.4g} {b['side']}: scan {b['scan']:.5g} ({b['scan_kind']}) vs "
-                         f"{b['continued']:.5g}" for b in bad[:6]) + (" ..." if len(bad) > 6 else "")))
+    lines += _scan_check_lines(res, problem)
     lines += coexistence_lines(res.get("coexistence"), problem.param2)
     lines += ["", f"Other windows (more than one impact per period): {len(res['other_windows'])} found (chart.json).",
               "", f"Backend: {res['backend']}; scans {res['seconds']:.1f} s wall ({sum(res['task_seconds']):.1f} s in "
