@@ -105,8 +105,8 @@ def wall_free_window(source: Any, params: Mapping[str, Any], param2: str, values
                "searched": [float(values[0]), float(values[-1])]}
     if i_abs is None:
         closing["note"] = ("the wall-free orbit exists at every sigma < 0 and grazes at sigma = 0 (located at each value "
-                           f"of {param2}: largest |sigma| {max(abs(x) for x in rows['sigma']):.2g}); stable at every value "
-                           f"(largest |multiplier| {max(abs(complex(*m)) for ms in rows['multipliers'] for m in ms):.4g})")
+                           f"of {param2}: at most {max(abs(x) for x in rows['sigma']):.2g} from 0); stable at every value "
+                           f"(largest multiplier modulus {max(abs(complex(*m)) for ms in rows['multipliers'] for m in ms):.4g})")
     first = {"kind": "graze", "sigma": rows["sigma"][0], "point": rows["points"][0], "bracket": rows["error"][0],
              "multipliers": rows["multipliers"][0], "note": "the wall-free orbit's graze"}
     return {"M": 1, "impacts": 0, "label": WALL_FREE_LABEL, "seed_sigma": s2, "seed": rows["points"][0],
