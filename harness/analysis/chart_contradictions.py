@@ -149,7 +149,7 @@ def _in_grid(lo: float | None, hi: float | None, g0: float, g1: float) -> bool:
 
 
 def _presence(sim: Any, problem: Any, v: float, key: str, cont: list, scans: list,
-              seeds: list, windows: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+              seeds: list, windows: Sequence[Mapping[str, Any]], closes: Mapping[str, Any] | None) -> dict[str, Any]:
     """A presence contradiction at ``v``, settled by :func:`search_orbit`."""
     from ..dynamics.periodic_map import PeriodMap
 
@@ -168,7 +168,7 @@ def _presence(sim: Any, problem: Any, v: float, key: str, cont: list, scans: lis
     right = saw if ev["found"] else ("scans" if saw == "continuation" else "continuation")
     return {"p2": v, "window": key, "label": window_key_label(key), "type": "presence",
             "continuation": bool(cont), "scans": bool(scans), "right": right,
-            "why": (why_not_continued(windows, M, impacts, v) if not cont else
+            "why": (why_not_continued(windows, M, impacts, v, closes) if not cont else
                     "the scans saw no such attractor at this value"),
             "continued": None if not cont else [cont[0]["lo"], cont[0]["hi"]],
             "scanned": None if not scans else [scans[0]["lo"], scans[0]["hi"]], "evidence": ev}
@@ -200,11 +200,11 @@ def _edges(sim: Any, problem: Any, v: float, key: str, c: Mapping[str, Any], e: 
 
 
 def contradictions(source: Any, problem: Any, windows: Sequence[Mapping[str, Any]],
-                   per_value: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
+                   per_value: Sequence[Mapping[str, Any]], closes: Mapping[str, Any] | None = None) -> dict[str, Any]:
     """Every disagreement between the continuation and the scans, each settled by shooting.
 
     ``windows``: the continued windows (the wall-free one included, ``impacts`` 0); ``per_value``:
-    the scans' results (``all``, ``seeds``).  Returns ``{"found": [...], "compared": {...}}``."""
+    the scans' results (``all``, ``seeds``); ``closes``: chart.json's, where each window closes.  Returns ``{"found": [...], "compared": {...}}``."""
     from ..fmu.simulator import FmuSimulator
 
     sim = FmuSimulator(source, instance_name="chart-contradictions")
@@ -214,14 +214,14 @@ def contradictions(source: Any, problem: Any, windows: Sequence[Mapping[str, Any
     n_pres = n_edge = 0
     for res in per_value:
         v = float(res["value"])
-        cont_all = continued_intervals(windows, v)
+        cont_all = continued_intervals(windows, v, closes)
         for key in keys:
             M, impacts = (1, 0) if key == WALL_FREE else (int(key), 1)
             cont = [c for c in cont_all if c["M"] == M and c["impacts"] == impacts and _in_grid(c["lo"], c["hi"], g0, g1)]
             scans = _scan_windows(res, M, impacts)
             n_pres += 1
             if bool(cont) != bool(scans):
-                found.append(_presence(sim, problem, v, key, cont, scans, res.get("seeds", []), windows))
+                found.append(_presence(sim, problem, v, key, cont, scans, res.get("seeds", []), windows, closes))
                 continue
             for c in cont:  # each continued window against the scanned window overlapping it most
                 e = max(scans, key=lambda e: _overlap_len(c, e), default=None)
@@ -300,8 +300,9 @@ def cross_checks(source: Any, problem: Any, out: dict[str, Any], per_value: Sequ
             {"closes": None, "sigma": None, "how": None, "searched": wf_searched(problem), "impacts": 0,
              "label": window_key_label(WALL_FREE),
              "note": "no stable wall-free orbit found by Newton from the wall-free point at the first value"})
-    out["contradictions"] = contradictions(source, problem, windows, per_value)
-    out["coexistence"] = coexistence_by_value([float(v) for v in problem.values], per_value, windows, search)
+    out["contradictions"] = contradictions(source, problem, windows, per_value, out["closes"])
+    out["coexistence"] = coexistence_by_value([float(v) for v in problem.values], per_value, windows, search,
+                                              out["closes"])
 
 
 def wf_searched(problem: Any) -> list[float]:

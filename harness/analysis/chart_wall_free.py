@@ -27,7 +27,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 __all__ = ["WALL_FREE", "WALL_FREE_LABEL", "window_key_label", "row_label", "coexistence_lines", "draw_wall_free", "wall_free_window", "wall_free_scans",
-           "continued_intervals", "why_not_continued", "coexistence_by_value"]
+           "closing_of", "continued_intervals", "why_not_continued", "coexistence_by_value"]
 
 #: key of the wall-free window in chart.json's ``closes``, ``scans``, ``contradictions``
 WALL_FREE = "1/0"
@@ -136,16 +136,26 @@ def wall_free_scans(values: Sequence[float], per_value: Sequence[Mapping[str, An
             "bracket": None}
 
 
-def continued_intervals(windows: Sequence[Mapping[str, Any]], v: float) -> list[dict[str, Any]]:
-    """The continued windows at ``v``: ``{"M", "impacts", "lo", "hi", "window"}`` (an edge None: open,
-    the branch left the range stable) for each window whose edges exist there, before its closing.
-    A window whose edge curve does not reach ``v`` (failed, ended, turned) is not there by this route."""
-    from .chart_curves import _edge_at
+def closing_of(w: Mapping[str, Any], windows: Sequence[Mapping[str, Any]],
+               closes: Mapping[str, Any] | None) -> float | None:
+    """Where the window closes: chart.json's ``closes[M]`` for the window it reports (the first of its
+    M, with one impact), else the window's own ``closing``."""
+    first = next((x for x in windows if x["M"] == w["M"] and x.get("impacts", 1) == 1), None)
+    if closes is not None and w is first and str(w["M"]) in closes:
+        return closes[str(w["M"])].get("closes")
+    return w["closing"]["closes"]
 
+
+def continued_intervals(windows: Sequence[Mapping[str, Any]], v: float,
+                        closes: Mapping[str, Any] | None = None) -> list[dict[str, Any]]:
+    """The continued windows at ``v``: ``{"M", "impacts", "lo", "hi", "window"}`` (an edge None: open,
+    the branch left the range stable) for each window whose edges exist there, before its closing
+    (:func:`closing_of`).  A window whose edge curve does not reach ``v`` (failed, ended, turned) is
+    not there by this route."""
     out = []
     for w in windows:
-        closes = w["closing"]["closes"]
-        if closes is not None and v >= closes:
+        closes_at = closing_of(w, windows, closes)
+        if closes_at is not None and v >= closes_at:
             continue
         ends = []
         for side in ("lower", "upper"):
@@ -172,16 +182,17 @@ def _edge_at_end(curve: Mapping[str, Any] | None, v: float) -> float | None:
     return s
 
 
-def why_not_continued(windows: Sequence[Mapping[str, Any]], M: int, impacts: int, v: float) -> str:
+def why_not_continued(windows: Sequence[Mapping[str, Any]], M: int, impacts: int, v: float,
+                      closes: Mapping[str, Any] | None = None) -> str:
     """Why the continuation has no window (M, impacts) at ``v``, in words."""
     mine = [w for w in windows if w["M"] == M and w.get("impacts", 1) == impacts]
     if not mine:
         return "no such window at the start of the range"
     out = []
     for w in mine:
-        closes = w["closing"]["closes"]
-        if closes is not None and v >= closes:
-            out.append(f"beyond its closing at {closes:.6g}")
+        at = closing_of(w, windows, closes)
+        if at is not None and v >= at:
+            out.append(f"beyond its closing at {at:.6g}")
             continue
         for side in ("lower", "upper"):
             c = w["curves"].get(side)
@@ -199,7 +210,8 @@ def why_not_continued(windows: Sequence[Mapping[str, Any]], M: int, impacts: int
 
 
 def coexistence_by_value(values: Sequence[float], per_value: Sequence[Mapping[str, Any]],
-                         windows: Sequence[Mapping[str, Any]], search: tuple[float, float]) -> list[dict[str, Any]]:
+                         windows: Sequence[Mapping[str, Any]], search: tuple[float, float],
+                         closes: Mapping[str, Any] | None = None) -> list[dict[str, Any]]:
     """Per value: the sigma intervals where two or more stable attractors coexist, from the scans'
     windows (every attractor they saw, shot to its edges) and from the continued edges; each row
     says which route saw it (``routes``) and the other route's interval with the same attractors."""
@@ -208,7 +220,7 @@ def coexistence_by_value(values: Sequence[float], per_value: Sequence[Mapping[st
     out = []
     for v, res in zip(values, per_value):
         scans = coexistence([e for e in res["all"] if e.get("resolved")], search)
-        cont = coexistence([{**c, "resolved": True} for c in continued_intervals(windows, float(v))], search)
+        cont = coexistence([{**c, "resolved": True} for c in continued_intervals(windows, float(v), closes)], search)
         for c in scans:
             twin = next((d for d in cont if d["keys"] == c["keys"] and _overlap(c, d)), None)
             out.append({"p2": float(v), **c, "routes": ["scans"] + (["continuation"] if twin else []),
