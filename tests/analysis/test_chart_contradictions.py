@@ -32,8 +32,14 @@ ARGS = ["chart", "--nu", "1.0", "--Omega", "3.2", "--r", "0.99", "--wall", "rigi
 
 @pytest.fixture(scope="module")
 def bistable(tmp_path_factory):
+    import contextlib
+    import io
+
     out = tmp_path_factory.mktemp("chart_bistable")
-    assert main([*ARGS, "--out", str(out)]) == 0
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        assert main([*ARGS, "--out", str(out)]) == 0
+    (out / "stdout.txt").write_text(buf.getvalue())
     return out, json.loads((out / "chart.json").read_text())
 
 
@@ -113,7 +119,7 @@ def test_coexistence_below_grazing_is_listed_per_value_and_is_the_exact_flows(bi
                      r"continuation", report)
 
 
-def test_every_contradiction_found_is_settled_as_the_exact_flow_says(bistable, capsys) -> None:
+def test_every_contradiction_found_is_settled_as_the_exact_flow_says(bistable) -> None:
     """Whatever the two routes disagree on, the resolution is the exact flow's: where the shooting
     found a stable orbit, the exact flow has it (same multipliers); where it found none at an edge's
     midpoint, the exact flow's orbit is lost before it.  The report puts them first; stdout counts."""
@@ -130,6 +136,11 @@ def test_every_contradiction_found_is_settled_as_the_exact_flow_says(bistable, c
         elif c["type"] == "edge" and c["window"] == "1" and c["side"] == "lower":
             s_mid = ev["range"][0]  # no stable impacting orbit there: the exact flow's fold lies above it
             assert _fold(c["p2"], s_mid) > s_mid
+    n = len(con["found"])
+    right = sum(c["right"] == "scans" for c in con["found"])
+    line = (f"contradictions between the continuation and the scans: {n} (settled by shooting: continuation right in "
+            f"{n - right}, scans right in {right}" if n else "contradictions between the continuation and the scans: none")
+    assert line in (out / "stdout.txt").read_text()
     report = (out / "report.md").read_text()
     sections = re.findall(r"^## (.+)$", report, flags=re.M)
     assert sections[0] == "Contradictions between the continuation and the per-value scans"
