@@ -142,8 +142,9 @@ class PeriodMap:
         u_wall = float(self.params.get("u_wall", 0.0))
         # sigma <= -1 (no forcing) is outside the FMU's domain: a corrector step that walks there
         # (near a nonsmooth fold) is a failed evaluation, not an error that ends the continuation
+        # (a test map with no FMU behind it, without ``source``, has no such domain)
         inside = int(self.params.get("wall", 1)) == 2 and (z0[0] > u_wall or (z0[0] == u_wall and z0[1] > 0.0))
-        if inside or self.sigma(p) <= -1.0:
+        if inside or (self.sigma(p) <= -1.0 and getattr(self.sim, "source", None) is not None):
             nan = np.full(2, np.nan)
             return MapEvaluation(nan, np.full((M, 2), np.nan), np.zeros(M, dtype=int),
                                  None if not derivatives else np.full((2, 2), np.nan),
