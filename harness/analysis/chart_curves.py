@@ -192,6 +192,7 @@ def chart_curves(source: Any, params: Mapping[str, Any], param2: str, p2_range: 
                  grid: np.ndarray, M_max: int, theta: float = 0.5) -> dict[str, Any]:
     """Windows at the start of the range, their edges continued, and where each closes."""
     from ..fmu.simulator import FmuSimulator
+    from .window_region import follow_window
 
     sim = FmuSimulator(source, instance_name="chart-curves")
     p0 = {**params, param2: float(p2_range[0])}
@@ -202,7 +203,8 @@ def chart_curves(source: Any, params: Mapping[str, Any], param2: str, p2_range: 
         sigma_range = widened(grid)
     for w in windows:
         w["curves"] = continue_window(sim, p0, w, param2, p2_range, log2, sigma_range, theta)
-        w["closing"] = window_closing(w["curves"], p2_range, sigma_range)
+        # the first candidate closing confirmed by shooting on both sides, hand-overs followed
+        w["closing"] = follow_window(sim, p0, w, param2, p2_range, log2, sigma_range, theta)
     closes: dict[str, Any] = {}
     for M in range(1, M_max + 1):
         mine = [w for w in windows if w["M"] == M]

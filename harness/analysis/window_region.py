@@ -1,0 +1,300 @@
+"""A window as a region of (sigma, p2), and its closing confirmed by direct shooting.
+
+At each value of the second parameter p2 a window is the set of sigma where its period-M orbit
+exists with its contacts and is stable.  Its boundary can hand over from one curve to another: a
+graze curve that turns back in p2 bounds only the region where the orbit's free passage reaches
+the wall; past its turn the window is bounded by the other edges (a flip curve taking over, a fold
+appearing) and closes later.  So the candidates of :func:`.chart_curves.window_closing` (turning
+points, a grazing orbit losing stability, an edge ending on the graze, the lower edge running off
+to sigma -> infinity) are only candidates.  Each is tested in turn by direct Newton shooting on the
+FMU (:func:`harness.dynamics.periodic_map.refine_orbit`, no continuation):
+
+* **below**, at p2* (1 - 1e-3): a stable period-M orbit with the window's contacts must be found
+  on a sigma grid across the window there (between the continued edges' crossings of that p2);
+* **above**, at p2* (1 + 1e-3): none on a sigma grid across the same interval widened (started
+  from the orbits found below, from the edge curves' own orbits, and from orbits iterated from a
+  few starts, :data:`ITERATED`).
+
+Both found: the candidate is confirmed, the window closes there.  A stable orbit above: the
+boundary hands over there (a codimension-two point of the kind the candidate names); the orbit
+found is continued in sigma to its new edges (:func:`orbit_edges`), those are continued in
+(sigma, p2) from there (:func:`.chart_curves.continue_window`), and their candidates are tested
+in turn, at most :data:`MAX_HANDOVERS` times.  No orbit below: the candidate is not this window's
+closing (recorded, the next candidate is tested).  An unconfirmed candidate is never the answer.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from ..errors import FmuError
+
+__all__ = ["STEP", "MAX_HANDOVERS", "GRID", "ITERATED", "closing_kind", "edge_crossings", "shoot_across",
+           "confirm_candidate", "orbit_edges", "follow_window"]
+
+#: Relative distance in p2 from a candidate closing at which the window is tested on each side.
+STEP = 1e-3
+#: Hand-overs followed per window before the search gives up (and says so).
+MAX_HANDOVERS = 6
+#: Values of sigma in each search grid.
+GRID = 25
+#: Orbits iterated from a few starts (periods of transient) at this many sigma of the grid above.
+ITERATED = (5, 300)
+
+
+def closing_kind(how: str) -> str:
+    """The codimension-two point a candidate's description (:func:`.chart_curves.window_closing`) names."""
+    if "runs off" in how:
+        return "edge runs off to sigma -> infinity (an asymptote)"
+    if "loses stability" in how:
+        return "graze meets flip/fold (the grazing orbit loses stability)"
+    if "ends on the orbit's graze" in how:
+        return "smooth edge meets graze (flip/fold curve ends on the graze)"
+    for kind in ("graze", "flip", "fold", "ns"):
+        if f"{kind} edge turns back" in how:
+            return f"{kind} curve turns (maximum in p2)"
+    return "other"
+
+
+def edge_crossings(curves: Mapping[str, Any], p2: float) -> list[float]:
+    """Every sigma at which a continued edge curve crosses ``p2`` (linear interpolation between
+    neighbouring points, in ln sigma where both are positive)."""
+    out: list[float] = []
+    for c in curves.values():
+        if not c or "failed" in c or len(c["p2"]) < 2:
+            continue
+        x, y = np.asarray(c["p2"], float), np.asarray(c["sigma"], float)
+        for i in range(len(x) - 1):
+            a, b = x[i], x[i + 1]
+            if (a - p2) * (b - p2) > 0 or a == b:
+                continue
+            t = (p2 - a) / (b - a)
+            if y[i] > 0 and y[i + 1] > 0:
+                out.append(float(math.exp((1 - t) * math.log(y[i]) + t * math.log(y[i + 1]))))
+            else:
+                out.append(float((1 - t) * y[i] + t * y[i + 1]))
+    return sorted(out)
+
+
+def _norm_seed(z: Sequence[float], sigma: float, theta: float) -> np.ndarray:
+    """A stroboscopic point as w / (1 + sigma) (w = z - p(theta)): the orbit's shape, which moves
+    little with sigma (the coordinates of the extended systems), so a seed at another sigma."""
+    from ..dynamics.periodic_map import wall_free_offset
+
+    return (np.asarray(z, float) - wall_free_offset(sigma, theta)) / (1.0 + sigma)
+
+
+def _good(ev: Any, impacts: int) -> tuple[bool, bool]:
+    """(the orbit has the window's contacts, and is stable)."""
+    same = int(np.sum(ev.contacts)) == impacts
+    return same, same and bool(np.all(np.abs(np.linalg.eigvals(ev.J)) < 1.0))
+
+
+def shoot_across(pmap: Any, M: int, impacts: int, sigmas: np.ndarray, seeds: Sequence[np.ndarray],
+                 iterated: tuple[int, int] = (0, 0)) -> list[dict[str, Any]]:
+    """Stable period-M orbits with ``impacts`` wall entries per period found by Newton at each sigma.
+
+    At each sigma (in order) Newton starts from the orbit found at the previous sigma, then from
+    each of ``seeds`` (shapes w / (1 + sigma), :func:`_norm_seed`); at ``iterated[0]`` sigma spread
+    over the grid also from the wall-free orbit and the seeds iterated ``iterated[1]`` periods.
+    Returns every stable orbit found: ``{"sigma", "point", "multipliers", "residual", "start"}``.
+    """
+    from ..dynamics.periodic_map import refine_orbit
+
+    found: list[dict[str, Any]] = []
+    prev: np.ndarray | None = None
+    spread = set(np.linspace(0, len(sigmas) - 1, iterated[0]).round().astype(int).tolist()) if iterated[0] else set()
+    for k, s in enumerate(sigmas):
+        s = float(s)
+        starts = ([("previous", prev)] if prev is not None else []) + [("seed", w * (1.0 + s)) for w in seeds]
+        if k in spread:
+            starts += _iterated_starts(pmap, s, seeds, iterated[1])
+        prev = None
+        for name, w0 in starts:
+            try:
+                w, ev, ok, res = refine_orbit(pmap, w0, s, M, tol=1e-10 * (1.0 + abs(s)))
+            except FmuError:
+                continue
+            same, stable = _good(ev, impacts) if ok else (False, False)
+            if same:
+                prev = w
+            if stable:
+                mu = np.linalg.eigvals(ev.J)
+                found.append({"sigma": s, "point": ev.points[0].tolist(), "residual": float(res), "start": name,
+                              "multipliers": [[float(m.real), float(m.imag)] for m in mu]})
+                break
+    return found
+
+
+def _iterated_starts(pmap: Any, sigma: float, seeds: Sequence[np.ndarray], periods: int) -> list[tuple[str, np.ndarray]]:
+    """The wall-free orbit and each seed at sigma, iterated ``periods`` periods (w coordinates)."""
+    out = []
+    for w in [np.zeros(2), *seeds]:
+        z0 = w * (1.0 + sigma) + pmap.offset(sigma)
+        try:
+            pts, _ = pmap.run(sigma, z0, periods)
+        except FmuError:
+            continue
+        if np.all(np.isfinite(pts[-1])):
+            out.append(("iterated", pts[-1] - pmap.offset(sigma)))
+    return out
+
+
+def _curve_seeds(curves: Mapping[str, Any], p2: float, theta: float) -> list[np.ndarray]:
+    """The orbit of each continued edge curve at its point nearest ``p2`` (as shapes)."""
+    out = []
+    for c in curves.values():
+        if c and "failed" not in c and len(c["p2"]) > 0:
+            i = int(np.argmin(np.abs(np.asarray(c["p2"], float) - p2)))
+            out.append(_norm_seed(c["points"][i], float(c["sigma"][i]), theta))
+    return out
+
+
+def _interval(curves: Mapping[str, Any], p2: float, cand: Mapping[str, Any]) -> tuple[float, float, list[float]]:
+    """The sigma interval of the window at ``p2`` just below the candidate: between the edge
+    curves' crossings there (and the candidate's own sigma).  For a lower edge running off to
+    sigma -> infinity, [1.2, 4] x the edge's sigma there on the asymptote p2 = p* - c / sigma."""
+    edges = edge_crossings(curves, p2)
+    if "runs off" in cand["how"]:
+        lower = curves["lower"]
+        (s1, s2), (a, b) = lower["sigma"][-2:], lower["p2"][-2:]
+        c = (b - a) / (1.0 / s1 - 1.0 / s2) if s1 != s2 else 0.0
+        s_e = c / max(cand["p2"] - p2, 1e-300) if c > 0 else 2.0 * float(s2)
+        return 1.2 * s_e, 4.0 * s_e, edges
+    pts = edges + [float(cand["sigma"])]
+    return min(pts), max(pts), edges
+
+
+def _grid(lo: float, hi: float, widen: float, n: int) -> np.ndarray:
+    """``n`` sigma from lo to hi, widened by ``widen`` x the width on each side (geometric where
+    positive; at least 1e-6 x sigma wide: a window's tip is thin)."""
+    if lo > 0:
+        span = max(math.log(hi / lo), 2e-6)
+        mid = 0.5 * math.log(hi * lo)
+        return np.exp(np.linspace(mid - (0.5 + widen) * span, mid + (0.5 + widen) * span, n))
+    span = max(hi - lo, 1e-6 * max(abs(hi), 1.0))
+    mid = 0.5 * (hi + lo)
+    return np.linspace(max(mid - (0.5 + widen) * span, -0.99), mid + (0.5 + widen) * span, n)
+
+
+def confirm_candidate(sim: Any, params: Mapping[str, Any], param2: str, M: int, impacts: int,
+                      curves: Mapping[str, Any], cand: Mapping[str, Any], theta: float = 0.5) -> dict[str, Any]:
+    """Test a candidate closing ``{"p2", "sigma", "how"}`` by Newton shooting on either side.
+
+    Returns ``{"verdict", "below", "above"}``; verdict "confirmed" (a stable orbit below between
+    the edges, none above), "hand-over" (one above: the window goes on) or "no orbit below" (the
+    window is not there just below the candidate: not its closing)."""
+    from ..dynamics.periodic_map import PeriodMap
+
+    p2c = float(cand["p2"])
+    pb, pa = p2c * (1.0 - STEP), p2c * (1.0 + STEP)
+    lo, hi, edges = _interval(curves, pb, cand)
+    seeds = _curve_seeds(curves, p2c, theta)
+    g_below = _grid(lo, hi, 0.25, GRID)
+    below = shoot_across(PeriodMap(sim, {**params, param2: pb}, "sigma", theta), M, impacts, g_below, seeds)
+    between = None if len(edges) < 2 else any(edges[0] <= o["sigma"] <= edges[-1] for o in below)
+    more = [_norm_seed(o["point"], o["sigma"], theta) for o in below[:: max(1, len(below) // 3)]]
+    g_above = _grid(lo, hi, 0.5, GRID + 6)
+    above = shoot_across(PeriodMap(sim, {**params, param2: pa}, "sigma", theta), M, impacts, g_above,
+                         more + seeds, ITERATED)
+    verdict = ("hand-over" if above else "confirmed" if below and between is not False else "no orbit below")
+    search = {"grid": "geometric" if lo > 0 else "even", "newton_tol": "1e-10 x (1 + |sigma|)",
+              "stable": "all |multipliers| < 1, contacts per period as the window's"}
+    return {"verdict": verdict,
+            "below": {"p2": pb, "sigma_range": [float(g_below[0]), float(g_below[-1])], "values": len(g_below),
+                      "edges_there": edges, "found": len(below), "between_edges": between,
+                      "sigma": [o["sigma"] for o in below], "orbit": _middle(below)},
+            "above": {"p2": pa, "sigma_range": [float(g_above[0]), float(g_above[-1])], "values": len(g_above),
+                      "starts": f"{len(more) + len(seeds)} seeds + the previous sigma's orbit at each value; the "
+                      f"wall-free orbit and the seeds iterated {ITERATED[1]} periods at {ITERATED[0]} values",
+                      "found": bool(above), "sigma": [o["sigma"] for o in above], "orbit": _middle(above)},
+            "search": search}
+
+
+def _middle(found: Sequence[Mapping[str, Any]]) -> dict[str, Any] | None:
+    """The middle one of the orbits found (as evidence), or None."""
+    return dict(found[len(found) // 2]) if found else None
+
+
+def orbit_edges(sim: Any, params: Mapping[str, Any], M: int, sigma: float, z: Sequence[float],
+                sigma_range: tuple[float, float], theta: float = 0.5) -> dict[str, Any]:
+    """A stable period-M orbit continued in sigma both ways to its first events: the window it
+    lies in, as :func:`.chart_curves.windows_at` builds one (same continuation settings)."""
+    from ..dynamics.continuation import continue_orbit
+    from .chart_curves import _edge
+
+    edges = []
+    for d in (-1.0, 1.0):
+        br = continue_orbit(sim, params, M, sigma, z, "sigma", sigma_range, d,
+                            ds_max=max(0.05, 0.1 * abs(sigma)), max_points=600, theta=theta)
+        edges.append(_edge(br))
+    return {"M": M, "seed_sigma": float(sigma), "seed": [float(x) for x in z], "lower": edges[0], "upper": edges[1]}
+
+
+def _candidates(curves: Mapping[str, Any], p2_range: Sequence[float], sigma_range: Sequence[float]) -> tuple[list, dict]:
+    """window_closing's candidates in its order (the preferred one first), above the range's start."""
+    from .chart_curves import window_closing
+
+    cl = window_closing(curves, p2_range, sigma_range)
+    if cl["closes"] is None:
+        return [], cl
+    cands = [{"p2": cl["closes"], "sigma": cl["sigma"], "how": cl["how"]}, *cl.get("other_candidates", [])]
+    return [c for c in cands if c["p2"] > p2_range[0] * (1.0 + STEP)], cl
+
+
+def _impacts(curves: Mapping[str, Any]) -> int:
+    for c in curves.values():
+        if c and "impacts" in c:
+            return int(c["impacts"])
+    return 1
+
+
+def follow_window(sim: Any, params: Mapping[str, Any], window: dict[str, Any], param2: str,
+                  p2_range: tuple[float, float], log2: bool, sigma_range: tuple[float, float],
+                  theta: float = 0.5) -> dict[str, Any]:
+    """Where the window (with its continued edges ``window["curves"]``, ``params`` at the range's
+    start) closes: the first candidate confirmed by :func:`confirm_candidate`, following every
+    hand-over of its boundary.  The new edges after each hand-over are kept in
+    ``window["handovers"]`` (``{"p2", "window", "curves"}``).  Returns the closing dict of
+    :func:`.chart_curves.window_closing` with ``confirmation``, ``codim2`` (every codimension-two
+    point met, with its kind) and ``tested`` (every candidate tested, with its verdict)."""
+    from .chart_curves import continue_window
+
+    M, curves, start = window["M"], window["curves"], float(p2_range[0])
+    codim2: list[dict[str, Any]] = []
+    tested: list[dict[str, Any]] = []
+    window["handovers"] = []
+    while True:
+        cands, first = _candidates(curves, (start, p2_range[1]), sigma_range)
+        handed = None
+        for cand in cands:
+            conf = confirm_candidate(sim, params, param2, M, _impacts(curves), curves, cand, theta)
+            kind = closing_kind(cand["how"])
+            tested.append({**cand, "kind": kind, "verdict": conf["verdict"]})
+            if conf["verdict"] == "confirmed":
+                if "asymptote" not in kind:
+                    codim2.append({"kind": kind, "p2": cand["p2"], "sigma": cand["sigma"], "closes_window": True})
+                return {"closes": cand["p2"], "sigma": cand["sigma"], "how": cand["how"], "kind": kind,
+                        "searched": list(p2_range), "confirmation": conf, "codim2": codim2, "tested": tested}
+            if conf["verdict"] == "hand-over":
+                codim2.append({"kind": f"boundary hand-over: {kind}", "p2": cand["p2"], "sigma": cand["sigma"],
+                               "closes_window": False, "orbit_above": conf["above"]["orbit"]})
+                handed = conf
+                break
+        if handed is None:
+            note = ("no candidate confirmed: " + "; ".join(f"{t['kind']} at {t['p2']:.6g}: {t['verdict']}" for t in tested)
+                    if tested else "no candidate closing (no turning point, loss of stability or asymptote) in the range")
+            return {"closes": None, "sigma": None, "how": None, "searched": list(p2_range), "note": note,
+                    "edges_end": first.get("edges_end"), "codim2": codim2, "tested": tested}
+        if len(window["handovers"]) >= MAX_HANDOVERS:
+            return {"closes": None, "sigma": None, "how": None, "searched": list(p2_range), "codim2": codim2,
+                    "tested": tested, "note": f"not decided: the boundary handed over {MAX_HANDOVERS} times "
+                    f"(the bound of hand-overs followed); the last at {param2} = {handed['above']['p2']:.8g}"}
+        start = handed["above"]["p2"]
+        orbit = handed["above"]["orbit"]
+        p_at = {**params, param2: start}
+        new = orbit_edges(sim, p_at, M, orbit["sigma"], orbit["point"], sigma_range, theta)
+        curves = continue_window(sim, p_at, new, param2, (start, float(p2_range[1])), log2, sigma_range, theta)
+        window["handovers"].append({"p2": start, "window": new, "curves": curves})
