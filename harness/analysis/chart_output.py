@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import HarnessInputError
 from .chart import ChartProblem, run_chart
+from .window_region import closing_evidence_lines
 
 __all__ = ["plot_chart", "chart_figure", "chart_report", "chart"]
 
@@ -61,8 +62,7 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
     seen: set[str] = set()
     for w in res["windows"]:
         col = cmap((w["M"] - 1) % 10)
-        for side in ("lower", "upper"):
-            c = w["curves"].get(side)
+        for side, c in _all_curves(w):
             if not c or "failed" in c:
                 continue
             lab = f"{c['kind']} edge (continued)" if c["kind"] not in seen else None
@@ -119,6 +119,12 @@ def _open_end_arrows(ax: Any, v: np.ndarray, lo: np.ndarray, hi: np.ndarray, bot
                             arrowprops=dict(arrowstyle="->", lw=1.2, color=col))
 
 
+def _all_curves(w: dict[str, Any]) -> list[tuple[str, Any]]:
+    """A window's continued edges, those continued after each hand-over of its boundary included."""
+    sets = [w["curves"], *(h["curves"] for h in w.get("handovers", []))]
+    return [(side, cs.get(side)) for cs in sets for side in ("lower", "upper")]
+
+
 def tolerance_text(problem: ChartProblem) -> str:
     """The edges' bisection tolerance in words: absolute where ``--xtol`` set one."""
     return f"{problem.xtol_rel:g} x sigma" if problem.xtol is None else f"{problem.xtol:g} in sigma"
@@ -155,10 +161,11 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
             lines.append(f"| {M} | {wtxt} | does not close in {cl['searched'][0]:g} .. {cl['searched'][1]:g} | - | {why} |")
         else:
             lines.append(f"| {M} | {wtxt} | {cl['closes']:.6g} | {cl['sigma']:.5g} | {cl['how']} |")
-    lines += ["", "Every edge curve (chart.json, `windows[*].curves`): its end and turning points:", ""]
+    lines += closing_evidence_lines(res["closes"], problem.param2)
+    lines += ["", "Every edge curve (chart.json, `windows[*].curves`; after a hand-over `windows[*].handovers`): "
+              "its end and turning points:", ""]
     for w in res["windows"]:
-        for side in ("lower", "upper"):
-            c = w["curves"].get(side)
+        for side, c in _all_curves(w):
             if c is None:
                 continue
             if "failed" in c:

@@ -152,19 +152,25 @@ def _curve_seeds(curves: Mapping[str, Any], p2: float, theta: float) -> list[np.
     return out
 
 
-def _interval(curves: Mapping[str, Any], p2: float, cand: Mapping[str, Any]) -> tuple[float, float, list[float]]:
-    """The sigma interval of the window at ``p2`` just below the candidate: between the edge
-    curves' crossings there (and the candidate's own sigma).  For a lower edge running off to
-    sigma -> infinity, [1.2, 4] x the edge's sigma there on the asymptote p2 = p* - c / sigma."""
-    edges = edge_crossings(curves, p2)
+def _below(curves: Mapping[str, Any], cand: Mapping[str, Any]) -> tuple[float, float, float, list[float]]:
+    """Where the window is tested just below the candidate: (p2, sigma from, sigma to, the edge
+    curves' crossings of that p2).  At p2* (1 - 1e-3), between the edges' crossings there (and the
+    candidate's own sigma).  For a lower edge running off to sigma -> infinity, on the asymptote
+    p2 = p* - c / sigma through its last two points, at the p2 where the edge is at sigma_e = at
+    most twice its last charted sigma (nearer p* the edge lies beyond any sigma Newton can follow
+    accurately), over [1.2, 4] x sigma_e."""
+    pb = float(cand["p2"]) * (1.0 - STEP)
     if "runs off" in cand["how"]:
         lower = curves["lower"]
         (s1, s2), (a, b) = lower["sigma"][-2:], lower["p2"][-2:]
         c = (b - a) / (1.0 / s1 - 1.0 / s2) if s1 != s2 else 0.0
-        s_e = c / max(cand["p2"] - p2, 1e-300) if c > 0 else 2.0 * float(s2)
-        return 1.2 * s_e, 4.0 * s_e, edges
+        if c > 0:
+            pb = min(pb, float(cand["p2"]) - c / (2.0 * s2))
+        s_e = c / max(cand["p2"] - pb, 1e-300) if c > 0 else 2.0 * float(s2)
+        return pb, 1.2 * s_e, 4.0 * s_e, edge_crossings(curves, pb)
+    edges = edge_crossings(curves, pb)
     pts = edges + [float(cand["sigma"])]
-    return min(pts), max(pts), edges
+    return pb, min(pts), max(pts), edges
 
 
 def _grid(lo: float, hi: float, widen: float, n: int) -> np.ndarray:
@@ -189,8 +195,8 @@ def confirm_candidate(sim: Any, params: Mapping[str, Any], param2: str, M: int, 
     from ..dynamics.periodic_map import PeriodMap
 
     p2c = float(cand["p2"])
-    pb, pa = p2c * (1.0 - STEP), p2c * (1.0 + STEP)
-    lo, hi, edges = _interval(curves, pb, cand)
+    pb, lo, hi, edges = _below(curves, cand)
+    pa = p2c * (1.0 + STEP)
     seeds = _curve_seeds(curves, p2c, theta)
     g_below = _grid(lo, hi, 0.25, GRID)
     below = shoot_across(PeriodMap(sim, {**params, param2: pb}, "sigma", theta), M, impacts, g_below, seeds)
@@ -260,8 +266,6 @@ def follow_window(sim: Any, params: Mapping[str, Any], window: dict[str, Any], p
     ``window["handovers"]`` (``{"p2", "window", "curves"}``).  Returns the closing dict of
     :func:`.chart_curves.window_closing` with ``confirmation``, ``codim2`` (every codimension-two
     point met, with its kind) and ``tested`` (every candidate tested, with its verdict)."""
-    from .chart_curves import continue_window
-
     M, curves, start = window["M"], window["curves"], float(p2_range[0])
     codim2: list[dict[str, Any]] = []
     tested: list[dict[str, Any]] = []
@@ -284,8 +288,9 @@ def follow_window(sim: Any, params: Mapping[str, Any], window: dict[str, Any], p
                 handed = conf
                 break
         if handed is None:
+            # no candidate at all: the edges' ends (``edges_end``) say why
             note = ("no candidate confirmed: " + "; ".join(f"{t['kind']} at {t['p2']:.6g}: {t['verdict']}" for t in tested)
-                    if tested else "no candidate closing (no turning point, loss of stability or asymptote) in the range")
+                    if tested else None)
             return {"closes": None, "sigma": None, "how": None, "searched": list(p2_range), "note": note,
                     "edges_end": first.get("edges_end"), "codim2": codim2, "tested": tested}
         if len(window["handovers"]) >= MAX_HANDOVERS:
@@ -293,8 +298,27 @@ def follow_window(sim: Any, params: Mapping[str, Any], window: dict[str, Any], p
                     "tested": tested, "note": f"not decided: the boundary handed over {MAX_HANDOVERS} times "
                     f"(the bound of hand-overs followed); the last at {param2} = {handed['above']['p2']:.8g}"}
         start = handed["above"]["p2"]
-        orbit = handed["above"]["orbit"]
-        p_at = {**params, param2: start}
-        new = orbit_edges(sim, p_at, M, orbit["sigma"], orbit["point"], sigma_range, theta)
-        curves = continue_window(sim, p_at, new, param2, (start, float(p2_range[1])), log2, sigma_range, theta)
-        window["handovers"].append({"p2": start, "window": new, "curves": curves})
+        curves, failed = _new_edges(sim, params, param2, window, handed["above"], p2_range, log2, sigma_range, theta)
+        if failed:
+            return {"closes": None, "sigma": None, "how": None, "searched": list(p2_range), "codim2": codim2,
+                    "tested": tested, "note": failed}
+
+
+def _new_edges(sim: Any, params: Mapping[str, Any], param2: str, window: dict[str, Any], above: Mapping[str, Any],
+               p2_range: Sequence[float], log2: bool, sigma_range: tuple[float, float],
+               theta: float) -> tuple[dict[str, Any], str | None]:
+    """After a hand-over: the window's edges at the p2 above it (the stable orbit found there continued
+    in sigma), continued in (sigma, p2) from there; kept in ``window["handovers"]``.  Returns (curves,
+    None), or ({}, why) where the new edges were not found."""
+    from .chart_curves import continue_window
+
+    start, orbit = float(above["p2"]), above["orbit"]
+    p_at = {**params, param2: start}
+    try:
+        new = orbit_edges(sim, p_at, window["M"], orbit["sigma"], orbit["point"], sigma_range, theta)
+    except (ValueError, ArithmeticError, FmuError) as exc:  # the FMU refusing a step of the walk
+        return {}, (f"not decided: the boundary hands over at {param2} = {start:.8g} and the window's new "
+                    f"edges were not found there ({type(exc).__name__}: {exc})")
+    curves = continue_window(sim, p_at, new, param2, (start, float(p2_range[1])), log2, sigma_range, theta)
+    window["handovers"].append({"p2": start, "window": new, "curves": curves})
+    return curves, None

@@ -1,0 +1,94 @@
+"""A window is a region of (sigma, p2); it closes where the region becomes empty.
+
+Case: a strongly damped oscillator on a soft compliant wall (nu = 4, Omega = 0.5, r = 0.9, not the
+paper's), charted over Gamma from 300.  Its period-2 window is bounded by a flip below and a graze
+above; at Gamma ~ 383 the grazing orbit loses stability where the graze curve meets the flip curve,
+which has turned back in Gamma (at ~490) and comes down as the upper edge: past that
+codimension-two point the window is bounded by the flip curve alone and closes at its tip.  The
+first candidate (the graze edge's loss of stability, which the chart used to report) is not the
+closing.
+
+Independent truth: mapcheck's closed-form flow and its own Newton shooting
+(:class:`tests.edge_support.ExactFlow`), sharing nothing with the FMU: just above the hand-over
+the exact flow still has the stable period-2 orbit between the new edges; just below the reported
+closing it has it, just above it has none across the window's sigma interval.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from harness.analysis.chart_curves import chart_curves
+from harness.analysis.window_region import closing_kind, edge_crossings
+from tests.edge_support import ExactFlow, good
+
+pytestmark = pytest.mark.slow
+
+CASE = {"nu": 4.0, "Omega": 0.5, "r": 0.9, "wall": 1, "solver": 1}
+
+
+@pytest.fixture(scope="module")
+def handover(model) -> dict:
+    grid = np.geomspace(0.05, 20.0, 27)
+    res = chart_curves(model.source(), {**CASE, "Gamma": 300.0}, "Gamma", (300.0, 1000.0), True, grid, 2)
+    (w2,) = [w for w in res["windows"] if w["M"] == 2]
+    return w2
+
+
+def exact_stable_sigmas(G: float, sigmas, seeds) -> list[float]:
+    """The sigma at which mapcheck's Newton on the exact flow finds a stable maximal period-2
+    orbit from any of ``seeds`` (orbit shapes w / (1 + sigma), w = z - p(1/2))."""
+    flow = ExactFlow(CASE["nu"], CASE["Omega"], CASE["r"], G, "compliant")
+    out = []
+    for s in sigmas:
+        off = np.array([-(1.0 + s) - 1.0, 0.0])  # the wall-free orbit at t = 1/2
+        if any(good(flow.orbit(float(s), 2, w * (1.0 + s) + off)) for w in seeds):
+            out.append(float(s))
+    return out
+
+
+def shapes(curves: dict, G: float) -> list[np.ndarray]:
+    """Each edge curve's orbit at its points nearest ``G``, as shapes."""
+    out = []
+    for c in curves.values():
+        p2 = np.asarray(c["p2"])
+        for i in np.argsort(np.abs(p2 - G))[:2]:
+            s = c["sigma"][i]
+            out.append((np.asarray(c["points"][i]) - [-(1.0 + s) - 1.0, 0.0]) / (1.0 + s))
+    return out
+
+
+def test_a_graze_meeting_a_flip_hands_the_boundary_over_and_the_window_closes_later(handover) -> None:
+    cl = handover["closing"]
+    hand = [c for c in cl["codim2"] if c["kind"].startswith("boundary hand-over")]
+    assert len(hand) == 1 and "graze meets flip" in hand[0]["kind"] and not hand[0]["closes_window"]
+    G_h = hand[0]["p2"]
+    assert cl["kind"] == closing_kind(cl["how"]) == "flip curve turns (maximum in p2)"
+    assert cl["closes"] > 1.2 * G_h  # the first candidate was a third too early
+    assert [t["verdict"] for t in cl["tested"]] == ["hand-over", "confirmed"]
+    # the new edges were found from the orbit shot above the hand-over and continued from there
+    (after,) = handover["handovers"]
+    assert after["p2"] == pytest.approx(G_h * 1.001) and after["window"]["lower"]["kind"] == "flip"
+    # the exact flow: the window is there just above the hand-over (the old answer), and midway
+    # to the closing, between the new edges
+    for G in (G_h * 1.01, 0.5 * (G_h + cl["closes"])):
+        e = edge_crossings(after["curves"], G)
+        assert len(e) >= 2, G
+        inside = np.geomspace(e[0], e[-1], 9)[1:-1]
+        assert exact_stable_sigmas(G, inside, shapes(after["curves"], G)), G
+
+
+def test_the_closing_is_where_the_exact_flows_window_ends(handover) -> None:
+    """The closing's own evidence (FMU shooting on both sides) and the exact flow's agree: a stable
+    orbit 2e-3 below it between the edges, none 2e-3 above across the window's interval widened."""
+    cl = handover["closing"]
+    conf = cl["confirmation"]
+    assert conf["verdict"] == "confirmed" and conf["below"]["between_edges"] and not conf["above"]["found"]
+    assert conf["above"]["values"] >= 25 and conf["above"]["p2"] == pytest.approx(cl["closes"] * 1.001)
+    curves = handover["handovers"][-1]["curves"]
+    G_below, G_above = cl["closes"] * (1 - 2e-3), cl["closes"] * (1 + 2e-3)
+    e = edge_crossings(curves, G_below)
+    seeds = shapes(curves, cl["closes"])
+    assert exact_stable_sigmas(G_below, np.geomspace(e[0], e[-1], 9)[1:-1], seeds)
+    lo, hi = e[0] * 0.9, e[-1] * 1.1
+    assert not exact_stable_sigmas(G_above, np.geomspace(lo, hi, 25), seeds)
