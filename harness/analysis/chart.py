@@ -6,7 +6,8 @@ Two measurements, the second checking the first:
    Gamma, r, nu, Omega or any FMU parameter) the stable maximal windows (one impact per period,
    M <= M_max) are found from the ODE, each continued in sigma to its edges, and every edge is
    continued in (sigma, p2): flip/fold/NS on the extended system, grazes located across the curve.
-   Where each window closes (``closes`` per M, with how) is where its edges meet; every point of
+   Where each window closes (``closes`` per M, with how) is the first candidate where its edges
+   meet that direct shooting confirms on both sides (:mod:`.window_region`); every point of
    every edge curve is then checked across itself (``edge_check``).
 2. **Scans per value** (the brute-force check): for each value of p2 the windows are measured
    from scratch as ``windows`` does (:mod:`.ode_windows`: up/down scans over sigma, every attractor

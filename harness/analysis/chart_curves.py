@@ -8,7 +8,7 @@ the branch leaves the range stable).  Each edge is then continued in (sigma, p2)
 on their extended system (:func:`harness.dynamics.event_curves.continue_event`), grazes stepped along
 the curve and located across it (:func:`harness.dynamics.graze_curves.continue_graze`).
 
-A window closes where its edges meet, the first of (in p2):
+Where a window closes: the candidates (:func:`window_closing`), in p2:
 
 * a turning point (maximum in p2) of an edge curve: the lower and upper edges are one curve that
   turns back (e.g. two flips joining: the smallest |multiplier| along sigma reaches 1 there);
@@ -17,6 +17,10 @@ A window closes where its edges meet, the first of (in p2):
   from the flip's side, located less exactly: the first is preferred when both are found);
 * the lower edge leaving the charted sigma range upward (the window runs to sigma -> infinity; the
   report says so: it is an asymptote, not a meeting of two edges).
+
+Each candidate is only a candidate: :func:`harness.analysis.window_region.follow_window` confirms
+it by direct shooting on both sides, and follows the window past a candidate where its boundary
+hands over to another curve (the window's closing is the first confirmed one).
 """
 from __future__ import annotations
 

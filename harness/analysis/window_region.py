@@ -231,11 +231,17 @@ def orbit_edges(sim: Any, params: Mapping[str, Any], M: int, sigma: float, z: Se
     from ..dynamics.continuation import continue_orbit
     from .chart_curves import _edge
 
-    edges = []
+    # not down to sigma = -1 (no forcing; the FMU refuses sigma <= -1, and a corrector step can
+    # overshoot the range's end)
+    rng = (max(float(sigma_range[0]), -0.8), float(sigma_range[1]))
+    edges: list[dict[str, Any] | None] = []
     for d in (-1.0, 1.0):
-        br = continue_orbit(sim, params, M, sigma, z, "sigma", sigma_range, d,
-                            ds_max=max(0.05, 0.1 * abs(sigma)), max_points=600, theta=theta)
-        edges.append(_edge(br))
+        try:
+            br = continue_orbit(sim, params, M, sigma, z, "sigma", rng, d,
+                                ds_max=max(0.05, 0.1 * abs(sigma)), max_points=600, theta=theta)
+            edges.append(_edge(br))
+        except (ValueError, ArithmeticError, FmuError) as exc:  # reported with the edge, not raised
+            edges.append({"kind": "failed", "sigma": math.nan, "note": f"{type(exc).__name__}: {exc}"})
     return {"M": M, "seed_sigma": float(sigma), "seed": [float(x) for x in z], "lower": edges[0], "upper": edges[1]}
 
 
@@ -247,7 +253,8 @@ def _candidates(curves: Mapping[str, Any], p2_range: Sequence[float], sigma_rang
     if cl["closes"] is None:
         return [], cl
     cands = [{"p2": cl["closes"], "sigma": cl["sigma"], "how": cl["how"]}, *cl.get("other_candidates", [])]
-    return [c for c in cands if c["p2"] > p2_range[0] * (1.0 + STEP)], cl
+    # an asymptote extrapolated beyond the range's end is not a closing in the range
+    return [c for c in cands if p2_range[0] * (1.0 + STEP) < c["p2"] <= p2_range[1]], cl
 
 
 def _impacts(curves: Mapping[str, Any]) -> int:

@@ -92,3 +92,40 @@ def test_the_closing_is_where_the_exact_flows_window_ends(handover) -> None:
     assert exact_stable_sigmas(G_below, np.geomspace(e[0], e[-1], 9)[1:-1], seeds)
     lo, hi = e[0] * 0.9, e[-1] * 1.1
     assert not exact_stable_sigmas(G_above, np.geomspace(lo, hi, 25), seeds)
+
+
+#: Figure 9's closings measured independently (issue 26: closed-form shooting on the exact flow
+#: and COCO, outside this tool); the chart's agree within 0.07 %.
+FIG9_CLOSINGS = {"2": 1651.9, "3": 1575.3}
+
+
+@pytest.fixture(scope="module")
+def fig9_near_closing(model) -> dict:
+    """Figure 9's windows charted from Gamma = 1500 (where periods 1-3 are still open) to 2000."""
+    import tomllib
+    from pathlib import Path
+
+    fig9 = tomllib.loads((Path(__file__).resolve().parents[2] / "harness/experiments/fig9.toml").read_text())["model"]
+    params = {**fig9, "wall": 1, "solver": 1, "Gamma": 1500.0}
+    return chart_curves(model.source(), params, "Gamma", (1500.0, 2000.0), True, np.geomspace(0.05, 20.0, 20), 3)
+
+
+def test_figure_9_closings_are_confirmed_without_a_hand_over(fig9_near_closing) -> None:
+    closes = fig9_near_closing["closes"]
+    for M, G in FIG9_CLOSINGS.items():
+        cl = closes[M]
+        assert cl["closes"] == pytest.approx(G, rel=1e-3), M
+        assert [t["verdict"] for t in cl["tested"]] == ["confirmed"], M  # the first candidate: no hand-over
+        below, above = cl["confirmation"]["below"], cl["confirmation"]["above"]
+        assert below["between_edges"] and below["p2"] == pytest.approx(cl["closes"] * 0.999), M
+        assert max(np.hypot(*m) for m in below["orbit"]["multipliers"]) < 1.0, M
+        assert below["edges_there"][0] <= below["orbit"]["sigma"] <= below["edges_there"][-1], M
+        assert not above["found"] and above["values"] >= 25, M
+        assert not any(c["kind"].startswith("boundary hand-over") for c in cl["codim2"]), M
+    assert closes["2"]["kind"] == "flip curve turns (maximum in p2)"
+    assert closes["3"]["kind"].startswith("graze meets flip")
+    # period 1: its flip edge runs off to sigma -> infinity near Gamma = 1632; a stable orbit above
+    # the edge just below, none across sigma just above
+    cl = closes["1"]
+    assert 1625.0 < cl["closes"] < 1640.0 and cl["confirmation"]["verdict"] == "confirmed"
+    assert "asymptote" in cl["kind"] and cl["codim2"] == []
