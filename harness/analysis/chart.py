@@ -32,7 +32,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ..errors import HarnessInputError
-from .chart_curves import chart_curves, edge_check, scan_check, widened
+from .chart_curves import edge_check, scan_check, widened
+from .window_region import chart_regions
 
 __all__ = ["ChartProblem", "run_chart", "chart_value_task", "curves_from_values", "closing"]
 
@@ -220,7 +221,7 @@ def run_chart(problem: ChartProblem, source: Any, backend: Any = None, workers: 
     per_value = [results[i] for i in sorted(results)]
     out = curves_from_values(problem, per_value)
     t1 = time.perf_counter()
-    cont = chart_curves(source, problem.params, problem.param2, (float(problem.values[0]), float(problem.values[-1])),
+    cont = chart_regions(source, problem.params, problem.param2, (float(problem.values[0]), float(problem.values[-1])),
                         problem.log, problem.sigma_grid, problem.M_max, problem.theta)
     out["windows"], out["closes"], out["continuation_search"] = cont["windows"], cont["closes"], cont["search"]
     out["scan_check"] = scan_check(cont["windows"], out["scans"])

@@ -18,9 +18,9 @@ Where a window closes: the candidates (:func:`window_closing`), in p2:
 * the lower edge leaving the charted sigma range upward (the window runs to sigma -> infinity; the
   report says so: it is an asymptote, not a meeting of two edges).
 
-Each candidate is only a candidate: :func:`harness.analysis.window_region.follow_window` confirms
-it by direct shooting on both sides, and follows the window past a candidate where its boundary
-hands over to another curve (the window's closing is the first confirmed one).
+These are only candidates: :func:`harness.analysis.window_region.chart_regions` confirms each by
+direct shooting on both sides, and follows the window past a candidate where its boundary hands
+over to another curve (the window's closing is the first confirmed one).
 """
 from __future__ import annotations
 
@@ -196,7 +196,6 @@ def chart_curves(source: Any, params: Mapping[str, Any], param2: str, p2_range: 
                  grid: np.ndarray, M_max: int, theta: float = 0.5) -> dict[str, Any]:
     """Windows at the start of the range, their edges continued, and where each closes."""
     from ..fmu.simulator import FmuSimulator
-    from .window_region import follow_window
 
     sim = FmuSimulator(source, instance_name="chart-curves")
     p0 = {**params, param2: float(p2_range[0])}
@@ -207,8 +206,7 @@ def chart_curves(source: Any, params: Mapping[str, Any], param2: str, p2_range: 
         sigma_range = widened(grid)
     for w in windows:
         w["curves"] = continue_window(sim, p0, w, param2, p2_range, log2, sigma_range, theta)
-        # the first candidate closing confirmed by shooting on both sides, hand-overs followed
-        w["closing"] = follow_window(sim, p0, w, param2, p2_range, log2, sigma_range, theta)
+        w["closing"] = window_closing(w["curves"], p2_range, sigma_range)
     closes: dict[str, Any] = {}
     for M in range(1, M_max + 1):
         mine = [w for w in windows if w["M"] == M]

@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import FmuError
 
-__all__ = ["STEP", "MAX_HANDOVERS", "GRID", "ITERATED", "closing_kind", "edge_crossings", "shoot_across",
+__all__ = ["chart_regions", "STEP", "MAX_HANDOVERS", "GRID", "ITERATED", "closing_kind", "edge_crossings", "shoot_across",
            "confirm_candidate", "orbit_edges", "follow_window"]
 
 #: Relative distance in p2 from a candidate closing at which the window is tested on each side.
@@ -329,3 +329,23 @@ def _new_edges(sim: Any, params: Mapping[str, Any], param2: str, window: dict[st
     curves = continue_window(sim, p_at, new, param2, (start, float(p2_range[1])), log2, sigma_range, theta)
     window["handovers"].append({"p2": start, "window": new, "curves": curves})
     return curves, None
+
+
+def chart_regions(source: Any, params: Mapping[str, Any], param2: str, p2_range: tuple[float, float], log2: bool,
+                  grid: np.ndarray, M_max: int, theta: float = 0.5) -> dict[str, Any]:
+    """:func:`.chart_curves.chart_curves` (the windows at the range's start and their edges
+    continued), with each window's closing the first candidate confirmed by :func:`follow_window`."""
+    from ..fmu.simulator import FmuSimulator
+    from .chart_curves import chart_curves
+
+    cont = chart_curves(source, params, param2, p2_range, log2, grid, M_max, theta)
+    sim = FmuSimulator(source, instance_name="chart-closing")
+    p0 = {**params, param2: float(p2_range[0])}
+    sigma_range = tuple(cont["sigma_range"])
+    for w in cont["windows"]:
+        w["closing"] = follow_window(sim, p0, w, param2, p2_range, log2, sigma_range, theta)
+    for M, cl in cont["closes"].items():
+        mine = [w for w in cont["windows"] if str(w["M"]) == M]
+        if mine:  # the window nearest grazing, as chart_curves chose it
+            cont["closes"][M] = {**mine[0]["closing"], "window_at_start": cl["window_at_start"]}
+    return cont

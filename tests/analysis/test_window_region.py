@@ -18,8 +18,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.analysis.chart_curves import chart_curves
-from harness.analysis.window_region import closing_kind, edge_crossings
+from harness.analysis.window_region import chart_regions, closing_kind, edge_crossings
 from tests.edge_support import ExactFlow, good
 
 pytestmark = pytest.mark.slow
@@ -30,7 +29,7 @@ CASE = {"nu": 4.0, "Omega": 0.5, "r": 0.9, "wall": 1, "solver": 1}
 @pytest.fixture(scope="module")
 def handover(model) -> dict:
     grid = np.geomspace(0.05, 20.0, 27)
-    res = chart_curves(model.source(), {**CASE, "Gamma": 300.0}, "Gamma", (300.0, 1000.0), True, grid, 2)
+    res = chart_regions(model.source(), {**CASE, "Gamma": 300.0}, "Gamma", (300.0, 1000.0), True, grid, 2)
     (w2,) = [w for w in res["windows"] if w["M"] == 2]
     return w2
 
@@ -107,7 +106,7 @@ def fig9_near_closing(model) -> dict:
 
     fig9 = tomllib.loads((Path(__file__).resolve().parents[2] / "harness/experiments/fig9.toml").read_text())["model"]
     params = {**fig9, "wall": 1, "solver": 1, "Gamma": 1500.0}
-    return chart_curves(model.source(), params, "Gamma", (1500.0, 2000.0), True, np.geomspace(0.05, 20.0, 20), 3)
+    return chart_regions(model.source(), params, "Gamma", (1500.0, 2000.0), True, np.geomspace(0.05, 20.0, 20), 3)
 
 
 def test_figure_9_closings_are_confirmed_without_a_hand_over(fig9_near_closing) -> None:
