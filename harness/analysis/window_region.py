@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import FmuError
 
-__all__ = ["chart_regions", "STEP", "MAX_HANDOVERS", "GRID", "ITERATED", "closing_kind", "edge_crossings", "shoot_across",
+__all__ = ["chart_regions", "closing_evidence_lines", "STEP", "MAX_HANDOVERS", "GRID", "ITERATED", "closing_kind", "edge_crossings", "shoot_across",
            "confirm_candidate", "orbit_edges", "follow_window"]
 
 #: Relative distance in p2 from a candidate closing at which the window is tested on each side.
@@ -349,3 +349,31 @@ def chart_regions(source: Any, params: Mapping[str, Any], param2: str, p2_range:
         if mine:  # the window nearest grazing, as chart_curves chose it
             cont["closes"][M] = {**mine[0]["closing"], "window_at_start": cl["window_at_start"]}
     return cont
+
+
+def closing_evidence_lines(closes: Mapping[str, Any], param2: str) -> list[str]:
+    """The report's account of each window's closing: the shooting on either side of it, every
+    candidate tested with its verdict, every codimension-two point met."""
+    lines = ["", f"Each closing confirmed by Newton shooting on the FMU (chart.json `closes[M].confirmation`): at "
+             f"{param2} x (1 - {STEP:g}) a stable orbit with the window's contacts between the continued edges, at "
+             f"{param2} x (1 + {STEP:g}) none on a sigma grid across the window's interval widened (from the orbits "
+             "found below, the edge curves' orbits, and orbits iterated from the wall-free orbit); a stable orbit "
+             "above is a hand-over of the window's boundary, whose new edges are then continued:", ""]
+    for M, cl in closes.items():
+        tested = "; ".join(f"{t['kind']} at {t['p2']:.7g} ({t['verdict']})" for t in cl.get("tested", [])) or "none"
+        c2 = "; ".join(f"{c['kind']} at ({param2} = {c['p2']:.7g}, sigma = {c['sigma']:.6g})"
+                       for c in cl.get("codim2", [])) or "none"
+        cf = cl.get("confirmation")
+        if cf is None:
+            lines.append(f"- M = {M}: {cl.get('note') or 'no closing in the range'}; candidates tested: {tested}; "
+                         f"codimension-two points: {c2}")
+            continue
+        b, a = cf["below"], cf["above"]
+        mu = [round(math.hypot(*m), 4) for m in b["orbit"]["multipliers"]]
+        lines.append(f"- M = {M}: closes at {param2} = {cl['closes']:.7g} ({cl['kind']}). Below ({param2} = "
+                     f"{b['p2']:.7g}): {b['found']} stable orbits on {b['values']} sigma in [{b['sigma_range'][0]:.6g}, "
+                     f"{b['sigma_range'][1]:.6g}], edges there {[round(x, 6) for x in b['edges_there']]}, e.g. sigma = "
+                     f"{b['orbit']['sigma']:.6g} with |multipliers| {mu}. Above ({param2} = {a['p2']:.7g}): none on "
+                     f"{a['values']} sigma in [{a['sigma_range'][0]:.6g}, {a['sigma_range'][1]:.6g}] ({a['starts']}). "
+                     f"Candidates tested: {tested}. Codimension-two points: {c2}.")
+    return lines
