@@ -148,9 +148,8 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
              "sigma to its edges; every edge is continued in (sigma, "
              f"{problem.param2}): flip/fold/NS on the extended system (orbit + test function, pseudo-arclength), "
              "grazes stepped along the curve and located across it (bisection, then secant steps on the gap). "
-             "A window closes where its edges "
-             "meet (a turning point of an edge curve, a flip meeting the graze) or where its lower edge leaves the "
-             "sigma range upward.", "",
+             "A window closes at the first candidate (an edge curve's turning point, a flip meeting the graze, its lower "
+             "edge leaving the sigma range upward) that direct shooting confirms on both sides (below).", "",
              f"| M | window at {problem.param2} = {problem.values[0]:g} | closes at {problem.param2} | sigma there | how |",
              "|---|---|---|---|---|"]
     for M, cl in res["closes"].items():

@@ -46,6 +46,10 @@ ITERATED = (5, 300)
 
 def closing_kind(how: str) -> str:
     """The codimension-two point a candidate's description (:func:`.chart_curves.window_closing`) names."""
+    if "bisection" in how:
+        return "window lost between two values of p2 (shooting bisection)"
+    if "continuation is lost" in how:
+        return "edge curve lost at its end (the window may end there)"
     if "runs off" in how:
         return "edge runs off to sigma -> infinity (an asymptote)"
     if "loses stability" in how:
@@ -169,7 +173,7 @@ def _below(curves: Mapping[str, Any], cand: Mapping[str, Any]) -> tuple[float, f
         s_e = c / max(cand["p2"] - pb, 1e-300) if c > 0 else 2.0 * float(s2)
         return pb, 1.2 * s_e, 4.0 * s_e, edge_crossings(curves, pb)
     edges = edge_crossings(curves, pb)
-    pts = edges + [float(cand["sigma"])]
+    pts = edges + [float(cand["sigma"])] + [float(x) for x in cand.get("sigmas", [])]
     return pb, min(pts), max(pts), edges
 
 
@@ -185,6 +189,13 @@ def _grid(lo: float, hi: float, widen: float, n: int) -> np.ndarray:
     return np.linspace(max(mid - (0.5 + widen) * span, -0.99), mid + (0.5 + widen) * span, n)
 
 
+def _with_near_edges(grid: np.ndarray, edges: Sequence[float]) -> np.ndarray:
+    """The grid with points 1e-8 to 1e-3 (relative) on either side of each edge: a window near
+    its closing can be a sliver along one edge, far narrower than the grid's step."""
+    near = [e + sgn * max(abs(e), 1e-3) * 10.0 ** -k for e in edges for sgn in (-1.0, 1.0) for k in range(3, 9)]
+    return np.unique(np.concatenate([grid, np.asarray(near, float)]))
+
+
 def confirm_candidate(sim: Any, params: Mapping[str, Any], param2: str, M: int, impacts: int,
                       curves: Mapping[str, Any], cand: Mapping[str, Any], theta: float = 0.5) -> dict[str, Any]:
     """Test a candidate closing ``{"p2", "sigma", "how"}`` by Newton shooting on either side.
@@ -198,11 +209,11 @@ def confirm_candidate(sim: Any, params: Mapping[str, Any], param2: str, M: int, 
     pb, lo, hi, edges = _below(curves, cand)
     pa = p2c * (1.0 + STEP)
     seeds = _curve_seeds(curves, p2c, theta)
-    g_below = _grid(lo, hi, 0.25, GRID)
+    g_below = _with_near_edges(_grid(lo, hi, 0.25, GRID), edges)
     below = shoot_across(PeriodMap(sim, {**params, param2: pb}, "sigma", theta), M, impacts, g_below, seeds)
     between = None if len(edges) < 2 else any(edges[0] <= o["sigma"] <= edges[-1] for o in below)
     more = [_norm_seed(o["point"], o["sigma"], theta) for o in below[:: max(1, len(below) // 3)]]
-    g_above = _grid(lo, hi, 0.5, GRID + 6)
+    g_above = _with_near_edges(_grid(lo, hi, 0.5, GRID + 6), edges)
     above = shoot_across(PeriodMap(sim, {**params, param2: pa}, "sigma", theta), M, impacts, g_above,
                          more + seeds, ITERATED)
     verdict = ("hand-over" if above else "confirmed" if below and between is not False else "no orbit below")
@@ -250,9 +261,18 @@ def _candidates(curves: Mapping[str, Any], p2_range: Sequence[float], sigma_rang
     from .chart_curves import window_closing
 
     cl = window_closing(curves, p2_range, sigma_range)
-    if cl["closes"] is None:
-        return [], cl
-    cands = [{"p2": cl["closes"], "sigma": cl["sigma"], "how": cl["how"]}, *cl.get("other_candidates", [])]
+    cands = [] if cl["closes"] is None else \
+        [{"p2": cl["closes"], "sigma": cl["sigma"], "how": cl["how"]}, *cl.get("other_candidates", [])]
+    for side in ("lower", "upper"):
+        # an edge whose continuation was lost inside the range may end where the window does (a
+        # graze curve running into a fold: its grazing orbit ends there); shooting decides
+        c = curves.get(side)
+        if c and "failed" not in c and c["end"].get("reason") in ("lost", "steps"):
+            e = {"p2": float(c["end"]["p2"]), "sigma": float(c["end"]["sigma"]),
+                 "how": f"the {side} {c['kind']} edge's continuation is lost at its end (approximate: "
+                 f"{c['end'].get('note', '')})"}
+            k = next((i for i, x in enumerate(cands) if x["p2"] > e["p2"]), len(cands))
+            cands.insert(k, e)
     # an asymptote extrapolated beyond the range's end is not a closing in the range
     return [c for c in cands if p2_range[0] * (1.0 + STEP) < c["p2"] <= p2_range[1]], cl
 
@@ -277,21 +297,28 @@ def follow_window(sim: Any, params: Mapping[str, Any], window: dict[str, Any], p
     codim2: list[dict[str, Any]] = []
     tested: list[dict[str, Any]] = []
     window["handovers"] = []
+    seen: dict[str, Any] | None = None  # the last hand-over's shooting above it: the window seen there
     while True:
         cands, first = _candidates(curves, (start, p2_range[1]), sigma_range)
         handed = None
         for cand in cands:
             conf = confirm_candidate(sim, params, param2, M, _impacts(curves), curves, cand, theta)
+            if conf["verdict"] == "no orbit below" and seen is not None:
+                # seen above the hand-over, gone below this candidate: it closes in between
+                tested.append({**cand, "kind": closing_kind(cand["how"]), "verdict": conf["verdict"]})
+                cand = _bisect_closing(sim, params, param2, M, _impacts(curves), seen, conf["below"], curves, theta)
+                conf = confirm_candidate(sim, params, param2, M, _impacts(curves), curves, cand, theta)
             kind = closing_kind(cand["how"])
             tested.append({**cand, "kind": kind, "verdict": conf["verdict"]})
             if conf["verdict"] == "confirmed":
-                if "asymptote" not in kind:
+                if "asymptote" not in kind and "bisection" not in kind:  # neither is a codimension-two point
                     codim2.append({"kind": kind, "p2": cand["p2"], "sigma": cand["sigma"], "closes_window": True})
                 return {"closes": cand["p2"], "sigma": cand["sigma"], "how": cand["how"], "kind": kind,
                         "searched": list(p2_range), "confirmation": conf, "codim2": codim2, "tested": tested}
-            if conf["verdict"] == "hand-over":
+            if conf["verdict"] == "hand-over" and "bisection" not in cand["how"]:  # a bisection's estimate is no point
                 codim2.append({"kind": f"boundary hand-over: {kind}", "p2": cand["p2"], "sigma": cand["sigma"],
                                "closes_window": False, "orbit_above": conf["above"]["orbit"]})
+            if conf["verdict"] == "hand-over":
                 handed = conf
                 break
         if handed is None:
@@ -304,11 +331,42 @@ def follow_window(sim: Any, params: Mapping[str, Any], window: dict[str, Any], p
             return {"closes": None, "sigma": None, "how": None, "searched": list(p2_range), "codim2": codim2,
                     "tested": tested, "note": f"not decided: the boundary handed over {MAX_HANDOVERS} times "
                     f"(the bound of hand-overs followed); the last at {param2} = {handed['above']['p2']:.8g}"}
-        start = handed["above"]["p2"]
+        start, seen = handed["above"]["p2"], handed["above"]
         curves, failed = _new_edges(sim, params, param2, window, handed["above"], p2_range, log2, sigma_range, theta)
         if failed:
             return {"closes": None, "sigma": None, "how": None, "searched": list(p2_range), "codim2": codim2,
                     "tested": tested, "note": failed}
+
+
+def _bisect_closing(sim: Any, params: Mapping[str, Any], param2: str, M: int, impacts: int, seen: Mapping[str, Any],
+                    gone: Mapping[str, Any], curves: Mapping[str, Any], theta: float) -> dict[str, Any]:
+    """Where the window, ``seen`` (shooting evidence with orbits) at one p2 and ``gone`` (none) at a
+    larger one, ends: bisection in ln p2, shooting on a sigma grid that narrows to the orbits found
+    (two grid steps beyond them) and the edge curves' crossings, until the bracket is within 1e-3.  A candidate for
+    :func:`confirm_candidate` (it decides, as for any other)."""
+    from ..dynamics.periodic_map import PeriodMap
+
+    lo_p, hi_p = float(seen["p2"]), float(gone["p2"])
+    sig = [o for o in seen["sigma"]] + [float(x) for x in gone["sigma_range"]]
+    lo_s, hi_s = min(sig), max(sig)
+    seeds = [_norm_seed(seen["orbit"]["point"], seen["orbit"]["sigma"], theta)]
+    last = seen["orbit"]
+    while hi_p / lo_p > 1.0 + STEP:
+        mid = math.sqrt(lo_p * hi_p)
+        # the window moves with p2: the edges' crossings of mid are in the interval too
+        e = edge_crossings(curves, mid)
+        grid = _grid(min([lo_s, *e]), max([hi_s, *e]), 0.25, GRID)
+        found = shoot_across(PeriodMap(sim, {**params, param2: mid}, "sigma", theta), M, impacts, grid, seeds, ITERATED)
+        if found:
+            lo_p, last = mid, found[len(found) // 2]
+            dx = 2.0 * float(np.max(np.abs(np.diff(grid))))
+            lo_s, hi_s = min(o["sigma"] for o in found) - dx, max(o["sigma"] for o in found) + dx
+            seeds = [_norm_seed(last["point"], last["sigma"], theta)] + seeds[:2]
+        else:
+            hi_p = mid
+    return {"p2": math.sqrt(lo_p * hi_p), "sigma": float(last["sigma"]), "sigmas": [lo_s, hi_s],
+            "how": f"the window, seen by shooting at {param2} = {seen['p2']:.8g} and not below the next candidate, "
+            f"ends between {lo_p:.8g} and {hi_p:.8g} (shooting bisection in {param2}; no edge curve located it)"}
 
 
 def _new_edges(sim: Any, params: Mapping[str, Any], param2: str, window: dict[str, Any], above: Mapping[str, Any],
@@ -369,11 +427,11 @@ def closing_evidence_lines(closes: Mapping[str, Any], param2: str) -> list[str]:
                          f"codimension-two points: {c2}")
             continue
         b, a = cf["below"], cf["above"]
-        mu = [round(math.hypot(*m), 4) for m in b["orbit"]["multipliers"]]
+        mu = ", ".join(f"{math.hypot(*m):.6g}" for m in b["orbit"]["multipliers"])
         lines.append(f"- M = {M}: closes at {param2} = {cl['closes']:.7g} ({cl['kind']}). Below ({param2} = "
                      f"{b['p2']:.7g}): {b['found']} stable orbits on {b['values']} sigma in [{b['sigma_range'][0]:.6g}, "
-                     f"{b['sigma_range'][1]:.6g}], edges there {[round(x, 6) for x in b['edges_there']]}, e.g. sigma = "
-                     f"{b['orbit']['sigma']:.6g} with |multipliers| {mu}. Above ({param2} = {a['p2']:.7g}): none on "
+                     f"{b['sigma_range'][1]:.6g}], edges there ({len(b['edges_there'])} crossings of the continued edge curves) {', '.join(f'{x:.8g}' for x in b['edges_there']) or 'none'}, e.g. sigma = "
+                     f"{b['orbit']['sigma']:.8g} with |multipliers| {mu}. Above ({param2} = {a['p2']:.7g}): none on "
                      f"{a['values']} sigma in [{a['sigma_range'][0]:.6g}, {a['sigma_range'][1]:.6g}] ({a['starts']}). "
                      f"Candidates tested: {tested}. Codimension-two points: {c2}.")
     return lines

@@ -135,12 +135,15 @@ class PeriodMap:
 
         A point inside a rigid wall is not a state (the FMU refuses it): a Newton or predictor
         step that lands there gets a non-finite image, which every caller treats as a failed
-        evaluation (a shorter step, or no orbit), instead of an error that ends the search.
+        evaluation (a shorter step, or no orbit), instead of an error that ends the search.  So does
+        a step to sigma <= -1 (no forcing: the FMU refuses it), which a corrector near the end of
+        an even sigma range can take.
         """
         off = self.offset(p)
         z0 = np.asarray(w, dtype=float) + off
         u_wall = float(self.params.get("u_wall", 0.0))
-        if int(self.params.get("wall", 1)) == 2 and (z0[0] > u_wall or (z0[0] == u_wall and z0[1] > 0.0)):
+        inside = int(self.params.get("wall", 1)) == 2 and (z0[0] > u_wall or (z0[0] == u_wall and z0[1] > 0.0))
+        if inside or self.sigma(p) <= -1.0:
             nan = np.full(2, np.nan)
             return MapEvaluation(nan, np.full((M, 2), np.nan), np.zeros(M, dtype=int),
                                  None if not derivatives else np.full((2, 2), np.nan),
