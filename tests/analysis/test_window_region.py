@@ -51,7 +51,7 @@ def shapes(curves: dict, G: float) -> list[np.ndarray]:
     out = []
     for c in curves.values():
         p2 = np.asarray(c["p2"])
-        for i in np.argsort(np.abs(p2 - G))[:2]:
+        for i in np.argsort(np.abs(p2 - G))[:1]:
             s = c["sigma"][i]
             out.append((np.asarray(c["points"][i]) - [-(1.0 + s) - 1.0, 0.0]) / (1.0 + s))
     return out
@@ -90,7 +90,7 @@ def test_the_closing_is_where_the_exact_flows_window_ends(handover) -> None:
     seeds = shapes(curves, cl["closes"])
     assert exact_stable_sigmas(G_below, np.geomspace(e[0], e[-1], 9)[1:-1], seeds)
     lo, hi = e[0] * 0.9, e[-1] * 1.1
-    assert not exact_stable_sigmas(G_above, np.geomspace(lo, hi, 25), seeds)
+    assert not exact_stable_sigmas(G_above, np.geomspace(lo, hi, 15), seeds)
 
 
 #: Figure 9's closings measured independently (issue 26: closed-form shooting on the exact flow
@@ -100,13 +100,13 @@ FIG9_CLOSINGS = {"2": 1651.9, "3": 1575.3}
 
 @pytest.fixture(scope="module")
 def fig9_near_closing(model) -> dict:
-    """Figure 9's windows charted from Gamma = 1500 (where periods 1-3 are still open) to 2000."""
+    """Figure 9's windows charted from Gamma = 1500 (where periods 1-3 are still open) to 1700."""
     import tomllib
     from pathlib import Path
 
     fig9 = tomllib.loads((Path(__file__).resolve().parents[2] / "harness/experiments/fig9.toml").read_text())["model"]
     params = {**fig9, "wall": 1, "solver": 1, "Gamma": 1500.0}
-    return chart_regions(model.source(), params, "Gamma", (1500.0, 2000.0), True, np.geomspace(0.05, 20.0, 20), 3)
+    return chart_regions(model.source(), params, "Gamma", (1500.0, 1700.0), True, np.geomspace(0.2, 10.0, 14), 3)
 
 
 def test_figure_9_closings_are_confirmed_without_a_hand_over(fig9_near_closing) -> None:
