@@ -29,9 +29,10 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from ..dynamics.sigma_search import norm_seed, shoot_across, sigma_grid, with_near_edges
 from ..errors import FmuError
 
-__all__ = ["chart_regions", "closing_evidence_lines", "STEP", "MAX_HANDOVERS", "GRID", "ITERATED", "closing_kind", "edge_crossings", "shoot_across",
+__all__ = ["chart_regions", "closing_evidence_lines", "STEP", "MAX_HANDOVERS", "GRID", "ITERATED", "closing_kind", "edge_crossings",
            "confirm_candidate", "orbit_edges", "follow_window"]
 
 #: Relative distance in p2 from a candidate closing at which the window is tested on each side.
@@ -82,78 +83,13 @@ def edge_crossings(curves: Mapping[str, Any], p2: float) -> list[float]:
     return sorted(out)
 
 
-def _norm_seed(z: Sequence[float], sigma: float, theta: float) -> np.ndarray:
-    """A stroboscopic point as w / (1 + sigma) (w = z - p(theta)): the orbit's shape, which moves
-    little with sigma (the coordinates of the extended systems), so a seed at another sigma."""
-    from ..dynamics.periodic_map import wall_free_offset
-
-    return (np.asarray(z, float) - wall_free_offset(sigma, theta)) / (1.0 + sigma)
-
-
-def _good(ev: Any, impacts: int) -> tuple[bool, bool]:
-    """(the orbit has the window's contacts, and is stable)."""
-    same = int(np.sum(ev.contacts)) == impacts
-    return same, same and bool(np.all(np.abs(np.linalg.eigvals(ev.J)) < 1.0))
-
-
-def shoot_across(pmap: Any, M: int, impacts: int, sigmas: np.ndarray, seeds: Sequence[np.ndarray],
-                 iterated: tuple[int, int] = (0, 0)) -> list[dict[str, Any]]:
-    """Stable period-M orbits with ``impacts`` wall entries per period found by Newton at each sigma.
-
-    At each sigma (in order) Newton starts from the orbit found at the previous sigma, then from
-    each of ``seeds`` (shapes w / (1 + sigma), :func:`_norm_seed`); at ``iterated[0]`` sigma spread
-    over the grid also from the wall-free orbit and the seeds iterated ``iterated[1]`` periods.
-    Returns every stable orbit found: ``{"sigma", "point", "multipliers", "residual", "start"}``.
-    """
-    from ..dynamics.periodic_map import refine_orbit
-
-    found: list[dict[str, Any]] = []
-    prev: np.ndarray | None = None
-    spread = set(np.linspace(0, len(sigmas) - 1, iterated[0]).round().astype(int).tolist()) if iterated[0] else set()
-    for k, s in enumerate(sigmas):
-        s = float(s)
-        starts = ([("previous", prev)] if prev is not None else []) + [("seed", w * (1.0 + s)) for w in seeds]
-        if k in spread:
-            starts += _iterated_starts(pmap, s, seeds, iterated[1])
-        prev = None
-        for name, w0 in starts:
-            try:
-                # a start near the orbit converges in a few steps; 8 bound the cost of those that do not
-                w, ev, ok, res = refine_orbit(pmap, w0, s, M, tol=1e-10 * (1.0 + abs(s)), max_iter=8)
-            except FmuError:
-                continue
-            same, stable = _good(ev, impacts) if ok else (False, False)
-            if same:
-                prev = w
-            if stable:
-                mu = np.linalg.eigvals(ev.J)
-                found.append({"sigma": s, "point": ev.points[0].tolist(), "residual": float(res), "start": name,
-                              "multipliers": [[float(m.real), float(m.imag)] for m in mu]})
-                break
-    return found
-
-
-def _iterated_starts(pmap: Any, sigma: float, seeds: Sequence[np.ndarray], periods: int) -> list[tuple[str, np.ndarray]]:
-    """The wall-free orbit and each seed at sigma, iterated ``periods`` periods (w coordinates)."""
-    out = []
-    for w in [np.zeros(2), *seeds]:
-        z0 = w * (1.0 + sigma) + pmap.offset(sigma)
-        try:
-            pts, _ = pmap.run(sigma, z0, periods)
-        except FmuError:
-            continue
-        if np.all(np.isfinite(pts[-1])):
-            out.append(("iterated", pts[-1] - pmap.offset(sigma)))
-    return out
-
-
 def _curve_seeds(curves: Mapping[str, Any], p2: float, theta: float) -> list[np.ndarray]:
     """The orbit of each continued edge curve at its point nearest ``p2`` (as shapes)."""
     out = []
     for c in curves.values():
         if c and "failed" not in c and len(c["p2"]) > 0:
             i = int(np.argmin(np.abs(np.asarray(c["p2"], float) - p2)))
-            out.append(_norm_seed(c["points"][i], float(c["sigma"][i]), theta))
+            out.append(norm_seed(c["points"][i], float(c["sigma"][i]), theta))
     return out
 
 
@@ -178,25 +114,6 @@ def _below(curves: Mapping[str, Any], cand: Mapping[str, Any]) -> tuple[float, f
     return pb, min(pts), max(pts), edges
 
 
-def _grid(lo: float, hi: float, widen: float, n: int) -> np.ndarray:
-    """``n`` sigma from lo to hi, widened by ``widen`` x the width on each side (geometric where
-    positive; at least 1e-6 x sigma wide: a window's tip is thin)."""
-    if lo > 0:
-        span = max(math.log(hi / lo), 2e-6)
-        mid = 0.5 * math.log(hi * lo)
-        return np.exp(np.linspace(mid - (0.5 + widen) * span, mid + (0.5 + widen) * span, n))
-    span = max(hi - lo, 1e-6 * max(abs(hi), 1.0))
-    mid = 0.5 * (hi + lo)
-    return np.linspace(max(mid - (0.5 + widen) * span, -0.99), mid + (0.5 + widen) * span, n)
-
-
-def _with_near_edges(grid: np.ndarray, edges: Sequence[float]) -> np.ndarray:
-    """The grid with points 1e-7, 1e-5 and 1e-3 (relative) on either side of each edge: a window near
-    its closing can be a sliver along one edge, far narrower than the grid's step."""
-    near = [e + sgn * max(abs(e), 1e-3) * 10.0 ** -k for e in edges for sgn in (-1.0, 1.0) for k in (3, 5, 7)]
-    return np.unique(np.concatenate([grid, np.asarray(near, float)]))
-
-
 def confirm_candidate(sim: Any, params: Mapping[str, Any], param2: str, M: int, impacts: int,
                       curves: Mapping[str, Any], cand: Mapping[str, Any], theta: float = 0.5) -> dict[str, Any]:
     """Test a candidate closing ``{"p2", "sigma", "how"}`` by Newton shooting on either side.
@@ -210,11 +127,11 @@ def confirm_candidate(sim: Any, params: Mapping[str, Any], param2: str, M: int, 
     pb, lo, hi, edges = _below(curves, cand)
     pa = p2c * (1.0 + STEP)
     seeds = _curve_seeds(curves, p2c, theta)
-    g_below = _with_near_edges(_grid(lo, hi, 0.25, GRID), edges)
+    g_below = with_near_edges(sigma_grid(lo, hi, 0.25, GRID), edges)
     below = shoot_across(PeriodMap(sim, {**params, param2: pb}, "sigma", theta), M, impacts, g_below, seeds)
     between = None if len(edges) < 2 else any(edges[0] <= o["sigma"] <= edges[-1] for o in below)
-    more = [_norm_seed(o["point"], o["sigma"], theta) for o in below[:: max(1, len(below) // 3)]]
-    g_above = _with_near_edges(_grid(lo, hi, 0.5, GRID + 6), edges)
+    more = [norm_seed(o["point"], o["sigma"], theta) for o in below[:: max(1, len(below) // 3)]]
+    g_above = with_near_edges(sigma_grid(lo, hi, 0.5, GRID + 6), edges)
     above = shoot_across(PeriodMap(sim, {**params, param2: pa}, "sigma", theta), M, impacts, g_above,
                          more + seeds, ITERATED)
     verdict = ("hand-over" if above else "confirmed" if below and between is not False else "no orbit below")
@@ -223,7 +140,8 @@ def confirm_candidate(sim: Any, params: Mapping[str, Any], param2: str, M: int, 
     return {"verdict": verdict,
             "below": {"p2": pb, "sigma_range": [float(g_below[0]), float(g_below[-1])], "values": len(g_below),
                       "edges_there": edges, "found": len(below), "between_edges": between,
-                      "sigma": [o["sigma"] for o in below], "orbit": _middle(below)},
+                      "sigma": [o["sigma"] for o in below],
+                      "orbit": _middle([o for o in below if not edges or edges[0] <= o["sigma"] <= edges[-1]] or below)},
             "above": {"p2": pa, "sigma_range": [float(g_above[0]), float(g_above[-1])], "values": len(g_above),
                       "starts": f"{len(more) + len(seeds)} seeds + the previous sigma's orbit at each value; the "
                       f"wall-free orbit and the seeds iterated {ITERATED[1]} periods at {ITERATED[0]} values",
@@ -350,19 +268,19 @@ def _bisect_closing(sim: Any, params: Mapping[str, Any], param2: str, M: int, im
     lo_p, hi_p = float(seen["p2"]), float(gone["p2"])
     sig = [o for o in seen["sigma"]] + [float(x) for x in gone["sigma_range"]]
     lo_s, hi_s = min(sig), max(sig)
-    seeds = [_norm_seed(seen["orbit"]["point"], seen["orbit"]["sigma"], theta)]
+    seeds = [norm_seed(seen["orbit"]["point"], seen["orbit"]["sigma"], theta)]
     last = seen["orbit"]
     while hi_p / lo_p > 1.0 + STEP:
         mid = math.sqrt(lo_p * hi_p)
         # the window moves with p2: the edges' crossings of mid are in the interval too
         e = edge_crossings(curves, mid)
-        grid = _grid(min([lo_s, *e]), max([hi_s, *e]), 0.25, GRID)
+        grid = sigma_grid(min([lo_s, *e]), max([hi_s, *e]), 0.25, GRID)
         found = shoot_across(PeriodMap(sim, {**params, param2: mid}, "sigma", theta), M, impacts, grid, seeds, ITERATED)
         if found:
             lo_p, last = mid, found[len(found) // 2]
             dx = 2.0 * float(np.max(np.abs(np.diff(grid))))
             lo_s, hi_s = min(o["sigma"] for o in found) - dx, max(o["sigma"] for o in found) + dx
-            seeds = [_norm_seed(last["point"], last["sigma"], theta)] + seeds[:2]
+            seeds = [norm_seed(last["point"], last["sigma"], theta)] + seeds[:2]
         else:
             hi_p = mid
     return {"p2": math.sqrt(lo_p * hi_p), "sigma": float(last["sigma"]), "sigmas": [lo_s, hi_s],

@@ -15,6 +15,9 @@ closing it has it, just above it has none across the window's sigma interval.
 """
 from __future__ import annotations
 
+import tomllib
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -101,9 +104,6 @@ FIG9_CLOSINGS = {"2": 1651.9, "3": 1575.3}
 @pytest.fixture(scope="module")
 def fig9_near_closing(model) -> dict:
     """Figure 9's windows charted from Gamma = 1500 (where periods 1-3 are still open) to 1700."""
-    import tomllib
-    from pathlib import Path
-
     fig9 = tomllib.loads((Path(__file__).resolve().parents[2] / "harness/experiments/fig9.toml").read_text())["model"]
     params = {**fig9, "wall": 1, "solver": 1, "Gamma": 1500.0}
     return chart_regions(model.source(), params, "Gamma", (1500.0, 1700.0), True, np.geomspace(0.2, 10.0, 14), 3)
