@@ -321,6 +321,9 @@ def chart_regions(source: Any, params: Mapping[str, Any], param2: str, p2_range:
     sigma_range = tuple(cont["sigma_range"])
     for w in cont["windows"]:
         w["closing"] = follow_window(sim, p0, w, param2, p2_range, log2, sigma_range, theta)
+        hand = [c["p2"] for c in w["closing"]["codim2"] if c["kind"].startswith("boundary hand-over")]
+        if hand:  # the edges continued from the start bound the window up to its first hand-over
+            w["closing"]["edges_bound_until"] = min(hand)
     for M, cl in cont["closes"].items():
         mine = [w for w in cont["windows"] if str(w["M"]) == M]
         if mine:  # the window nearest grazing, as chart_curves chose it
