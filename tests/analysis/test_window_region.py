@@ -68,6 +68,7 @@ def test_a_graze_meeting_a_flip_hands_the_boundary_over_and_the_window_closes_la
     assert cl["kind"] == closing_kind(cl["how"]) == "flip curve turns (maximum in p2)"
     assert cl["closes"] > 1.2 * G_h  # the first candidate was a third too early
     assert [t["verdict"] for t in cl["tested"]] == ["hand-over", "confirmed"]
+    assert cl["edges_bound_until"] == G_h  # the edges continued from the start, checked up to there
     # the new edges were found from the orbit shot above the hand-over and continued from there
     (after,) = handover["handovers"]
     assert after["p2"] == pytest.approx(G_h * 1.001) and after["window"]["lower"]["kind"] == "flip"
