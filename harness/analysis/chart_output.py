@@ -30,7 +30,7 @@ def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: st
 
 def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
     """sigma against the second parameter: the windows' edges continued in two parameters (lines,
-    by kind; where each window closes starred), the per-value scans' windows beneath as bands (the
+    by kind; where each window closes starred, a hand-over of its boundary crossed), the per-value scans' windows beneath as bands (the
     brute-force check), the windows of maps (48) and (39) as thin lines, and beta in a second panel."""
     from ..io import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
@@ -69,6 +69,9 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
             seen.add(c["kind"])
             ax.plot(c["p2"], c["sigma"], LINESTYLES.get(c["kind"], "-"), color=col, lw=2.0, label=lab)
         cl = w["closing"]
+        for c in cl.get("codim2", []):  # a hand-over of the boundary: the window goes on past it
+            if c["kind"].startswith("boundary hand-over") and bottom <= c["sigma"] <= top:
+                ax.plot([c["p2"]], [c["sigma"]], "X", color=col, ms=9, mec="k", zorder=5)
         if cl["closes"] is not None:
             ax.plot([cl["closes"]], [min(cl["sigma"], top)], "*", color=col, ms=13, mec="k", zorder=5)
             clipped = cl["sigma"] >= top  # an asymptote: the star sits on the top of the axes
