@@ -20,7 +20,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from .jacobian import free_propagator, resolve_method
-from ..errors import HarnessInputError
+from ..errors import FmuRejectedInput, HarnessInputError
 from ..fmu.simulator import Simulator
 
 __all__ = ["MapEvaluation", "PeriodMap", "wall_free_offset"]
@@ -136,19 +136,24 @@ class PeriodMap:
         A point inside a rigid wall is not a state (the FMU refuses it): a Newton or predictor
         step that lands there gets a non-finite image, which every caller treats as a failed
         evaluation (a shorter step, or no orbit), instead of an error that ends the search.  So does
-        a step to sigma <= -1 (no forcing: the FMU refuses it), which a corrector near the end of
-        an even sigma range can take.
+        a parameter the FMU refuses (sigma <= -1: no forcing), which a corrector near the end of an
+        even sigma range can step to.
         """
         off = self.offset(p)
         z0 = np.asarray(w, dtype=float) + off
         u_wall = float(self.params.get("u_wall", 0.0))
         inside = int(self.params.get("wall", 1)) == 2 and (z0[0] > u_wall or (z0[0] == u_wall and z0[1] > 0.0))
-        if inside or self.sigma(p) <= -1.0:
+        try:
+            pts, cont = (None, None) if inside else self.run(p, np.asarray(w, dtype=float) + off, M)
+        except FmuRejectedInput:
+            if self.sigma(p) > -1.0:  # any other refusal is the caller's input: said as such
+                raise
+            pts = None
+        if pts is None:
             nan = np.full(2, np.nan)
             return MapEvaluation(nan, np.full((M, 2), np.nan), np.zeros(M, dtype=int),
                                  None if not derivatives else np.full((2, 2), np.nan),
                                  None if not derivatives else nan.copy())
-        pts, cont = self.run(p, np.asarray(w, dtype=float) + off, M)
         image = pts[-1] - off
         if not derivatives:
             return MapEvaluation(image, pts[:-1], cont)
