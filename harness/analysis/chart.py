@@ -6,7 +6,8 @@ Two measurements, the second checking the first:
    Gamma, r, nu, Omega or any FMU parameter) the stable maximal windows (one impact per period,
    M <= M_max) are found from the ODE, each continued in sigma to its edges, and every edge is
    continued in (sigma, p2): flip/fold/NS on the extended system, grazes located across the curve.
-   Where each window closes (``closes`` per M, with how) is where its edges meet; every point of
+   Where each window closes (``closes`` per M, with how) is the first candidate where its edges
+   meet that direct shooting confirms on both sides (:mod:`.window_region`); every point of
    every edge curve is then checked across itself (``edge_check``).
 2. **Scans per value** (the brute-force check): for each value of p2 the windows are measured
    from scratch as ``windows`` does (:mod:`.ode_windows`: up/down scans over sigma, every attractor
@@ -31,7 +32,8 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ..errors import HarnessInputError
-from .chart_curves import chart_curves, edge_check, scan_check, widened
+from .chart_curves import edge_check, scan_check, widened
+from .window_region import chart_regions
 
 __all__ = ["ChartProblem", "run_chart", "chart_value_task", "curves_from_values", "closing"]
 
@@ -222,7 +224,7 @@ def run_chart(problem: ChartProblem, source: Any, backend: Any = None, workers: 
     per_value = [results[i] for i in sorted(results)]
     out = curves_from_values(problem, per_value)
     t1 = time.perf_counter()
-    cont = chart_curves(source, problem.params, problem.param2, (float(problem.values[0]), float(problem.values[-1])),
+    cont = chart_regions(source, problem.params, problem.param2, (float(problem.values[0]), float(problem.values[-1])),
                         problem.log, problem.sigma_grid, problem.M_max, problem.theta)
     out["windows"], out["closes"], out["continuation_search"] = cont["windows"], cont["closes"], cont["search"]
     out["scan_check"] = scan_check(cont["windows"], out["scans"])

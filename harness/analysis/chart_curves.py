@@ -8,7 +8,7 @@ the branch leaves the range stable).  Each edge is then continued in (sigma, p2)
 on their extended system (:func:`harness.dynamics.event_curves.continue_event`), grazes stepped along
 the curve and located across it (:func:`harness.dynamics.graze_curves.continue_graze`).
 
-A window closes where its edges meet, the first of (in p2):
+Where a window closes: the candidates (:func:`window_closing`), in p2:
 
 * a turning point (maximum in p2) of an edge curve: the lower and upper edges are one curve that
   turns back (e.g. two flips joining: the smallest |multiplier| along sigma reaches 1 there);
@@ -17,6 +17,10 @@ A window closes where its edges meet, the first of (in p2):
   from the flip's side, located less exactly: the first is preferred when both are found);
 * the lower edge leaving the charted sigma range upward (the window runs to sigma -> infinity; the
   report says so: it is an asymptote, not a meeting of two edges).
+
+These are only candidates: :func:`harness.analysis.window_region.chart_regions` confirms each by
+direct shooting on both sides, and follows the window past a candidate where its boundary hands
+over to another curve (the window's closing is the first confirmed one).
 """
 from __future__ import annotations
 
@@ -286,7 +290,8 @@ def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Seq
     to_s, of_s = (np.log, np.exp) if sigma_log else (np.asarray, np.asarray)
     out: dict[str, Any] = {}
     for w in windows:
-        M, closes = w["M"], w["closing"]["closes"]
+        # past a hand-over of the boundary (harness.analysis.window_region) these curves bound the window no more
+        M, closes = w["M"], w["closing"].get("edges_bound_until", w["closing"]["closes"])
         rep = out.setdefault(str(M), {"checked": 0, "confirmed": 0, "failed": []})
         for side in ("lower", "upper"):
             c = w["curves"].get(side)

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import HarnessInputError
 from .chart import ChartProblem, run_chart
+from .window_region import closing_evidence_lines
 
 __all__ = ["plot_chart", "chart_figure", "chart_report", "chart"]
 
@@ -29,7 +30,7 @@ def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: st
 
 def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
     """sigma against the second parameter: the windows' edges continued in two parameters (lines,
-    by kind; where each window closes starred), the per-value scans' windows beneath as bands (the
+    by kind; where each window closes starred, a hand-over of its boundary crossed), the per-value scans' windows beneath as bands (the
     brute-force check), the windows of maps (48) and (39) as thin lines, and beta in a second panel."""
     from ..io import plots  # noqa: F401  (Agg backend)
     import matplotlib.pyplot as plt
@@ -64,14 +65,16 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
     seen: set[str] = set()
     for w in res["windows"]:
         col = cmap((w["M"] - 1) % 10)
-        for side in ("lower", "upper"):
-            c = w["curves"].get(side)
+        for side, c in _all_curves(w):
             if not c or "failed" in c:
                 continue
             lab = f"{c['kind']} edge (continued)" if c["kind"] not in seen else None
             seen.add(c["kind"])
             ax.plot(c["p2"], c["sigma"], LINESTYLES.get(c["kind"], "-"), color=col, lw=2.0, label=lab)
         cl = w["closing"]
+        for c in cl.get("codim2", []):  # a hand-over of the boundary: the window goes on past it
+            if c["kind"].startswith("boundary hand-over") and bottom <= c["sigma"] <= top:
+                ax.plot([c["p2"]], [c["sigma"]], "X", color=col, ms=9, mec="k", zorder=5)
         if cl["closes"] is not None:
             ax.plot([cl["closes"]], [min(cl["sigma"], top)], "*", color=col, ms=13, mec="k", zorder=5)
             clipped = cl["sigma"] >= top  # an asymptote: the star sits on the top of the axes
@@ -123,6 +126,12 @@ def _open_end_arrows(ax: Any, v: np.ndarray, lo: np.ndarray, hi: np.ndarray, bot
                             arrowprops=dict(arrowstyle="->", lw=1.2, color=col))
 
 
+def _all_curves(w: dict[str, Any]) -> list[tuple[str, Any]]:
+    """A window's continued edges, those continued after each hand-over of its boundary included."""
+    sets = [w["curves"], *(h["curves"] for h in w.get("handovers", []))]
+    return [(side, cs.get(side)) for cs in sets for side in ("lower", "upper")]
+
+
 def tolerance_text(problem: ChartProblem) -> str:
     """The edges' bisection tolerance in words: absolute where ``--xtol`` set one."""
     return f"{problem.xtol_rel:g} x sigma" if problem.xtol is None else f"{problem.xtol:g} in sigma"
@@ -165,9 +174,8 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
              "sigma to its edges; every edge is continued in (sigma, "
              f"{problem.param2}): flip/fold/NS on the extended system (orbit + test function, pseudo-arclength), "
              "grazes stepped along the curve and located across it (bisection, then secant steps on the gap). "
-             "A window closes where its edges "
-             "meet (a turning point of an edge curve, a flip meeting the graze) or where its lower edge leaves the "
-             "sigma range upward.", "",
+             "A window closes at the first candidate (an edge curve's turning point, a flip meeting the graze, its lower "
+             "edge leaving the sigma range upward) that direct shooting confirms on both sides (below).", "",
              f"| M | window at {problem.param2} = {problem.values[0]:g} | closes at {problem.param2} | sigma there | how |",
              "|---|---|---|---|---|"]
     for M, cl in res["closes"].items():
@@ -178,10 +186,11 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
             lines.append(f"| {row_label(M)} | {wtxt} | does not close in {cl['searched'][0]:g} .. {cl['searched'][1]:g} | - | {why} |")
         else:
             lines.append(f"| {row_label(M)} | {wtxt} | {cl['closes']:.6g} | {cl['sigma']:.5g} | {cl['how']} |")
-    lines += ["", "Every edge curve (chart.json, `windows[*].curves`): its end and turning points:", ""]
+    lines += closing_evidence_lines(res["closes"], problem.param2)
+    lines += ["", "Every edge curve (chart.json, `windows[*].curves`; after a hand-over `windows[*].handovers`): "
+              "its end and turning points:", ""]
     for w in res["windows"]:
-        for side in ("lower", "upper"):
-            c = w["curves"].get(side)
+        for side, c in _all_curves(w):
             if c is None:
                 continue
             if "failed" in c:
@@ -193,6 +202,7 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
                          f"stability changes: {turns}; ends at ({problem.param2} = {c['end']['p2']:.6g}, sigma = "
                          f"{c['end']['sigma']:.5g}): {c['end']['note']}")
     lines += ["", "Each continued edge checked across itself at every point of its curve up to the window's closing "
+              "(or the first hand-over of its boundary) "
               "(Newton 1e-5 away on either side, across the curve "
               f"in (ln sigma, {'ln ' if problem.log else ''}{problem.param2}): a flip has a stable orbit on one side and an unstable one on the other, a graze a "
               "stable orbit on one side and none with its contacts on the other; `edge_check` in chart.json):", ""]

@@ -20,7 +20,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from .jacobian import free_propagator, resolve_method
-from ..errors import HarnessInputError
+from ..errors import FmuRejectedInput, HarnessInputError
 from ..fmu.simulator import Simulator
 
 __all__ = ["MapEvaluation", "PeriodMap", "wall_free_offset"]
@@ -133,23 +133,27 @@ class PeriodMap:
     def evaluate(self, w: np.ndarray, p: float, M: int, derivatives: bool = True) -> MapEvaluation:
         """F^M at (w, p) in w coordinates; with ``derivatives``: D(F^M) and d/dp.
 
-        A point inside a rigid wall is not a state (the FMU refuses it), nor is sigma <= -1: a
-        Newton or predictor step that lands there gets a non-finite image, which every caller treats as a failed
-        evaluation (a shorter step, or no orbit), instead of an error that ends the search.
+        A point inside a rigid wall is not a state (the FMU refuses it): a Newton or predictor
+        step that lands there gets a non-finite image, which every caller treats as a failed
+        evaluation (a shorter step, or no orbit), instead of an error that ends the search.  So does
+        a parameter the FMU refuses (sigma <= -1: no forcing), which a corrector near the end of an
+        even sigma range can step to.
         """
         off = self.offset(p)
         z0 = np.asarray(w, dtype=float) + off
         u_wall = float(self.params.get("u_wall", 0.0))
-        # sigma <= -1 (no forcing) is outside the FMU's domain: a corrector step that walks there
-        # (near a nonsmooth fold) is a failed evaluation, not an error that ends the continuation
-        # (a test map with no FMU behind it, without ``source``, has no such domain)
         inside = int(self.params.get("wall", 1)) == 2 and (z0[0] > u_wall or (z0[0] == u_wall and z0[1] > 0.0))
-        if inside or (self.sigma(p) <= -1.0 and getattr(self.sim, "source", None) is not None):
+        try:
+            pts, cont = (None, None) if inside else self.run(p, np.asarray(w, dtype=float) + off, M)
+        except FmuRejectedInput:
+            if self.sigma(p) > -1.0:  # any other refusal is the caller's input: said as such
+                raise
+            pts = None
+        if pts is None:
             nan = np.full(2, np.nan)
             return MapEvaluation(nan, np.full((M, 2), np.nan), np.zeros(M, dtype=int),
                                  None if not derivatives else np.full((2, 2), np.nan),
                                  None if not derivatives else nan.copy())
-        pts, cont = self.run(p, np.asarray(w, dtype=float) + off, M)
         image = pts[-1] - off
         if not derivatives:
             return MapEvaluation(image, pts[:-1], cont)
