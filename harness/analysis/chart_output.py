@@ -62,25 +62,7 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
                 y = np.array([np.nan if x is None else x for x in mw[edge]], float)
                 ax.plot(mw["value"], y, ls=ls, color=col, lw=0.7, alpha=0.8,
                         label=f"map ({key[-2:]}), A~" if edge == "lower" and M == "1" else None)
-    seen: set[str] = set()
-    for w in res["windows"]:
-        col = cmap((w["M"] - 1) % 10)
-        for side, c in _all_curves(w):
-            if not c or "failed" in c:
-                continue
-            lab = f"{c['kind']} edge (continued)" if c["kind"] not in seen else None
-            seen.add(c["kind"])
-            ax.plot(c["p2"], c["sigma"], LINESTYLES.get(c["kind"], "-"), color=col, lw=2.0, label=lab)
-        cl = w["closing"]
-        for c in cl.get("codim2", []):  # a hand-over of the boundary: the window goes on past it
-            if c["kind"].startswith("boundary hand-over") and bottom <= c["sigma"] <= top:
-                ax.plot([c["p2"]], [c["sigma"]], "X", color=col, ms=9, mec="k", zorder=5)
-        if cl["closes"] is not None:
-            ax.plot([cl["closes"]], [min(cl["sigma"], top)], "*", color=col, ms=13, mec="k", zorder=5)
-            clipped = cl["sigma"] >= top  # an asymptote: the star sits on the top of the axes
-            ax.annotate(f"M = {w['M']} closes\n{problem.param2} = {cl['closes']:.5g}", (cl["closes"], min(cl["sigma"], top)),
-                        textcoords="offset points", xytext=(12, -30 if clipped else -4), fontsize=7, color=col,
-                        bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": col, "lw": 0.5, "alpha": 0.85})
+    _draw_continued(ax, res["windows"], problem.param2, cmap, bottom, top)
     draw_wall_free(ax, res.get("wall_free"))
     if log_sigma:
         ax.set_yscale("log")
@@ -109,6 +91,31 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
         bx.legend(fontsize=7, ncol=5)
     fig.tight_layout()
     return fig
+
+
+def _draw_continued(ax: Any, windows: list[dict[str, Any]], param2: str, cmap: Any, bottom: float,
+                    top: float) -> None:
+    """The continued edges of every window (hand-overs included), each closing starred and each
+    hand-over of a boundary crossed."""
+    seen: set[str] = set()
+    for w in windows:
+        col = cmap((w["M"] - 1) % 10)
+        for side, c in _all_curves(w):
+            if not c or "failed" in c:
+                continue
+            lab = f"{c['kind']} edge (continued)" if c["kind"] not in seen else None
+            seen.add(c["kind"])
+            ax.plot(c["p2"], c["sigma"], LINESTYLES.get(c["kind"], "-"), color=col, lw=2.0, label=lab)
+        cl = w["closing"]
+        for c in cl.get("codim2", []):  # a hand-over of the boundary: the window goes on past it
+            if c["kind"].startswith("boundary hand-over") and bottom <= c["sigma"] <= top:
+                ax.plot([c["p2"]], [c["sigma"]], "X", color=col, ms=9, mec="k", zorder=5)
+        if cl["closes"] is not None:
+            ax.plot([cl["closes"]], [min(cl["sigma"], top)], "*", color=col, ms=13, mec="k", zorder=5)
+            clipped = cl["sigma"] >= top  # an asymptote: the star sits on the top of the axes
+            ax.annotate(f"M = {w['M']} closes\n{param2} = {cl['closes']:.5g}", (cl["closes"], min(cl["sigma"], top)),
+                        textcoords="offset points", xytext=(12, -30 if clipped else -4), fontsize=7, color=col,
+                        bbox={"boxstyle": "round,pad=0.2", "fc": "white", "ec": col, "lw": 0.5, "alpha": 0.85})
 
 
 def _open_end_arrows(ax: Any, v: np.ndarray, lo: np.ndarray, hi: np.ndarray, bottom: float, top: float,

@@ -157,17 +157,28 @@ def continued_intervals(windows: Sequence[Mapping[str, Any]], v: float,
         closes_at = closing_of(w, windows, closes)
         if closes_at is not None and v >= closes_at:
             continue
+        edges, curves = _stretch_at(w, v)
         ends = []
         for side in ("lower", "upper"):
-            if w[side] is None:
+            if edges[side] is None:
                 ends.append(None)  # open: no edge in the range at the start, none later
                 continue
-            s = _edge_at_end(w["curves"].get(side), v)
+            s = _edge_at_end(curves.get(side), v)
             ends.append(s if s is not None else "missing")
         if "missing" in ends:
             continue
         out.append({"M": w["M"], "impacts": w.get("impacts", 1), "lo": ends[0], "hi": ends[1], "window": w})
     return out
+
+
+def _stretch_at(w: Mapping[str, Any], v: float) -> tuple[Mapping[str, Any], Mapping[str, Any]]:
+    """The window's edges and their continued curves that bound it at ``v``: those from the start,
+    or, past a hand-over of its boundary (:mod:`.window_region`), the ones continued from there."""
+    edges, curves = w, w.get("curves") or {}
+    for h in w.get("handovers") or []:
+        if v >= float(h["p2"]):
+            edges, curves = h["window"], h["curves"]
+    return edges, curves
 
 
 def _edge_at_end(curve: Mapping[str, Any] | None, v: float) -> float | None:
