@@ -146,6 +146,11 @@ def orbit_edge_kind(orb: PeriodicOrbit | None, iterated_entries: int, M: int, im
             return "impact-lost" if iterated_entries else "no-impact"
         return "lost"
     n = int(np.sum(orb.contacts))
+    if n != impacts and minimal_period(orb) < M:
+        # Newton fell onto an orbit of a shorter period with other contacts (Figure 9's unstable
+        # period-1 orbit, 2 impacts per 2 periods, reached from the period-2 window at sigma = 0.526,
+        # Gamma = 48.9): not this family's continuation, so not a graze; the flow decides
+        return orbit_edge_kind(None, iterated_entries, M, impacts)
     if n > impacts:
         return "graze"
     if n < impacts:
@@ -205,6 +210,16 @@ def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_
     if not ok or orb is None:
         return {"family": fam, "lower": None, "upper": None, "resolved": False}
     w0 = orb.z[0]
+    from .located_edges import located_edges
+
+    # the edges located by the continuation from the seed orbit (the same walk as ``continue``)
+    (c_lo, c_hi), how, n_cont = located_edges(smap, fam.M, fam.impacts, fam.seed_sigma,
+                                              w0 + smap.offset(fam.seed_sigma), sigma_range)
+    base = {"family": fam, "resolved": True, "multipliers": orb.multipliers, "fmu_periods_continuation": n_cont,
+            "v_c": impact_velocity(smap, orb, fam.seed_sigma), "located": how}
+    if c_lo is not None and c_hi is not None:
+        return {**base, "lower": c_lo, "upper": c_hi}
+    sides = (c_lo is None, c_hi is None)
     if fam.geometric:
         width, step = math.log(max(fam.hi / fam.lo, grid_ratio)), math.log(grid_ratio)
     else:
@@ -229,11 +244,13 @@ def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_
         e_lo, e_hi = window_edges(smap, fam.M, fam.seed_sigma, w0, guess_of, sigma_range, dp,
                                   xtol_rel * (abs(fam.seed_sigma) if relative else 1.0), newton, fam.geometric,
                                   accept=_accept(fam.M, fam.impacts),
-                                  kind_of=lambda o, n: orbit_edge_kind(o, n, fam.M, fam.impacts))
+                                  kind_of=lambda o, n: orbit_edge_kind(o, n, fam.M, fam.impacts), sides=sides)
     except ValueError:
         return {"family": fam, "lower": None, "upper": None, "resolved": False}
-    return {"family": fam, "lower": e_lo, "upper": e_hi, "resolved": True, "multipliers": orb.multipliers,
-            "v_c": impact_velocity(smap, orb, fam.seed_sigma)}
+    # a side the continuation did not locate: the march and bisection's edge, said so
+    how = [h if e is not None else f"bisection ({h})" for h, e in zip(how, (c_lo, c_hi))]
+    return {**base, "lower": c_lo if c_lo is not None else e_lo, "upper": c_hi if c_hi is not None else e_hi,
+            "located": how}
 
 
 def _shoot_task(source: Any, params: Mapping[str, Any], theta: float, fams: Sequence[Family],
@@ -244,7 +261,12 @@ def _shoot_task(source: Any, params: Mapping[str, Any], theta: float, fams: Sequ
 
     smap = StroboscopicMap(FmuSimulator(source, instance_name="ode-windows"), params, theta)
     out = [shoot_family(smap, f, sigma_range, xtol_rel, grid_ratio, relative, c) for f in fams]
-    return out, smap.evaluations
+    return out, smap.evaluations + _continued_periods(out)
+
+
+def _continued_periods(results: Sequence[Mapping[str, Any]]) -> int:
+    """FMU periods the continuation ran (on its own map, beside the shooting's)."""
+    return int(sum(r.get("fmu_periods_continuation", 0) for r in results))
 
 
 def shoot_families(smap: Any, fams: Sequence[Family], sigma_range: tuple[float, float], xtol_rel: float,
@@ -254,7 +276,7 @@ def shoot_families(smap: Any, fams: Sequence[Family], sigma_range: tuple[float, 
     one-period FMU runs)."""
     if workers <= 1 or len(fams) <= 1:
         res = [shoot_family(smap, f, sigma_range, xtol_rel, grid_ratio, relative, c) for f in fams]
-        return res, smap.evaluations
+        return res, smap.evaluations + _continued_periods(res)
     import multiprocessing
     import os
     from concurrent.futures import ProcessPoolExecutor
@@ -336,6 +358,7 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
                           "multipliers_inside": r.get("multipliers"), "v_c": r.get("v_c"),
                           "multipliers_near_lower_edge": lo.multipliers,
                           "multipliers_near_upper_edge": hi.multipliers,
+                          "located": r.get("located"),
                           "xtol": xtol_rel * (abs(f.seed_sigma) if relative else 1.0)})
         out["all"].append(entry)
         if f.impacts == 1 and r["resolved"]:
