@@ -10,12 +10,16 @@ Newton guess, and a family found that way says so (``found_by = ["map-guided sta
    same (M, k) that overlap are one family; the scan's state in the middle of the run is its seed.
 2. :func:`shoot_family`: Newton on F^M(w) = w from the seed; an orbit belongs to the family when
    it converges, is stable, has exactly k wall entries per M periods and minimal period M.  The
-   orbit is marched (geometric steps) to both sides until it stops belonging, and each bracket is
-   bisected (:func:`harness.dynamics.shooting.window_edges`); the march may go beyond the scan
-   grid, to ``sigma_range``.
-3. :func:`orbit_edge_kind`: why it stopped: flip/fold/torus (a multiplier leaves the unit circle),
-   graze (an extra wall entry), impact-lost (fewer), period-halving (the orbit collapses onto a
-   shorter period), lost (Newton found nothing; the last good orbit iterated beyond says more).
+   orbit is continued in sigma both ways (:mod:`.located_edges`, the walk of ``continue``) and the
+   first event on each side that ends the window is its edge: a flip/fold on its test function,
+   a graze on its defining quantity, to ~1e-9 in quick and full runs alike (``located`` says
+   "continuation").  A side the continuation cannot settle (the branch lost, or stability or
+   contacts changing without a located event) falls back on a march and bisection to ``xtol``
+   (:func:`harness.dynamics.shooting.window_edges`), and ``located`` says "bisection (why)".
+3. :func:`orbit_edge_kind`: the fallback's kind: flip/fold/torus (a multiplier leaves the unit
+   circle), graze (an extra wall entry), impact-lost (fewer), period-halving (the orbit collapses
+   onto a shorter period), lost (Newton found nothing, or an orbit of another period and contact
+   count: the last good orbit iterated beyond says more).
 """
 from __future__ import annotations
 
@@ -325,15 +329,18 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
             M_max: int | None, guide: Mapping[int, Any] | None = None, c: Any = None,
             workers: int = 1, relative: bool = True) -> dict[str, Any]:
     """The ODE's windows: families from the scans (plus map-guided starts for windows the
-    scans missed), each shot to its edges.
+    scans missed), each continued to its edges (:mod:`.located_edges`; a side the continuation
+    cannot settle is marched and bisected to ``xtol_rel``, and says so).
 
     Returns
     -------
     dict
         ``windows`` {M: (lo, hi)} of the maximal orbits (one impact per period; the widest
-        window per M), ``kinds``, ``brackets``, ``intervals``, ``unresolved``,
-        ``multipliers_at_lower_edge``, ``xtol`` {M: absolute bisection tolerance}, ``all``: every
-        family's window (any number of impacts) as a list of dicts, ``fmu_periods``.
+        window per M), ``kinds``, ``brackets`` (widths of the located intervals), ``intervals``
+        ((inside end, outside end) per edge), ``unresolved``, ``multipliers_at_lower_edge``,
+        ``xtol`` {M: absolute tolerance of the fallback bisection}, ``all``: every family's
+        window (any number of impacts) as a list of dicts, each with ``located`` [lower, upper]
+        ("continuation", or "bisection (why the continuation did not)"), ``fmu_periods``.
     """
     geometric = bool(grid[0] > 0)  # an even grid reaching sigma <= 0 is marched in even steps
     fams = families_from_scans(grid, ds, M_max, geometric)
