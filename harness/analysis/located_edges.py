@@ -5,7 +5,9 @@ from its seed orbit (:func:`harness.dynamics.window_branch.continue_side`, the w
 ``continue`` and ``chart`` use), and the first event on each side that ends the stable window is
 its edge: a flip or fold is the root of its test function (det(D + I), det(D - I)), located to
 :data:`LOCATE_TOL`; a graze the zero of its defining quantity (the gap of a free passage, the
-entry velocity of a contact), with an interval that contains it (:mod:`harness.dynamics.graze_location`).
+entry velocity of a contact), with an interval that contains it (:mod:`harness.dynamics.graze_location`),
+or where no such quantity describes it, the contact change bisected along the branch (``located``
+says which).
 The location does not depend on ``--quick``: only the search (scan grid, transients) does.
 
 The continuation's kinds are mapped onto the reports' vocabulary: flip, fold, torus (ns),
@@ -89,6 +91,17 @@ def edge_from_event(e: Event, kind: str, direction: float) -> Edge:
     return Edge(v, kind, hi - lo, np.asarray(e.multipliers), good, bad)
 
 
+def _how(e: Event) -> str:
+    """How the event was located, for the entry's ``located``: "continuation", with the defining
+    quantity of a graze ("gap = 0", "entry velocity = 0"), or "contact change" where no quantity
+    describes it (the last orbit with the old contacts and the first parameter without them: the
+    FMU's wall detection, a few 1e-9 from the exact graze in Figure 9's windows)."""
+    if e.kind not in ("graze", "stick"):
+        return "continuation"
+    q = e.quantity if e.quantity in ("gap", "entry velocity") else "contact change"
+    return f"continuation ({q} = 0)" if q != "contact change" else "continuation (contact change)"
+
+
 def _consistent(branch: Branch, e: Event | None, impacts: int) -> bool:
     """Every point before the event (all, without one) is stable with the family's contacts, and
     a graze's last orbit with the old contacts is not unstable (no flip stepped over)."""
@@ -116,7 +129,7 @@ def locate_side(pmap: PeriodMap, M: int, impacts: int, sigma0: float, z0: Any, s
             return None, ("the continued branch lost stability or changed contacts before its first located "
                           "event (an event stepped over)")
         if e is not None:
-            return edge_from_event(e, report_kind(br, e, impacts), direction), "continuation"
+            return edge_from_event(e, report_kind(br, e, impacts), direction), _how(e)
         last = float(br.values[-1])
         if not lo <= last <= hi:
             inside = float(br.values[-2]) if len(br) > 1 else float(sigma0)
