@@ -4,7 +4,7 @@ A family (period M, k contacts per M periods) seen by the scans is continued in 
 from its seed orbit (:func:`harness.dynamics.window_branch.continue_side`, the walk that
 ``continue`` and ``chart`` use), and the first event on each side that ends the stable window is
 its edge: a flip or fold is the root of its test function (det(D + I), det(D - I)), located to
-:data:`LOCATE_TOL`; a graze the zero of its defining quantity (the gap of a free passage, the
+:data:`LOCATE_TOL` along the branch, a flip then again at fixed sigma (:func:`polish_flip`); a graze the zero of its defining quantity (the gap of a free passage, the
 entry velocity of a contact), with an interval that contains it (:mod:`harness.dynamics.graze_location`),
 or where no such quantity describes it, the contact change bisected along the branch (``located``
 says which).
@@ -21,13 +21,15 @@ is reported as such and left to the march and bisection (:func:`harness.dynamics
 """
 from __future__ import annotations
 
+import math
 import re
 from typing import Any
 
 import numpy as np
 
+from ..dynamics.arclength import illinois_update
 from ..dynamics.branch import Branch, Event
-from ..dynamics.periodic_map import PeriodMap
+from ..dynamics.periodic_map import PeriodMap, refine_orbit
 from ..dynamics.shooting import Edge
 from ..dynamics.window_branch import continue_side, first_edge
 from ..errors import FmuError
@@ -102,6 +104,49 @@ def _how(e: Event) -> str:
     return f"continuation ({q} = 0)" if q != "contact change" else "continuation (contact change)"
 
 
+def polish_flip(pmap: PeriodMap, branch: Branch, e: Event, impacts: int) -> tuple[float, float, float] | None:
+    """A flip located again on its test function det(D(F^M) + I) of the orbit solved at fixed sigma
+    (Newton to a residual of 1e-13 (1 + |sigma|)), by the Illinois method from the continuation's
+    value: (sigma, lo, hi) with the test function changing sign on [lo, hi] (1e-11 (1 + |sigma|)
+    wide), or None where no sign change is found within 1e-5 of it.
+
+    The continuation's own location is the root along its corrected points (residual 1e-10) and its
+    bracket in arclength: from a seed far away (Figure 9's period 1 seeded at sigma = 17) it was
+    6.6e-9 off with a bracket of 8e-12; on both sides of a flip the orbit exists, so the root in
+    sigma itself is the honest one."""
+    M, v = branch.M, float(e.value)
+    w0 = np.asarray(branch.points[e.index][0], dtype=float) - pmap.offset(v)
+
+    def f(s: float) -> float:
+        _, ev, ok, _ = refine_orbit(pmap, w0, s, M, tol=1e-13 * (1.0 + abs(s)), max_iter=20)
+        same = ok and int(np.asarray(ev.contacts).sum()) == impacts
+        return float(np.linalg.det(ev.J + np.eye(2))) if same else math.nan
+
+    d = max(1e-9 * (1.0 + abs(v)), 4.0 * float(e.bracket))
+    while d <= 1e-5 * (1.0 + abs(v)):
+        lo, hi = v - d, v + d
+        flo, fhi = f(lo), f(hi)
+        if math.isfinite(flo) and math.isfinite(fhi) and flo * fhi <= 0.0:
+            break
+        d *= 10.0
+    else:
+        return None
+    side = 0
+    for _ in range(60):
+        if hi - lo <= 1e-12 * (1.0 + abs(v)) or flo == 0.0 or fhi == 0.0:
+            break
+        s = (lo * fhi - hi * flo) / (fhi - flo)
+        fs = f(s)
+        if not math.isfinite(fs):
+            return None
+        lo, hi, flo, fhi, side = illinois_update(lo, hi, flo, fhi, s, fs, side)
+    root = lo if flo == 0.0 else hi if fhi == 0.0 else (lo * fhi - hi * flo) / (fhi - flo)
+    # the test function carries the orbit's Newton residual: from five seeds Figure 9's period-1
+    # flip came out within 6e-13, so the interval is at least 5e-12 (1 + |sigma|) either side
+    half = max(0.5 * (hi - lo), 5e-12 * (1.0 + abs(root)))
+    return root, root - half, root + half
+
+
 def _consistent(branch: Branch, e: Event | None, impacts: int) -> bool:
     """Every point before the event (all, without one) is stable with the family's contacts, and
     a graze's last orbit with the old contacts is not unstable (no flip stepped over)."""
@@ -129,7 +174,16 @@ def locate_side(pmap: PeriodMap, M: int, impacts: int, sigma0: float, z0: Any, s
             return None, ("the continued branch lost stability or changed contacts before its first located "
                           "event (an event stepped over)")
         if e is not None:
-            return edge_from_event(e, report_kind(br, e, impacts), direction), _how(e)
+            kind = report_kind(br, e, impacts)
+            edge = edge_from_event(e, kind, direction)
+            if kind == "flip":
+                polished = polish_flip(pmap, br, e, impacts)
+                if polished is None:
+                    return edge, "continuation (flip not confirmed at fixed sigma)"
+                v, lo, hi = polished
+                good, bad = (hi, lo) if direction < 0 else (lo, hi)
+                edge = Edge(v, kind, hi - lo, edge.multipliers, good, bad)
+            return edge, _how(e)
         last = float(br.values[-1])
         if not lo <= last <= hi:
             inside = float(br.values[-2]) if len(br) > 1 else float(sigma0)
