@@ -8,7 +8,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-SECTION = re.compile(r"<!-- (\w+):begin -->.*?<!-- \1:end -->", re.S)
+SECTION = re.compile(r"<!-- ([\w-]+):begin -->.*?<!-- \1:end -->", re.S)  # names may hold a hyphen (windows-edges)
 
 
 def keep_sections(path: Path, text: str) -> str:

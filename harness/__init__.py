@@ -52,7 +52,8 @@ The public entry points, grouped as you look for them:
 * `StroboscopicMap` -- the FMU's one-period map in coordinates relative to the
   wall-free orbit;
 * `map_guided_windows` -- ODE window edges of maximal period-M orbits, started in a map's
-  windows; each edge the midpoint of a bracket the shooting bisected, or unresolved;
+  windows; each edge the midpoint of a bracket the shooting bisected, or unresolved (``windows``
+  locates its edges by continuation instead: :mod:`harness.analysis.located_edges`);
 * `harness.dynamics.shooting.window_edges`, `harness.dynamics.shooting.Edge`.
 
 # Lyapunov exponents

@@ -29,23 +29,20 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from ..dynamics.window_branch import EDGE_KINDS, first_edge  # noqa: F401  (EDGE_KINDS: one list, there)
 from ..errors import FmuError
 
 __all__ = ["windows_at", "widened", "continue_window", "window_closing", "chart_curves", "scan_check", "edge_check"]
 
-EDGE_KINDS = ("flip", "fold", "ns", "graze", "stick")
-
 
 def _edge(branch: Any) -> dict[str, Any] | None:
     """The first event of a branch that ends the stable one-impact window, as a dict."""
-    for e in branch.events:
-        if e.kind in EDGE_KINDS:
-            return {"kind": e.kind, "sigma": float(e.value), "point": [float(x) for x in e.point],
-                    "bracket": float(e.bracket), "multipliers": [[float(m.real), float(m.imag)] for m in e.multipliers],
-                    "note": e.note}
-        if e.kind == "end":
-            return None
-    return None
+    e = first_edge(branch)
+    if e is None:
+        return None
+    return {"kind": e.kind, "sigma": float(e.value), "point": [float(x) for x in e.point],
+            "bracket": float(e.bracket), "multipliers": [[float(m.real), float(m.imag)] for m in e.multipliers],
+            "note": e.note}
 
 
 def windows_at(sim: Any, params: Mapping[str, Any], grid: np.ndarray, M_max: int, theta: float = 0.5,
@@ -60,7 +57,7 @@ def windows_at(sim: Any, params: Mapping[str, Any], grid: np.ndarray, M_max: int
     the edges as dicts (None: the branch left the range stable); ``search`` what was scanned.
     """
     from ..dynamics.attractors import families, find_attractors
-    from ..dynamics.continuation import continue_orbit
+    from ..dynamics.window_branch import continue_side
 
     scan = find_attractors(sim, params, grid, "sigma", M_max=M_max, theta=theta, transient=transient)
     labels = [frozenset(a.label for a in scan.at(float(v))) for v in grid]
@@ -79,11 +76,8 @@ def windows_at(sim: Any, params: Mapping[str, Any], grid: np.ndarray, M_max: int
         a = fam[len(fam) // 2]
         if any(w["M"] == a.period and _inside(a.value, w) for w in windows):
             continue  # the same window, reached again from another run of the grid
-        edges = []
-        for d in (-1.0, 1.0):
-            br = continue_orbit(sim, params, a.period, a.value, a.points[0], "sigma", (lo, hi), d,
-                                ds_max=max(0.05, 0.1 * a.value), max_points=600, theta=theta)
-            edges.append(_edge(br))
+        edges = [_edge(continue_side(sim, params, a.period, a.value, a.points[0], (lo, hi), d, theta))
+                 for d in (-1.0, 1.0)]
         windows.append({"M": a.period, "seed_sigma": a.value, "seed": a.points[0].tolist(),
                         "lower": edges[0], "upper": edges[1], "found_by": a.found_by})
     search = {"sigma": [lo, hi], "values": len(grid), "refined_intervals": len(changes), "refined_values": int(extra.size),

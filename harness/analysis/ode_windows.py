@@ -10,12 +10,16 @@ Newton guess, and a family found that way says so (``found_by = ["map-guided sta
    same (M, k) that overlap are one family; the scan's state in the middle of the run is its seed.
 2. :func:`shoot_family`: Newton on F^M(w) = w from the seed; an orbit belongs to the family when
    it converges, is stable, has exactly k wall entries per M periods and minimal period M.  The
-   orbit is marched (geometric steps) to both sides until it stops belonging, and each bracket is
-   bisected (:func:`harness.dynamics.shooting.window_edges`); the march may go beyond the scan
-   grid, to ``sigma_range``.
-3. :func:`orbit_edge_kind`: why it stopped: flip/fold/torus (a multiplier leaves the unit circle),
-   graze (an extra wall entry), impact-lost (fewer), period-halving (the orbit collapses onto a
-   shorter period), lost (Newton found nothing; the last good orbit iterated beyond says more).
+   orbit is continued in sigma both ways (:mod:`.located_edges`, the walk of ``continue``) and the
+   first event on each side that ends the window is its edge: a flip/fold on its test function,
+   a graze on its defining quantity, to ~1e-9 in quick and full runs alike (``located`` says
+   "continuation").  A side the continuation cannot settle (the branch lost, or stability or
+   contacts changing without a located event) falls back on a march and bisection to ``xtol``
+   (:func:`harness.dynamics.shooting.window_edges`), and ``located`` says "bisection (why)".
+3. :func:`orbit_edge_kind`: the fallback's kind: flip/fold/torus (a multiplier leaves the unit
+   circle), graze (an extra wall entry), impact-lost (fewer), period-halving (the orbit collapses
+   onto a shorter period), lost (Newton found nothing, or an orbit of another period and contact
+   count: the last good orbit iterated beyond says more).
 """
 from __future__ import annotations
 
@@ -146,6 +150,11 @@ def orbit_edge_kind(orb: PeriodicOrbit | None, iterated_entries: int, M: int, im
             return "impact-lost" if iterated_entries else "no-impact"
         return "lost"
     n = int(np.sum(orb.contacts))
+    if n != impacts and minimal_period(orb) < M:
+        # Newton fell onto an orbit of a shorter period with other contacts (Figure 9's unstable
+        # period-1 orbit, 2 impacts per 2 periods, reached from the period-2 window at sigma = 0.526,
+        # Gamma = 48.9): not this family's continuation, so not a graze; the flow decides
+        return orbit_edge_kind(None, iterated_entries, M, impacts)
     if n > impacts:
         return "graze"
     if n < impacts:
@@ -205,6 +214,16 @@ def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_
     if not ok or orb is None:
         return {"family": fam, "lower": None, "upper": None, "resolved": False}
     w0 = orb.z[0]
+    from .located_edges import located_edges
+
+    # the edges located by the continuation from the seed orbit (the same walk as ``continue``)
+    (c_lo, c_hi), how, n_cont = located_edges(smap, fam.M, fam.impacts, fam.seed_sigma,
+                                              w0 + smap.offset(fam.seed_sigma), sigma_range)
+    base = {"family": fam, "resolved": True, "multipliers": orb.multipliers, "fmu_periods_continuation": n_cont,
+            "v_c": impact_velocity(smap, orb, fam.seed_sigma), "located": how}
+    if c_lo is not None and c_hi is not None:
+        return {**base, "lower": c_lo, "upper": c_hi}
+    sides = (c_lo is None, c_hi is None)
     if fam.geometric:
         width, step = math.log(max(fam.hi / fam.lo, grid_ratio)), math.log(grid_ratio)
     else:
@@ -229,11 +248,13 @@ def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_
         e_lo, e_hi = window_edges(smap, fam.M, fam.seed_sigma, w0, guess_of, sigma_range, dp,
                                   xtol_rel * (abs(fam.seed_sigma) if relative else 1.0), newton, fam.geometric,
                                   accept=_accept(fam.M, fam.impacts),
-                                  kind_of=lambda o, n: orbit_edge_kind(o, n, fam.M, fam.impacts))
+                                  kind_of=lambda o, n: orbit_edge_kind(o, n, fam.M, fam.impacts), sides=sides)
     except ValueError:
         return {"family": fam, "lower": None, "upper": None, "resolved": False}
-    return {"family": fam, "lower": e_lo, "upper": e_hi, "resolved": True, "multipliers": orb.multipliers,
-            "v_c": impact_velocity(smap, orb, fam.seed_sigma)}
+    # a side the continuation did not locate: the march and bisection's edge, said so
+    how = [h if e is not None else f"bisection ({h})" for h, e in zip(how, (c_lo, c_hi))]
+    return {**base, "lower": c_lo if c_lo is not None else e_lo, "upper": c_hi if c_hi is not None else e_hi,
+            "located": how}
 
 
 def _shoot_task(source: Any, params: Mapping[str, Any], theta: float, fams: Sequence[Family],
@@ -244,7 +265,12 @@ def _shoot_task(source: Any, params: Mapping[str, Any], theta: float, fams: Sequ
 
     smap = StroboscopicMap(FmuSimulator(source, instance_name="ode-windows"), params, theta)
     out = [shoot_family(smap, f, sigma_range, xtol_rel, grid_ratio, relative, c) for f in fams]
-    return out, smap.evaluations
+    return out, smap.evaluations + _continued_periods(out)
+
+
+def _continued_periods(results: Sequence[Mapping[str, Any]]) -> int:
+    """FMU periods the continuation ran (on its own map, beside the shooting's)."""
+    return int(sum(r.get("fmu_periods_continuation", 0) for r in results))
 
 
 def shoot_families(smap: Any, fams: Sequence[Family], sigma_range: tuple[float, float], xtol_rel: float,
@@ -254,7 +280,7 @@ def shoot_families(smap: Any, fams: Sequence[Family], sigma_range: tuple[float, 
     one-period FMU runs)."""
     if workers <= 1 or len(fams) <= 1:
         res = [shoot_family(smap, f, sigma_range, xtol_rel, grid_ratio, relative, c) for f in fams]
-        return res, smap.evaluations
+        return res, smap.evaluations + _continued_periods(res)
     import multiprocessing
     import os
     from concurrent.futures import ProcessPoolExecutor
@@ -303,15 +329,18 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
             M_max: int | None, guide: Mapping[int, Any] | None = None, c: Any = None,
             workers: int = 1, relative: bool = True) -> dict[str, Any]:
     """The ODE's windows: families from the scans (plus map-guided starts for windows the
-    scans missed), each shot to its edges.
+    scans missed), each continued to its edges (:mod:`.located_edges`; a side the continuation
+    cannot settle is marched and bisected to ``xtol_rel``, and says so).
 
     Returns
     -------
     dict
         ``windows`` {M: (lo, hi)} of the maximal orbits (one impact per period; the widest
-        window per M), ``kinds``, ``brackets``, ``intervals``, ``unresolved``,
-        ``multipliers_at_lower_edge``, ``xtol`` {M: absolute bisection tolerance}, ``all``: every
-        family's window (any number of impacts) as a list of dicts, ``fmu_periods``.
+        window per M), ``kinds``, ``brackets`` (widths of the located intervals), ``intervals``
+        ((inside end, outside end) per edge), ``unresolved``, ``multipliers_at_lower_edge``,
+        ``xtol`` {M: absolute tolerance of the fallback bisection}, ``all``: every family's
+        window (any number of impacts) as a list of dicts, each with ``located`` [lower, upper]
+        ("continuation", or "bisection (why the continuation did not)"), ``fmu_periods``.
     """
     geometric = bool(grid[0] > 0)  # an even grid reaching sigma <= 0 is marched in even steps
     fams = families_from_scans(grid, ds, M_max, geometric)
@@ -336,6 +365,7 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
                           "multipliers_inside": r.get("multipliers"), "v_c": r.get("v_c"),
                           "multipliers_near_lower_edge": lo.multipliers,
                           "multipliers_near_upper_edge": hi.multipliers,
+                          "located": r.get("located"),
                           "xtol": xtol_rel * (abs(f.seed_sigma) if relative else 1.0)})
         out["all"].append(entry)
         if f.impacts == 1 and r["resolved"]:

@@ -55,8 +55,11 @@ def _all_windows_table(res: dict[str, Any], f: str) -> list[str]:
 
 def _located(e: dict[str, Any]) -> str:
     """' (lower edge: the flip of period 2 (2/1))' where an edge was located once for two windows."""
-    by = e.get("located_by") or {}
-    return "".join(f" ({'lower' if k == 'lo' else 'upper'} edge: {v})" for k, v in by.items())
+    by = dict(e.get("located_by") or {})
+    for k, how in zip(("lo", "hi"), e.get("located") or ()):
+        if how.startswith("bisection") and k not in by:
+            by[k] = how  # not located by the continuation: said, never silently
+    return "".join(f" ({'lower' if k == 'lo' else 'upper'} edge: {by[k]})" for k in ("lo", "hi") if k in by)
 
 
 def _how_found(ctx: Context, problem: Any, res: dict[str, Any], title: str | None) -> list[str]:
@@ -78,13 +81,17 @@ def _how_found(ctx: Context, problem: Any, res: dict[str, Any], title: str | Non
         f"From the ODE alone: quasi-static up and down scans of the FMU over sigma in [{g0:.4g}, {g1:.4g}] "
         f"({grid_txt}, {p['transient']} transient periods per point, periods classified up to "
         f"{p['M_scan_limit']}) give every stable periodic orbit with impacts that they reach; each (period M, "
-        "impacts per period) seen is then followed by Newton shooting on the FMU's stroboscopic M-period map "
-        f"(phase {problem.theta}, {p['shooting_derivatives']} Jacobian) to both of its edges, marching beyond the "
-        f"scan grid if need be (search range [{p['shooting_sigma_range'][0]:.4g}, {p['shooting_sigma_range'][1]:.4g}]). "
-        "An orbit belongs to the window while Newton converges to it, it is stable, has the same number of impacts "
-        "per period and minimal period M. Each edge is the midpoint of a bracket that the shooting found and "
-        f"bisected to xtol ({p['shooting_xtol_rule']}: {_fmt_tol(p['shooting_xtol'])}); an edge it could not "
-        "bracket inside the search range is reported as beyond it, never as a number. Windows narrower than the "
+        "impacts per period) seen is then solved by Newton on the FMU's stroboscopic M-period map "
+        f"(phase {problem.theta}, {p['shooting_derivatives']} Jacobian) and continued in sigma both ways (pseudo-"
+        f"arclength, as `continue` does; search range [{p['shooting_sigma_range'][0]:.4g}, "
+        f"{p['shooting_sigma_range'][1]:.4g}]). An orbit belongs to the window while it is stable, has the same "
+        "number of impacts per period and minimal period M; each edge is the first event on the way: a flip or fold "
+        "located on its test function (det(D + I), det(D - I)) to 1e-9, a graze on its defining quantity (the gap of "
+        "a free passage, the entry velocity of a contact, reaching 0), reported as the midpoint of an interval that "
+        "holds it, in quick and full runs alike. Where the continuation could not settle an edge, the edge is the "
+        "midpoint of a bracket marched and bisected to xtol "
+        f"({p['shooting_xtol_rule']}: {_fmt_tol(p['shooting_xtol'])}), and the table of every window says so; an "
+        "edge not found inside the search range is reported as beyond it, never as a number. Windows narrower than the "
         "scan step can be missed by the scans: the maps' windows that the scans did not see were tried as extra "
         "Newton starts (marked 'map-guided start'); the ODE decides whether the orbit is there.",
         "",

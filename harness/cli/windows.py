@@ -21,8 +21,9 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "windows", help="window edges of the maps vs the ODE (FMU) for any parameter set, with a report",
         description="For (alpha, gamma) or (nu, Omega), r and a wall: the sigma-edges of the stable maximal "
-        "period-M windows from (64), the 2D map (37)/(38), the 2D map with A~(sigma), and the ODE (FMU; Newton "
-        "shooting, every edge bracketed and bisected, confirmed by up/down scans). Writes report.md, windows.json "
+        "period-M windows from (64), the 2D map (37)/(38), the 2D map with A~(sigma), and the ODE (FMU; every "
+        "orbit the up/down scans see continued in sigma to its edges, each edge located on its defining equation: "
+        "flips and folds on their test functions, grazes on the gap or impact velocity). Writes report.md, windows.json "
         "(fig9.json's format), PNG plots and the scans' NetCDF into --out.")
     g = p.add_argument_group("parameter set: --alpha/--gamma, or --nu/--Omega (below)")
     g.add_argument("--alpha", type=float, help="map parameter alpha of (9), in (0, 1)")
@@ -39,15 +40,20 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
                    help="sigma interval of the scans and the shooting, negative values allowed (--sigma-range=-0.2:1; "
                    "default: 1e-3 to 3, widened to the maps' windows, edges followed down to 1e-4 and up to 12)")
     s.add_argument("--xtol", type=positive, metavar="DS",
-                   help="absolute bisection tolerance of every edge, in sigma (default: 1e-4 x the window's sigma, "
-                   "1e-3 with --quick; with a --sigma-range reaching sigma <= 0: 1e-8 x its width, 1e-6 quick)")
+                   help="absolute tolerance, in sigma, of the march-and-bisection fallback, used only for an edge the "
+                   "continuation could not locate (the report and windows.json's 'located' say which); edges located "
+                   "by the continuation are located to 1e-9 (flips, folds) or within an interval of ~1e-8 (grazes) "
+                   "whatever this is, with --quick too (default: 1e-4 x the window's sigma, 1e-3 with --quick; with "
+                   "a --sigma-range reaching sigma <= 0: 1e-8 x its width, 1e-6 quick)")
     theta_option(s)
     s.add_argument("--M-max", type=_m_max, default=None, dest="M_max", metavar="{auto,1..12}",
                    help="highest period; auto (default): until period adding truncates (no stable window at M "
                    "and M + 1)")
     o = p.add_argument_group("run")
     o.add_argument("--out", "-o", metavar="DIR", default="results/windows", help="output directory")
-    o.add_argument("--quick", action="store_true", help="coarse scans and tolerances (seconds to a minute)")
+    o.add_argument("--quick", action="store_true", help="coarse scans (fewer points, shorter transients) and a "
+                   "coarser fallback bisection (seconds to a minute); the edges located by the continuation are as "
+                   "exact as without it")
     o.add_argument("--workers", "-j", type=int, metavar="N", help="worker processes (default: up to 2)")
     o.add_argument("--fmu", metavar="PATH", help="FMU (default build/fmu/ImpactOscillator.fmu)")
     o.add_argument("--no-progress", action="store_true", help="no progress bars")

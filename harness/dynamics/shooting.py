@@ -120,7 +120,8 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
                  guess_of: Callable[[float], np.ndarray | None], sigma_range: tuple[float, float],
                  dp: float, xtol: float, newton: Mapping[str, Any] | None = None,
                  geometric: bool = False, accept: Callable[[PeriodicOrbit], bool] | None = None,
-                 kind_of: Callable[[PeriodicOrbit | None, int], str] | None = None) -> tuple[Edge, Edge]:
+                 kind_of: Callable[[PeriodicOrbit | None, int], str] | None = None,
+                 sides: tuple[bool, bool] = (True, True)) -> tuple[Edge | None, Edge | None]:
     """Lower and upper sigma-edges of the stable maximal period-M window containing
     ``sigma_in``.
 
@@ -150,12 +151,18 @@ def window_edges(smap: StroboscopicMap, M: int, sigma_in: float, w_in: np.ndarra
     kind_of : callable, optional
         (orbit beyond the edge or None, wall entries of the last good orbit iterated there)
         -> the edge's kind (default: :func:`mapcheck.orbits.edge_kind`, for maximal orbits).
+    sides : (bool, bool)
+        Which of (lower, upper) to search; a side not searched is returned as None (the other
+        was located another way, :mod:`harness.analysis.located_edges`).
     """
     ok, orb = good_orbit(smap, M, sigma_in, [w_in, guess_of(sigma_in)], newton, accept)
     if not ok or orb is None:
         raise ValueError(f"no stable maximal period-{M} orbit found at sigma = {sigma_in}")
     edges = []
-    for direction, limit in ((-1.0, sigma_range[0]), (+1.0, sigma_range[1])):
+    for direction, limit, wanted in ((-1.0, sigma_range[0], sides[0]), (+1.0, sigma_range[1], sides[1])):
+        if not wanted:
+            edges.append(None)
+            continue
         search = _EdgeSearch(smap, M, direction, sigma_in, orb, guess_of, newton, accept)
         if not search.march(limit, dp, geometric):
             # no bracket inside the range: unresolved, never a number
@@ -202,6 +209,14 @@ class _EdgeSearch:
             (s1, z1), (s2, z2) = self.history[-2], self.history[-1]
             if s2 != s1:
                 out.append(z2 + (z2 - z1) * (s - s2) / (s2 - s1))
+        else:
+            # no secant yet: the orbit scaled with the forcing amplitude 1 + sigma.  Far above
+            # grazing an impacting orbit lies O(sigma) from the wall-free one (w ~ (1 + sigma) c:
+            # the oscillator is nearly scale-invariant), so the last orbit unchanged, a few per cent
+            # away in sigma, can miss the wall for a whole period, where the map is the free linear
+            # one and Newton jumps to its fixed point, the wall-free orbit (Figure 9's period 1 at
+            # Gamma = 48.9, sigma = 16: "lost")
+            out.append(anchor * (1.0 + s) / (1.0 + self.s_good))
         return out + [anchor, self.guess_of(s)]
 
     def probe(self, s: float) -> None:
@@ -238,9 +253,9 @@ class _EdgeSearch:
         which could be a guide's edge), with its kind."""
         s_good, s_bad, o_good, o_bad, M = self.s_good, self.s_bad, self.o_good, self.o_bad, self.M
         if kind_of is not None:
-            n_iter = -1
-            if o_bad is None or not o_bad.converged:
-                _, n_iter = self.smap.iterate(s_bad, _rotate_to_impact(o_good, M), M)
+            # the last good orbit run M periods beyond the edge: its wall entries decide where
+            # Newton found nothing there, or fell onto another orbit (the kind checks that)
+            _, n_iter = self.smap.iterate(s_bad, _rotate_to_impact(o_good, M), M)
             kind = kind_of(o_bad, n_iter)
         else:
             kind = edge_kind(o_bad) if o_bad is not None else "lost"
