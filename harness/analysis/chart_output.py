@@ -140,7 +140,7 @@ def _all_curves(w: dict[str, Any]) -> list[tuple[str, Any]]:
 
 
 def tolerance_text(problem: ChartProblem) -> str:
-    """The edges' bisection tolerance in words: absolute where ``--xtol`` set one."""
+    """The fallback bisection's tolerance in words: absolute where ``--xtol`` set one."""
     return f"{problem.xtol_rel:g} x sigma" if problem.xtol is None else f"{problem.xtol:g} in sigma"
 
 
@@ -221,8 +221,10 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
                          f"(one side: {b['one_side']}, other: {b['other_side']})" for b in bad[:6])))
     lines += ["", "## Brute-force check: windows measured per value", "",
               f"For {len(problem.values)} values, up/down scans of the FMU over sigma in [{g[0]:.3g}, {g[-1]:.3g}] "
-              f"({len(g)} points, {'geometric' if g[0] > 0 else 'evenly spaced'}), every attractor seen shot by Newton to its edges (bisected to "
-              f"{tolerance_text(problem)}). Where a window disappears is bracketed between neighbouring values.", "",
+              f"({len(g)} points, {'geometric' if g[0] > 0 else 'evenly spaced'}), every attractor seen continued in sigma by Newton shooting to its edges (located as `continue` "
+              "locates events: flips and folds on their test functions, grazes on their defining quantity; where the "
+              f"continuation fails, marched and bisected to {tolerance_text(problem)}, said per window in chart.json's "
+              "`located`). Where a window disappears is bracketed between neighbouring values.", "",
               "| M | present at | disappears (bracket) | edge kinds at the last value | beta range |",
               "|---|---|---|---|---|"]
     for M, cv in res["scans"].items():
