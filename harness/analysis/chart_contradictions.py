@@ -14,8 +14,8 @@ At each scanned value and for each window (period M with one impact, and the wal
   known orbit points (the continued curves' points at the nearest p2, the scans' own states).  Found:
   the route that saw the window is right; not found: the other, with the search's extent recorded.
 * **edges**: where both see it, each edge pair differing by more than the tolerance (twice the
-  scans' bisection tolerance, at least 1e-3 x |sigma|: the continued edge is interpolated between
-  its points) is shot at the midpoint sigma between the two: a stable orbit with the window's
+  scans' tolerance, at least 1e-3 x |sigma|, plus the chord error of the continued edge, which is
+  read between two points of its curve: :mod:`.curve_interpolation`) is shot at the midpoint sigma between the two: a stable orbit with the window's
   contacts there says the route with the wider window is right, none says the narrower one.
 
 :func:`contradictions` returns chart.json's ``contradictions``; :func:`contradiction_lines` the
@@ -28,7 +28,8 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from .chart_wall_free import WALL_FREE, continued_intervals, why_not_continued, window_key_label
+from .chart_wall_free import WALL_FREE, _stretch_at, continued_intervals, why_not_continued, window_key_label
+from .curve_interpolation import chord_error
 
 __all__ = ["scan_seeds", "search_orbit", "contradictions", "contradiction_lines", "cross_checks", "count_line", "EDGE_REL"]
 
@@ -184,7 +185,9 @@ def _edges(sim: Any, problem: Any, v: float, key: str, c: Mapping[str, Any], e: 
     for side, s_c, s_s, j in (("lower", c["lo"], e["lo"], 0), ("upper", c["hi"], e["hi"], 1)):
         if s_c is None or s_s is None:
             continue
-        tol = max(2.0 * float(e.get("xtol") or 0.0), EDGE_REL * abs(s_c), 1e-9)
+        # the continued edge is read on a chord of its curve: the chord's own error widens the tolerance
+        chord = chord_error(_stretch_at(c["window"], v)[1].get(side), v, v > 0)
+        tol = max(2.0 * float(e.get("xtol") or 0.0), EDGE_REL * abs(s_c), 1e-9) + chord
         if abs(s_s - s_c) <= tol:
             continue
         mid = 0.5 * (s_s + s_c)
@@ -195,6 +198,7 @@ def _edges(sim: Any, problem: Any, v: float, key: str, c: Mapping[str, Any], e: 
         narrower = "continuation" if wider == "scans" else "scans"
         out.append({"p2": v, "window": key, "label": window_key_label(key), "type": "edge", "side": side,
                     "continued_edge": s_c, "scan_edge": s_s, "scan_kind": e["kinds"][j], "tolerance": tol,
+                    "chord_error": chord,
                     "right": wider if ev["found"] else narrower, "evidence": ev})
     return out
 
@@ -214,7 +218,7 @@ def contradictions(source: Any, problem: Any, windows: Sequence[Mapping[str, Any
     n_pres = n_edge = 0
     for res in per_value:
         v = float(res["value"])
-        cont_all = continued_intervals(windows, v, closes)
+        cont_all = continued_intervals(windows, v, closes, g1)
         for key in keys:
             M, impacts = (1, 0) if key == WALL_FREE else (int(key), 1)
             cont = [c for c in cont_all if c["M"] == M and c["impacts"] == impacts and _in_grid(c["lo"], c["hi"], g0, g1)]
@@ -260,7 +264,8 @@ def contradiction_lines(con: Mapping[str, Any], param2: str) -> list[str]:
         return []  # a chart.json from before the check
     what = (f"presence of {len(cmp_['windows'])} windows ({', '.join(window_key_label(k) for k in cmp_['windows'])}) "
             f"at {cmp_['values']} values of {param2} ({cmp_['presence']} comparisons) and {cmp_['edges']} edges "
-            f"(tolerance: 2 x the scans' bisection tolerance, at least {cmp_['edge_rel']:g} x |sigma|)")
+            f"(tolerance: 2 x the scans' tolerance, at least {cmp_['edge_rel']:g} x |sigma|, plus the continued edge's "
+            "chord error: it is read between two points of its curve)")
     lines = ["## Contradictions between the continuation and the per-value scans", ""]
     if not con["found"]:
         return lines + [f"None: compared the {what}; the two routes agree.", ""]

@@ -221,10 +221,8 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
                          f"(one side: {b['one_side']}, other: {b['other_side']})" for b in bad[:6])))
     lines += ["", "## Brute-force check: windows measured per value", "",
               f"For {len(problem.values)} values, up/down scans of the FMU over sigma in [{g[0]:.3g}, {g[-1]:.3g}] "
-              f"({len(g)} points, {'geometric' if g[0] > 0 else 'evenly spaced'}), every attractor seen continued in sigma by Newton shooting to its edges (located as `continue` "
-              "locates events: flips and folds on their test functions, grazes on their defining quantity; where the "
-              f"continuation fails, marched and bisected to {tolerance_text(problem)}, said per window in chart.json's "
-              "`located`). Where a window disappears is bracketed between neighbouring values.", "",
+              f"({len(g)} points, {'geometric' if g[0] > 0 else 'evenly spaced'}), every attractor seen continued in sigma to its edges (located as `continue` locates events; where the "
+              f"continuation fails, bisected to {tolerance_text(problem)}, said in chart.json's `located`). Where a window disappears is bracketed between neighbouring values.", "",
               "| M | present at | disappears (bracket) | edge kinds at the last value | beta range |",
               "|---|---|---|---|---|"]
     for M, cv in res["scans"].items():

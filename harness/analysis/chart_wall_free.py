@@ -147,11 +147,14 @@ def closing_of(w: Mapping[str, Any], windows: Sequence[Mapping[str, Any]],
 
 
 def continued_intervals(windows: Sequence[Mapping[str, Any]], v: float,
-                        closes: Mapping[str, Any] | None = None) -> list[dict[str, Any]]:
+                        closes: Mapping[str, Any] | None = None,
+                        sigma_top: float | None = None) -> list[dict[str, Any]]:
     """The continued windows at ``v``: ``{"M", "impacts", "lo", "hi", "window"}`` (an edge None: open,
     the branch left the range stable) for each window whose edges exist there, before its closing
     (:func:`closing_of`).  A window whose edge curve does not reach ``v`` (failed, ended, turned) is
-    not there by this route."""
+    not there by this route, except an upper edge whose curve left the range upward, above
+    ``sigma_top``, before ``v``: the window is open above there (Figure 9's period 2 past
+    Gamma = 1102, where its graze edge runs off to large sigma)."""
     out = []
     for w in windows:
         closes_at = closing_of(w, windows, closes)
@@ -164,11 +167,28 @@ def continued_intervals(windows: Sequence[Mapping[str, Any]], v: float,
                 ends.append(None)  # open: no edge in the range at the start, none later
                 continue
             s = _edge_at_end(curves.get(side), v)
+            if s is None and side == "upper" and _left_upward(curves.get(side), v, sigma_top):
+                ends.append(None)
+                continue
             ends.append(s if s is not None else "missing")
         if "missing" in ends:
             continue
         out.append({"M": w["M"], "impacts": w.get("impacts", 1), "lo": ends[0], "hi": ends[1], "window": w})
     return out
+
+
+def _left_upward(curve: Mapping[str, Any] | None, v: float, sigma_top: float | None) -> bool:
+    """The curve ran monotonically (no turning point) out of the sigma range upward, above
+    ``sigma_top``, before reaching ``v``."""
+    if sigma_top is None or not curve or "failed" in curve or len(curve.get("p2", ())) < 2:
+        return False
+    end, p2 = curve["end"], curve["p2"]
+    if end.get("reason") != "range" or float(end["sigma"]) <= sigma_top:
+        return False
+    if any(t.get("side") in ("max", "min") for t in curve.get("turns", [])):
+        return False
+    rising = p2[-1] > p2[0]
+    return v > p2[-1] if rising else v < p2[-1]
 
 
 def _stretch_at(w: Mapping[str, Any], v: float) -> tuple[Mapping[str, Any], Mapping[str, Any]]:
@@ -231,7 +251,7 @@ def coexistence_by_value(values: Sequence[float], per_value: Sequence[Mapping[st
     out = []
     for v, res in zip(values, per_value):
         scans = coexistence([e for e in res["all"] if e.get("resolved")], search)
-        cont = coexistence([{**c, "resolved": True} for c in continued_intervals(windows, float(v), closes)], search)
+        cont = coexistence([{**c, "resolved": True} for c in continued_intervals(windows, float(v), closes, search[1])], search)
         for c in scans:
             twin = next((d for d in cont if d["keys"] == c["keys"] and _overlap(c, d)), None)
             out.append({"p2": float(v), **c, "routes": ["scans"] + (["continuation"] if twin else []),
