@@ -16,6 +16,9 @@
  * for k = 1). With g = +-(u - wall) the side indicator (> 0: crossed), an interval [L, R] is
  *   - excluded if the Taylor bound from both ends, max(g_L + |g'_L| h/2, g_R + |g'_R| h/2)
  *     + M_2 h^2/8, is negative: no contact inside;
+ *   - else, if g' keeps one sign on it (g'_L + g'_R > M_2 h in that sign, since
+ *     g' >= (g'_L + g'_R - M_2 h)/2 there), g is monotone: a crossing is a sign change of g
+ *     (its only one), located as below;
  *   - else, if u'' = a keeps one sign on it (a_L + a_R > M_3 h in that sign), g' is monotone:
  *     g has at most one turning point, located by a root of g', and on the (at most two)
  *     monotone pieces a crossing is a sign change of g, located by a safeguarded Newton
@@ -297,9 +300,17 @@ static int first_crossing(const Seg *sg, double sgn, double s_end, int released,
         const double aL = sgn * L.a, aR = sgn * R.a;
         const int monotone_rate = (aL > 0.0 && aR > 0.0 && aL + aR > sg->M[3] * hh) ||
                                   (aL < 0.0 && aR < 0.0 && -(aL + aR) > sg->M[3] * hh);
+        /* g' >= (g'_L + g'_R - M_2 h)/2 on [L, R] (file comment): g itself monotone */
+        const int monotone_side = (dL > 0.0 && dR > 0.0 && dL + dR > sg->M[2] * hh) ||
+                                  (dL < 0.0 && dR < 0.0 && -(dL + dR) > sg->M[2] * hh);
         const int tiny = hh <= 4.0 * DBL_EPSILON * (1.0 + fabs(sg->tau_a + L.s));
         if (ub < 0.0) {
             /* no contact inside */
+        } else if (monotone_side) {
+            if (gL <= 0.0 && gR > 0.0) { /* the only sign change */
+                bracket_root(sg, sgn, 0, L, R, hit);
+                return 1;
+            }
         } else if (monotone_rate || tiny) {
             if (dL * dR < 0.0 && monotone_rate) { /* one turning point: split there */
                 bracket_root(sg, sgn, 1, L, R, &T);
