@@ -54,7 +54,7 @@ def child(spec: dict) -> dict:
 
     # xarray imports dask on its first Dataset (to tell dask arrays apart), 0.1 s: an import,
     # like the interpreter's start, not part of either path's scan
-    xr.Dataset({"warm": ("i", np.zeros(1))})
+    xr.Dataset({"warm": ("i", np.zeros(1))}, coords={"i": [0.0]})
     model = FmuModel(FMU)
     s = SamplingSpec(theta=0.0, n_transient=150, n_samples=30)
     u0, v0 = np.linspace(BOX[0], BOX[1], spec["n"]), np.linspace(BOX[2], BOX[3], spec["n"])
