@@ -8,11 +8,11 @@ form in C, all cores) with early stopping, in tiles, resumable, locally or on Da
    :func:`harness.runs.basin_scan.default_match_tol` does.
 2. *Tiles*: the grid in tiles of ``tile_size`` starts, each run by the kernel with the
    attractors known when it was sent: a start stops as soon as its stroboscopic state lands
-   within the tolerance of an attractor's point when every attractor's balls all reached it,
-   else once its orbit comes round an attractor twice (:mod:`harness.fmu.batch_kernel`,
-   :mod:`.basin_registry`); the others run the
-   whole transient and are classified from their samples (:mod:`.basin_tiles`), their new
-   attractors registered (:mod:`.basin_registry`).  Each finished tile is checkpointed.
+   within the tolerance of a point of an attractor whose balls all reached it, or once its
+   orbit comes round any attractor twice (:mod:`harness.fmu.batch_kernel`,
+   :mod:`.basin_registry`); the others run the whole transient and are classified from their
+   samples (:mod:`.basin_tiles`), their new attractors registered (:mod:`.basin_registry`).
+   Each finished tile is checkpointed.
 3. *Assembly*: labels relabelled by basin size, as :func:`harness.runs.basin_scan.run_basins`
    stores them, plus the periods each start ran and Newton's verdict per attractor.
 """
