@@ -220,24 +220,13 @@ static double side_rate(const Seg *sg, double sgn, const Pt *p) {
     return sgn * (p->v - sg->md->wall1);
 }
 
-/* The rounding noise of side (which = 0) or side_rate (which = 1) at p: a few ulps of the terms
- * seg_eval sums to get u (or v) and of the wall's position. Where |f| is below it, p is the
- * root to working accuracy: further Newton steps only wander inside that band. */
-static double side_noise(const Seg *sg, int which, const Pt *p) {
-    const Mode *md = sg->md;
-    const double q = fabs(md->amp) * (fabs(md->gr) + fabs(md->gi)) * (fabs(p->dcos) + fabs(p->dsin));
-    const double t = which ? fabs(sg->v_a) + fabs(p->E[1][0] * sg->wu) + fabs(p->E[1][1] * sg->wv) +
-                                 TWO_PI * q + fabs(md->wall1)
-                           : fabs(sg->u_a) + fabs(p->E[0][0] * sg->wu) + fabs(p->E[0][1] * sg->wv) + q +
-                                 fabs(md->p1 * p->s) + fabs(md->wall0) +
-                                 fabs(md->wall1 * (sg->tau_a + p->s - md->tref));
-    return 8.0 * DBL_EPSILON * t;
-}
-
 /* Root of f = side (which = 0) or side_rate (which = 1) on [lo, hi], where f is monotone with
  * f(lo) <= 0 < f(hi) (which = 0) or a sign change (which = 1): Newton's iteration on the exact
- * solution, kept inside the bracket (bisection when it leaves it), until the step is below
- * rounding in s or |f| below its rounding noise (side_noise). */
+ * solution, kept inside the bracket (bisection when it leaves it), until the step or the
+ * bracket is below rounding in s. A Newton step below rounding ends it at once: taken, it
+ * rounds onto the end of the bracket Newton came from, which counted as leaving the bracket
+ * and restarted a bisection of the whole bracket (30 more evaluations at a contact exit on
+ * Figure 7's orbits, converging to the same root). */
 static void bracket_root(const Seg *sg, double sgn, int which, Pt lo, Pt hi, Pt *out) {
     double flo = which ? side_rate(sg, sgn, &lo) : side(sg, sgn, &lo);
     const double up = flo <= 0.0 ? 1.0 : -1.0; /* orient so that f(lo) <= 0 */
@@ -245,15 +234,12 @@ static void bracket_root(const Seg *sg, double sgn, int which, Pt lo, Pt hi, Pt 
     for (int it = 0; it < 100; ++it) {
         const double f = up * (which ? side_rate(sg, sgn, &x) : side(sg, sgn, &x));
         const double df = up * sgn * (which ? x.a : x.v - sg->md->wall1);
-#ifndef CF_NO_NOISE
-        if (fabs(f) <= side_noise(sg, which, &x)) break;
-#else
         if (f == 0.0) break;
-#endif
         if (f < 0.0) lo = x;
         else hi = x;
         const double tol = 2.0 * DBL_EPSILON * fabs(x.s) + 1e-300;
         if (hi.s - lo.s <= 2.0 * DBL_EPSILON * fabs(hi.s) + 1e-300) break;
+        if (fabs(f) <= tol * fabs(df)) break; /* Newton's step below rounding: x is the root */
         double xn = x.s - f / df;
         if (!(xn > lo.s && xn < hi.s) || !isfinite(xn)) xn = 0.5 * (lo.s + hi.s);
         const double step = fabs(xn - x.s);
