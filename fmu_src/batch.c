@@ -7,12 +7,12 @@
  * points are the FMU's closed-form mode's, bit for bit.
  *
  * Early stopping (recurrence on the stroboscopic section). The caller passes the attractors
- * found so far: per attractor its period p, its p stroboscopic points in orbit order and the
- * wall entries of the period that ends on each point. After every period the state is compared
- * with them in the max norm; a start whose state lands within `tol` (the tolerance the
- * attractors are told apart with) of point j of an attractor, and then on point j+1, j+2, ...
- * (cyclically) with the right wall entries each period, for `confirm` periods in a row, is
- * labelled with that attractor and stops. Any other start runs the whole transient and its
+ * found so far: per attractor its period p, its p stroboscopic points in orbit order, the
+ * wall entries of the period that ends on each point and how many periods in a row confirm it.
+ * After every period the state is compared with them in the max norm; a start whose state
+ * lands within `tol` (the tolerance the attractors are told apart with) of point j of an
+ * attractor, and then on point j+1, j+2, ... (cyclically) with the right wall entries each
+ * period, for that attractor's `confirm` periods in a row, is labelled with it and stops. Any other start runs the whole transient and its
  * samples come back to the caller, which classifies them (and so finds new attractors).
  *
  * Starts are independent: OpenMP spreads them over `threads` threads (dynamic schedule: early
@@ -99,7 +99,7 @@ typedef struct {
     const double *points;  /* [n][width][2] */
     const int *entries;    /* [n][width]: wall entries of the period that ends on the point */
     double tol;
-    int confirm;
+    const int *confirm;    /* [n]: consecutive periods on the orbit that recognise a start */
 } Known;
 
 /* The point j of an attractor whose state z is within tol of it (with the same wall entries),
@@ -183,7 +183,7 @@ static Outcome run_start(const ModelData *m0, double u0, double v0, double theta
             cand = find_point(known, m.u, m.v, entries, &cj);
             run = cand >= 0;
         }
-        if (cand >= 0 && run >= known->confirm) {
+        if (cand >= 0 && run >= (known->confirm[cand] < 1 ? 1 : known->confirm[cand])) {
             o.label = cand;
             o.status = BATCH_MATCHED;
             break;
@@ -194,7 +194,7 @@ static Outcome run_start(const ModelData *m0, double u0, double v0, double theta
 }
 
 /* Library version: the loader refuses a stale build. */
-BATCH_EXPORT int impact_batch_version(void) { return 1; }
+BATCH_EXPORT int impact_batch_version(void) { return 2; }
 
 BATCH_EXPORT int impact_batch_threads(void) {
 #ifdef _OPENMP
@@ -206,7 +206,8 @@ BATCH_EXPORT int impact_batch_threads(void) {
 
 /*
  * Runs n starts (u0[i], v0[i]) at t = theta for n_transient + n_samples periods each, or until
- * recognised as one of the n_known attractors (file comment; n_known = 0: no early stop).
+ * recognised as one of the n_known attractors (file comment; n_known = 0: no early stop;
+ * confirm[a] < 1 counts as 1).
  * Outputs per start: label (the attractor, or -1), periods run, status (BATCH_*), and the
  * samples of the last n_samples periods (u, v, wall entries, sticking at the sample), left as
  * they were for periods not reached. Returns 0, or -1 with err set: the parameters are refused
@@ -216,15 +217,14 @@ BATCH_EXPORT int impact_batch_run(int n_params, const char *const *names, const 
                                   long n, const double *u0, const double *v0, double theta,
                                   int n_transient, int n_samples, int n_known, int width,
                                   const int *known_period, const double *known_points,
-                                  const int *known_entries, double tol, int confirm, int threads,
+                                  const int *known_entries, double tol, const int *confirm, int threads,
                                   int *label, int *periods, int *status, double *u_out,
                                   double *v_out, int *imp_out, unsigned char *stuck_out, char *err,
                                   int errlen) {
     ModelData m0;
     err[0] = '\0';
     if (build_model(&m0, n_params, names, values, err, errlen) != 0) return -1;
-    const Known known = {n_known, width, known_period, known_points, known_entries, tol,
-                         confirm < 1 ? 1 : confirm};
+    const Known known = {n_known, width, known_period, known_points, known_entries, tol, confirm};
     int failed = 0;
 #ifdef _OPENMP
 #pragma omp parallel for schedule(dynamic, 8) num_threads(threads > 0 ? threads : 1)

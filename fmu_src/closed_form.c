@@ -16,6 +16,9 @@
  * for k = 1). With g = +-(u - wall) the side indicator (> 0: crossed), an interval [L, R] is
  *   - excluded if the Taylor bound from both ends, max(g_L + |g'_L| h/2, g_R + |g'_R| h/2)
  *     + M_2 h^2/8, is negative: no contact inside;
+ *   - else, if g' keeps one sign on it (g'_L + g'_R > M_2 h in that sign, since
+ *     g' >= (g'_L + g'_R - M_2 h)/2 there), g is monotone: a crossing is a sign change of g
+ *     (its only one), located as below;
  *   - else, if u'' = a keeps one sign on it (a_L + a_R > M_3 h in that sign), g' is monotone:
  *     g has at most one turning point, located by a root of g', and on the (at most two)
  *     monotone pieces a crossing is a sign change of g, located by a safeguarded Newton
@@ -190,10 +193,11 @@ static void seg_init(Seg *sg, const Mode *md, double tau_a, double u_a, double v
 static void seg_eval(const Seg *sg, double s, Pt *p) {
     const Mode *md = sg->md;
     prop_minus_identity(md, s, p->E);
-    const double half = M_PI * s;
-    double smid, cmid;
-    sincos(sg->th_a + half, &smid, &cmid);
-    const double sh = sin(half);
+    /* the phase at mid-step by the angle-sum formula from the anchor's sin and cos (seg_init):
+     * one sincos per evaluation instead of two, as accurate (absolute error ~ 1 ulp of 1) */
+    double sh, ch;
+    sincos(M_PI * s, &sh, &ch);
+    const double smid = sg->sa * ch + sg->ca * sh, cmid = sg->ca * ch - sg->sa * sh;
     p->dcos = -2.0 * sh * smid;
     p->dsin = 2.0 * sh * cmid;
     const double dqu = md->amp * (md->gr * p->dcos - md->gi * p->dsin) + md->p1 * s;
@@ -218,7 +222,11 @@ static double side_rate(const Seg *sg, double sgn, const Pt *p) {
 
 /* Root of f = side (which = 0) or side_rate (which = 1) on [lo, hi], where f is monotone with
  * f(lo) <= 0 < f(hi) (which = 0) or a sign change (which = 1): Newton's iteration on the exact
- * solution, kept inside the bracket (bisection when it leaves it). */
+ * solution, kept inside the bracket (bisection when it leaves it), until the step or the
+ * bracket is below rounding in s. A Newton step below rounding ends it at once: taken, it
+ * rounds onto the end of the bracket Newton came from, which counted as leaving the bracket
+ * and restarted a bisection of the whole bracket (30 more evaluations at a contact exit on
+ * Figure 7's orbits, converging to the same root). */
 static void bracket_root(const Seg *sg, double sgn, int which, Pt lo, Pt hi, Pt *out) {
     double flo = which ? side_rate(sg, sgn, &lo) : side(sg, sgn, &lo);
     const double up = flo <= 0.0 ? 1.0 : -1.0; /* orient so that f(lo) <= 0 */
@@ -231,6 +239,7 @@ static void bracket_root(const Seg *sg, double sgn, int which, Pt lo, Pt hi, Pt 
         else hi = x;
         const double tol = 2.0 * DBL_EPSILON * fabs(x.s) + 1e-300;
         if (hi.s - lo.s <= 2.0 * DBL_EPSILON * fabs(hi.s) + 1e-300) break;
+        if (fabs(f) <= tol * fabs(df)) break; /* Newton's step below rounding: x is the root */
         double xn = x.s - f / df;
         if (!(xn > lo.s && xn < hi.s) || !isfinite(xn)) xn = 0.5 * (lo.s + hi.s);
         const double step = fabs(xn - x.s);
@@ -241,7 +250,8 @@ static void bracket_root(const Seg *sg, double sgn, int which, Pt lo, Pt hi, Pt 
 }
 
 /* The first crossing to the far side (g > 0) in (0, s_end]: returns 1 with *hit the crossing
- * state, or 0. `released`: the segment starts at the release from sticking. */
+ * state, or 0 with *hit the state at s_end. `released`: the segment starts at the release from
+ * sticking. */
 static int first_crossing(const Seg *sg, double sgn, double s_end, int released, Pt *hit) {
     const Mode *md = sg->md;
     Pt L, R, T;
@@ -250,14 +260,25 @@ static int first_crossing(const Seg *sg, double sgn, double s_end, int released,
         /* a <= a_0 + j x + M_4 x^2/2 < 0 on (2 a_0/|j|, -j/M_4]: certified away from the wall */
         const double x = fmin(s_end, fabs(L.j) / sg->M[4]);
         seg_eval(sg, x, &L);
-        if (x >= s_end) return 0;
+        if (x >= s_end) {
+            *hit = L;
+            return 0;
+        }
     }
     const double h0 = fmin(0.25, 1.0 / fmax(TWO_PI, md->omega));
     double h = h0;
+    /* right ends of the last undecided steps: after a halving the search often comes back to
+     * one of them (same s, same state), which is then not evaluated again */
+    enum { KEPT = 4 };
+    Pt kept[KEPT];
+    int n_kept = 0, slot = 0;
     while (L.s < s_end) {
         const double sR = fmin(L.s + h, s_end);
         const double hh = sR - L.s;
-        seg_eval(sg, sR, &R);
+        int k = 0;
+        while (k < n_kept && kept[k].s != sR) ++k;
+        if (k < n_kept) R = kept[k];
+        else seg_eval(sg, sR, &R);
         const double gL = side(sg, sgn, &L), gR = side(sg, sgn, &R);
         const double dL = side_rate(sg, sgn, &L), dR = side_rate(sg, sgn, &R);
         const double ub = fmax(gL + fabs(dL) * 0.5 * hh, gR + fabs(dR) * 0.5 * hh) +
@@ -265,9 +286,17 @@ static int first_crossing(const Seg *sg, double sgn, double s_end, int released,
         const double aL = sgn * L.a, aR = sgn * R.a;
         const int monotone_rate = (aL > 0.0 && aR > 0.0 && aL + aR > sg->M[3] * hh) ||
                                   (aL < 0.0 && aR < 0.0 && -(aL + aR) > sg->M[3] * hh);
+        /* g' >= (g'_L + g'_R - M_2 h)/2 on [L, R] (file comment): g itself monotone */
+        const int monotone_side = (dL > 0.0 && dR > 0.0 && dL + dR > sg->M[2] * hh) ||
+                                  (dL < 0.0 && dR < 0.0 && -(dL + dR) > sg->M[2] * hh);
         const int tiny = hh <= 4.0 * DBL_EPSILON * (1.0 + fabs(sg->tau_a + L.s));
         if (ub < 0.0) {
             /* no contact inside */
+        } else if (monotone_side) {
+            if (gL <= 0.0 && gR > 0.0) { /* the only sign change */
+                bracket_root(sg, sgn, 0, L, R, hit);
+                return 1;
+            }
         } else if (monotone_rate || tiny) {
             if (dL * dR < 0.0 && monotone_rate) { /* one turning point: split there */
                 bracket_root(sg, sgn, 1, L, R, &T);
@@ -286,11 +315,15 @@ static int first_crossing(const Seg *sg, double sgn, double s_end, int released,
             }
         } else {
             h = 0.5 * hh; /* not decided: halve */
+            kept[slot] = R; /* the oldest goes */
+            slot = (slot + 1) % KEPT;
+            n_kept += n_kept < KEPT;
             continue;
         }
         L = R;
         h = fmin(2.0 * h, h0);
     }
+    *hit = L; /* at s_end: the caller's end state, not evaluated again */
     return 0;
 }
 
@@ -441,8 +474,9 @@ static int cf_advance_to(Stepper *st, ModelData *m, double t_end, int stop_at_ev
         int hit = 0;
         if (m->wall != WALL_NONE)
             hit = first_crossing(&sg, m->mode == MODE_CONTACT ? -1.0 : 1.0, s_end, released, &p);
+        else
+            seg_eval(&sg, s_end, &p);
         released = 0;
-        if (!hit) seg_eval(&sg, s_end, &p);
         if (m->sensitivities) propagate_sensitivities(m, md, &sg, &p);
         m->u = p.u;
         m->v = p.v;

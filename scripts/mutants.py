@@ -229,8 +229,9 @@ MUTANTS: tuple[Mutant, ...] = (
        "P[PU_F_CONTACT][PK_U_WALL] = P[PU_WALL_INDICATOR][PK_U_WALL] = -1.0;", DERIV,
        "sticking: the holding force's partial on u_wall without the spring's Omega^2"),
     # -- basins: the batch kernel's early stop, the labels of slow regions, the quantifiers --------
-    _m("M56", "fmu_src/batch.c", "if (cand >= 0 && run >= known->confirm) {", "if (cand >= 0) {", BASINS,
-       "early stop at the first point near an attractor, without following the orbit round"),
+    _m("M56", "fmu_src/batch.c", "if (cand >= 0 && run >= (known->confirm[cand] < 1 ? 1 : known->confirm[cand])) {",
+       "if (cand >= 0) {", BASINS,
+       "early stop at the first point near any attractor, its balls' verdict ignored"),
     _m("M57", "harness/runs/basin_tiles.py", "if np.any(stuck) or int(np.max(imp)) >= CHATTER_ENTRIES:",
        "if np.any(stuck):", BASINS, "a start chattering at its samples not labelled sticking/chatter"),
     _m("M58", "harness/analysis/basin_measures.py",
@@ -240,6 +241,8 @@ MUTANTS: tuple[Mutant, ...] = (
     _m("M59", "harness/analysis/basin_measures.py", "        diff |= (c != lab[m - j: nu - m - j, m: nv - m])",
        "        diff = (c != lab[m - j: nu - m - j, m: nv - m])", MEASURES,
        "eps-uncertain: only the neighbours at eps (the last axis direction), not within eps"),
+    _m("M60", "harness/runs/basin_ball.py", '"inside": bool(bad.size == 0)', '"inside": True', BASINS,
+       "every attractor's tolerance balls pass: one period labels starts also where a boundary is within tol"),
 )
 
 

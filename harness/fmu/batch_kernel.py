@@ -22,7 +22,7 @@ from .fmi import WALL_NAMES
 #: Per-start status codes of the kernel (``fmu_src/batch.c``).
 RAN, MATCHED, INVALID, FAILED, ESCAPED = 0, 1, 2, 3, 4
 LIBRARY_NAME = "libimpact_batch.so"
-_VERSION = 1
+_VERSION = 2
 _LIBS: dict[str, ctypes.CDLL] = {}
 
 
@@ -51,7 +51,7 @@ def load_library(path: str | Path | None = None) -> ctypes.CDLL:
     i32, f64, ptr = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
     lib.impact_batch_run.restype = i32
     lib.impact_batch_run.argtypes = [i32, ptr, ptr, ctypes.c_long, ptr, ptr, f64, i32, i32, i32, i32, ptr, ptr, ptr,
-                                     f64, i32, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, ctypes.c_char_p, i32]
+                                     f64, ptr, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, ctypes.c_char_p, i32]
     _LIBS[key] = lib
     return lib
 
@@ -92,13 +92,14 @@ class BatchResult:
 class KnownAttractors:
     """Attractors for the early stop: points (k, width, 2) in orbit order, NaN-padded, the wall
     entries of the period ending on each point (k, width), the periods (k,), the tolerance (max
-    norm) and how many consecutive periods on the orbit recognise a start."""
+    norm) and, per attractor (or one number for all), how many consecutive periods on the orbit
+    recognise a start."""
 
     points: np.ndarray
     entries: np.ndarray
     period: np.ndarray
     tol: float
-    confirm: int
+    confirm: np.ndarray | int
 
     @classmethod
     def none(cls, tol: float = 1.0) -> "KnownAttractors":
@@ -164,11 +165,12 @@ def run_batch(params: Mapping[str, Any], u0: np.ndarray, v0: np.ndarray, theta: 
     pts = np.ascontiguousarray(np.nan_to_num(known.points, nan=np.inf), dtype=np.float64)
     ent = np.ascontiguousarray(known.entries, dtype=np.int32)
     per = np.ascontiguousarray(known.period, dtype=np.int32)
+    confirm = np.ascontiguousarray(np.broadcast_to(np.asarray(known.confirm, dtype=np.int32), per.shape))
     err = ctypes.create_string_buffer(1024)
     a = lambda x: x.ctypes.data  # noqa: E731 - the arrays outlive the call
     rc = lib.impact_batch_run(len(names), c_names, a(c_values), n, a(u0), a(v0), float(theta), int(n_transient),
                               int(n_samples), per.size, pts.shape[1], a(per), a(pts), a(ent), float(known.tol),
-                              int(known.confirm), int(threads or default_threads()), a(out.label), a(out.periods),
+                              a(confirm), int(threads or default_threads()), a(out.label), a(out.periods),
                               a(out.status), a(out.u), a(out.v), a(out.impacts), a(out.stuck), err, len(err))
     out.error = err.value.decode(errors="replace")
     if rc != 0 and not np.any(out.status == FAILED):

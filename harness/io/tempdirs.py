@@ -42,15 +42,18 @@ def _alive(pid: int) -> bool:
 def remove_stale(base: str | os.PathLike | None = None) -> list[Path]:
     """Delete the folders of processes that died without cleaning up (SIGKILL); return them."""
     base = Path(base or tempfile.gettempdir())
-    removed = []
+    removed: list[Path] = []
     try:
-        entries = list(base.iterdir())
+        # names first, a Path only for ours: a shared /tmp can hold tens of thousands of
+        # entries, and a Path each cost 30 ms at every FMU extraction
+        names = [n for n in os.listdir(base) if n.startswith(PREFIX)]
     except OSError:
         return removed
-    for entry in entries:
-        m = _NAME.match(entry.name)
+    for name in names:
+        m = _NAME.match(name)
         if not m or int(m.group(1)) == os.getpid() or _alive(int(m.group(1))):
             continue
+        entry = base / name
         try:
             if entry.is_dir() and not entry.is_symlink() and entry.stat().st_uid == os.getuid():
                 shutil.rmtree(entry, ignore_errors=True)

@@ -3,13 +3,16 @@ form in C, all cores) with early stopping, in tiles, resumable, locally or on Da
 
 1. *Seed*: a strided subset of the grid (a 64th, 32 to 400 starts) runs in full; its
    periodic orbits become the first attractors (stroboscopic points, wall entries per period),
-   each confirmed by Newton shooting on the FMU.  The matching tolerance is fixed here, from
-   the seed's samples, as :func:`harness.runs.basin_scan.default_match_tol` does.
+   each confirmed by Newton shooting on the FMU and its tolerance balls run in full
+   (:mod:`.basin_ball`).  The matching tolerance is fixed here, from the seed's samples, as
+   :func:`harness.runs.basin_scan.default_match_tol` does.
 2. *Tiles*: the grid in tiles of ``tile_size`` starts, each run by the kernel with the
-   attractors known when it was sent: a start stops as soon as its orbit comes round an
-   attractor twice within the tolerance (:mod:`harness.fmu.batch_kernel`); the others run the
-   whole transient and are classified from their samples (:mod:`.basin_tiles`), their new
-   attractors registered (:mod:`.basin_registry`).  Each finished tile is checkpointed.
+   attractors known when it was sent: a start stops as soon as its stroboscopic state lands
+   within the tolerance of a point of an attractor whose balls all reached it, or once its
+   orbit comes round any attractor twice (:mod:`harness.fmu.batch_kernel`,
+   :mod:`.basin_registry`); the others run the whole transient and are classified from their
+   samples (:mod:`.basin_tiles`), their new attractors registered (:mod:`.basin_registry`).
+   Each finished tile is checkpointed.
 3. *Assembly*: labels relabelled by basin size, as :func:`harness.runs.basin_scan.run_basins`
    stores them, plus the periods each start ran and Newton's verdict per attractor.
 """
@@ -26,6 +29,7 @@ from ..config import SamplingSpec
 from ..dynamics.basins import Attractor, orbit_points
 from ..errors import HarnessInputError
 from ..fmu import batch_kernel as bk
+from .basin_ball import ball_checker
 from .basin_registry import Registry, TileCheckpoint, fingerprint
 from .basin_scan import MATCH_FACTOR, check_grid, with_attractors
 from .basin_tiles import BasinTile, label_result, run_tile
@@ -57,7 +61,7 @@ def _shooter(model: Any, params: Mapping[str, Any], theta: float) -> Any:
 
 
 def _seed(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: SamplingSpec, threads: int,
-          match_tol: float | None, shoot: Any) -> Registry:
+          match_tol: float | None, shoot: Any, ball: Any) -> Registry:
     """The first attractors, from a strided subset run in full."""
     n = min(us.size, max(SEED_MIN, min(SEED_MAX, int(us.size * SEED_SHARE))))
     idx = np.unique(np.linspace(0, us.size - 1, n).round().astype(int))
@@ -65,7 +69,7 @@ def _seed(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: Sampling
     if match_tol is None:
         finite = np.abs(np.concatenate([res.u[np.isfinite(res.u)], res.v[np.isfinite(res.v)]]))
         match_tol = MATCH_FACTOR * s.tol * (max(1.0, float(finite.max())) if finite.size else 1.0)
-    reg = Registry(match_tol, shoot)
+    reg = Registry(match_tol, shoot, ball=ball)
     reg.merge(label_result(res, s, reg.known()))
     return reg
 
@@ -152,8 +156,9 @@ def run_basins_kernel(model: Any, u0: Sequence[float], v0: Sequence[float], para
                        "tile": int(tile_size), "from": None if attractors_from is None else
                        attractors_from.attrs.get("basins.attractors")})
     ckpt = TileCheckpoint(checkpoint, key)
-    shoot = _shooter(model, params, s.theta)
-    reg = ckpt.registry(shoot) or _start_registry(attractors_from, params, us, vs, s, threads, match_tol, shoot)
+    shoot, ball = _shooter(model, params, s.theta), ball_checker(params, s, threads)
+    reg = ckpt.registry(shoot, ball) or _start_registry(attractors_from, params, us, vs, s, threads, match_tol,
+                                                        shoot, ball)
     ckpt.save_registry(reg)
     tiles = _tiles(us, vs, int(tile_size))
     grid = _Grid(us.size, dict(tiles), ckpt.done(), stats, progress)
@@ -209,13 +214,13 @@ def _backend(backend: Any, workers: int | None, scheduler: str | None) -> tuple[
 
 
 def _start_registry(attractors_from: xr.Dataset | None, params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray,
-                    s: SamplingSpec, threads: int, match_tol: float | None, shoot: Any) -> Registry:
+                    s: SamplingSpec, threads: int, match_tol: float | None, shoot: Any, ball: Any) -> Registry:
     if attractors_from is None:
-        return _seed(params, us, vs, s, threads, match_tol, shoot)
+        return _seed(params, us, vs, s, threads, match_tol, shoot, ball)
     from .basin_registry import Found
 
     found = json.loads(attractors_from.attrs["basins.registry"])
-    return Registry(float(attractors_from.attrs["basins.match_tol"]), shoot, [Found(**f) for f in found])
+    return Registry(float(attractors_from.attrs["basins.match_tol"]), shoot, [Found(**f) for f in found], ball)
 
 
 def _bar(progress: bool, total: int, initial: int) -> Any:
@@ -253,6 +258,14 @@ def _assemble(model: Any, u0: np.ndarray, v0: np.ndarray, raw: np.ndarray, perio
         ds[name] = ("attractor_index", np.array([float(x.get(key, np.nan)) for x in shots]), {"long_name": what})
     ds["attractor_sticks"] = ("attractor_index", np.array([reg.found[j].stuck for j in order]),
                               {"long_name": "the orbit sticks on the wall at a sample"})
+    ds["attractor_ball_inside"] = ("attractor_index", np.array([bool(reg.found[j].ball.get("inside", False))
+                                                                for j in order]),
+                                   {"long_name": "every start of a grid over the tolerance balls around the orbit's "
+                                                 "points reached it: one period within the tolerance labels a start"})
+    confirm = reg.known().confirm
+    ds["attractor_confirm_periods"] = ("attractor_index", np.array([int(confirm[j]) for j in order], dtype=np.int32),
+                                       {"long_name": "consecutive periods on the orbit that recognise a start "
+                                                     "(the scan's last tiles)"})
     attrs = provenance(settings or {}, model if hasattr(model, "sha256") else None, describe, wall)
     attrs.update(ds.attrs)
     attrs.update({"basins.kernel": "batch", "basins.tiles": n_tiles, "basins.tiles_resumed": resumed,

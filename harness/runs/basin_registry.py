@@ -23,6 +23,8 @@ from .checkpoint import CheckpointMismatch
 
 #: Consecutive periods on an attractor that recognise a start, per period of the attractor
 #: (at least MIN_CONFIRM): the orbit must come round twice, each point within the tolerance.
+#: The strict rule; one period is enough once every attractor's tolerance balls were run and
+#: all reached it (:mod:`.basin_ball`).
 CONFIRM_ROUNDS = 2
 MIN_CONFIRM = 4
 
@@ -37,6 +39,7 @@ class Found:
     entries: list[int]
     stuck: bool
     shot: dict[str, Any] = field(default_factory=dict)
+    ball: dict[str, Any] = field(default_factory=dict)  # .basin_ball.check_balls (empty: not run)
 
     @property
     def array(self) -> np.ndarray:
@@ -45,16 +48,19 @@ class Found:
 
 
 class Registry:
-    """The attractors found so far, matched within ``tol`` (max norm)."""
+    """The attractors found so far, matched within ``tol`` (max norm); ``shoot`` confirms a new
+    one by Newton on the FMU, ``ball`` runs its tolerance balls (:func:`.basin_ball.ball_checker`)."""
 
     def __init__(self, tol: float, shoot: Callable[[np.ndarray], dict[str, Any]] | None = None,
-                 found: list[Found] | None = None) -> None:
+                 found: list[Found] | None = None, ball: Callable[..., dict[str, Any]] | None = None) -> None:
         self.tol = float(tol)
         self.shoot = shoot
+        self.ball = ball
         self.found: list[Found] = list(found or [])
 
-    def known(self) -> KnownAttractors:
-        """The registry as the kernel's early-stop input."""
+    def known(self, strict: bool = False) -> KnownAttractors:
+        """The registry as the kernel's early-stop input: one period on an attractor whose
+        tolerance balls all reached it recognises a start, else (or ``strict``) two rounds."""
         n = len(self.found)
         width = max([f.period for f in self.found], default=1)
         pts = np.full((n, width, 2), np.nan)
@@ -62,7 +68,9 @@ class Registry:
         for a, f in enumerate(self.found):
             pts[a, : f.period] = f.array
             ent[a, : f.period] = f.entries
-        confirm = max(MIN_CONFIRM, CONFIRM_ROUNDS * width)
+        rounds = max(MIN_CONFIRM, CONFIRM_ROUNDS * width)
+        confirm = np.array([1 if f.ball.get("inside", False) and not strict else rounds for f in self.found],
+                           dtype=np.int32)
         return KnownAttractors(pts, ent, np.array([f.period for f in self.found], dtype=np.int32), self.tol, confirm)
 
     def add(self, c: Candidate) -> int:
@@ -74,6 +82,8 @@ class Registry:
         if self.shoot is not None:
             f.shot = self.shoot(c.points)
         self.found.append(f)
+        if self.ball is not None:  # with the strict rule, against every attractor known
+            f.ball = self.ball(self.known(strict=True), len(self.found) - 1)
         return len(self.found) - 1
 
     def merge(self, result: Mapping[str, Any]) -> np.ndarray:
@@ -113,13 +123,14 @@ class TileCheckpoint:
         tmp.write_bytes(data)
         os.replace(tmp, path)
 
-    def registry(self, shoot: Callable[[np.ndarray], dict[str, Any]] | None) -> Registry | None:
+    def registry(self, shoot: Callable[[np.ndarray], dict[str, Any]] | None,
+                 ball: Callable[..., dict[str, Any]] | None = None) -> Registry | None:
         """The stored registry (None: none yet)."""
         path = self.dir / "attractors.json" if self.dir else None
         if path is None or not path.exists():
             return None
         data = json.loads(path.read_text())
-        return Registry(data["tol"], shoot, [Found(**f) for f in data["found"]])
+        return Registry(data["tol"], shoot, [Found(**f) for f in data["found"]], ball)
 
     def save_registry(self, reg: Registry) -> None:
         if self.dir is not None:

@@ -94,7 +94,9 @@ def test_kernel_agrees_with_the_exact_flow_of_mapcheck(case: str) -> None:
 def test_early_stopping_changes_no_label(match_tol: float | None) -> None:
     """Also with a coarse matching tolerance (up to the distance between the two attractors'
     nearest points, 1.2), where a single passage near an attractor's point would mislabel
-    hundreds of starts: the orbit must come round twice."""
+    hundreds of starts: there the tolerance balls reach other basins (harness/runs/basin_ball.py)
+    and the orbit must come round twice; at the scan's own tolerance one attractor's balls pass
+    and one period labels its starts."""
     params, theta, box = CASES["fig7-compliant"]
     s = SamplingSpec(theta=theta, n_transient=150, n_samples=30)
     u0, v0 = np.linspace(box[0], box[1], 36), np.linspace(box[2], box[3], 36)
@@ -104,6 +106,9 @@ def test_early_stopping_changes_no_label(match_tol: float | None) -> None:
     full = bk.run_batch({**params, "solver": 1}, us, vs, theta, s.n_transient, s.n_samples)
     lab = label_result(full, s, bk.KnownAttractors.none(fast.attrs["basins.match_tol"]))
     assert fast.attrs["basins.periods_run_mean"] < 0.5 * (s.n_transient + s.n_samples)  # it did stop early
+    one_period = fast["attractor_confirm_periods"].values == 1
+    assert one_period.any() if match_tol is None else not one_period.any()
+    np.testing.assert_array_equal(one_period, fast["attractor_ball_inside"].values)
     assert len(lab["candidates"]) == fast.sizes["attractor_index"] == 2
     # the full run's classes, named by the fast scan's attractors
     names = {}
