@@ -217,8 +217,15 @@ def follow_window(sim: Any, params: Mapping[str, Any], window: dict[str, Any], p
     tested: list[dict[str, Any]] = []
     window["handovers"] = []
     seen: dict[str, Any] | None = None  # the last hand-over's shooting above it: the window seen there
+    before: Mapping[str, Any] | None = None  # the edges before the last hand-over
     while True:
         cands, first = _candidates(curves, (start, p2_range[1]), sigma_range)
+        if not cands and before is not None:
+            # the new edges propose nothing (not continued, or no event in the range): the edges
+            # before the hand-over still bound the window on their other side, and their later
+            # candidates are tested like any (shooting decides, not the curve)
+            curves, before = before, None
+            cands, first = _candidates(curves, (start, p2_range[1]), sigma_range)
         handed = None
         for cand in cands:
             conf = confirm_candidate(sim, params, param2, M, _impacts(curves), curves, cand, theta)
@@ -250,11 +257,12 @@ def follow_window(sim: Any, params: Mapping[str, Any], window: dict[str, Any], p
             return {"closes": None, "sigma": None, "how": None, "searched": list(p2_range), "codim2": codim2,
                     "tested": tested, "note": f"not decided: the boundary handed over {MAX_HANDOVERS} times "
                     f"(the bound of hand-overs followed); the last at {param2} = {handed['above']['p2']:.8g}"}
-        start, seen = handed["above"]["p2"], handed["above"]
-        curves, failed = _new_edges(sim, params, param2, window, handed["above"], p2_range, log2, sigma_range, theta)
+        start, seen, before = handed["above"]["p2"], handed["above"], curves
+        new, failed = _new_edges(sim, params, param2, window, handed["above"], p2_range, log2, sigma_range, theta)
         if failed:
-            return {"closes": None, "sigma": None, "how": None, "searched": list(p2_range), "codim2": codim2,
-                    "tested": tested, "note": failed}
+            tested.append({"p2": start, "sigma": None, "how": failed, "kind": "new edges not found",
+                           "verdict": "the edges before the hand-over are followed on"})
+        curves = before if failed else new
 
 
 def _bisect_closing(sim: Any, params: Mapping[str, Any], param2: str, M: int, impacts: int, seen: Mapping[str, Any],
