@@ -346,6 +346,13 @@ def locate_graze(cont: ArclengthCorrector, a: BranchPoint, good: BranchPoint) ->
     if fit is None:
         return None
     value, err = fit
-    if (value - good.p) * math.copysign(1.0, float(good.tangent[2])) < -err:
-        return None  # behind the last orbit with the pattern: not the zero this change is at
+    # Every sample has q > 0, so the zero lies beyond the nearest of them; a fitted zero behind it
+    # is not the zero this change is at.  It may well lie behind ``good`` itself: ``good`` is the
+    # contact-change bisection's last orbit, corrected to the corrector's residual only (1e-10),
+    # which moves a free passage's highest point by ~1e-11 and so its contact count by ~1e-9 in
+    # sigma next to a compliant wall's graze (Figure 9's windows: ``good`` 1.3e-9 to 2.9e-9 past
+    # the exact graze, the refined samples' zero within 1e-10 of it).
+    nearest = min(data, key=lambda d: d[1])[0]
+    if (value - nearest) * math.copysign(1.0, float(good.tangent[2])) < -err:
+        return None
     return GrazeLocation(value, (value - err, value + err), key[2], key[0], len(data), min(d[1] for d in data), key[1])
