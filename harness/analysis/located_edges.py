@@ -29,6 +29,7 @@ import numpy as np
 
 from ..dynamics.arclength import illinois_update
 from ..dynamics.branch import Branch, Event
+from ..dynamics.graze_location import CONTACT_CHANGE_SLACK
 from ..dynamics.periodic_map import PeriodMap, refine_orbit
 from ..dynamics.shooting import Edge
 from ..dynamics.window_branch import continue_side, first_edge
@@ -81,8 +82,8 @@ def edge_from_event(e: Event, kind: str, direction: float) -> Edge:
     if e.interval is not None:
         lo, hi = sorted(float(x) for x in e.interval)
     elif e.kind in ("graze", "stick"):
-        # located by the contact pattern only: the last orbit with the old contacts, and the
-        # first parameter without them ``bracket`` beyond it
+        # located by the contact pattern only (an event without its widened interval): the last
+        # orbit with the old contacts, and the first parameter without them ``bracket`` beyond it
         lo, hi = sorted((v, v + direction * float(e.bracket)))
     else:
         # the root of the test function lies in the final bracket of width ``bracket`` around
@@ -96,12 +97,14 @@ def edge_from_event(e: Event, kind: str, direction: float) -> Edge:
 def _how(e: Event) -> str:
     """How the event was located, for the entry's ``located``: "continuation", with the defining
     quantity of a graze ("gap = 0", "entry velocity = 0"), or "contact change" where no quantity
-    describes it (the last orbit with the old contacts and the first parameter without them: the
-    FMU's wall detection, a few 1e-9 from the exact graze in Figure 9's windows)."""
+    describes it (the last orbit with the old contacts and the first parameter without them, the
+    corrector's orbits: up to 3e-9 past the exact graze in Figure 9's windows before those were
+    located on their gap, hence the interval widened by :data:`CONTACT_CHANGE_SLACK`)."""
     if e.kind not in ("graze", "stick"):
         return "continuation"
-    q = e.quantity if e.quantity in ("gap", "entry velocity") else "contact change"
-    return f"continuation ({q} = 0)" if q != "contact change" else "continuation (contact change)"
+    if e.quantity in ("gap", "entry velocity"):
+        return f"continuation ({e.quantity} = 0)"
+    return f"continuation (contact change; interval widened by {CONTACT_CHANGE_SLACK:g} (1 + |sigma|) each side)"
 
 
 def polish_flip(pmap: PeriodMap, branch: Branch, e: Event, impacts: int) -> tuple[float, float, float] | None:

@@ -14,7 +14,7 @@ import numpy as np
 
 from .arclength import ArclengthCorrector, BranchPoint
 from .branch import Branch, Event
-from .graze_location import GrazeLocation, locate_graze
+from .graze_location import CONTACT_CHANGE_SLACK, GrazeLocation, contact_change_interval, locate_graze
 from .periodic_map import PeriodMap, refine_orbit
 from .step_control import StepControl
 
@@ -83,7 +83,15 @@ class OrbitWalk:
         if located is not None:
             ev.value, ev.bracket, ev.interval, ev.quantity = located.value, located.width, located.interval, located.quantity
         elif kind in ("graze", "stick"):
+            # located by the contact pattern only: the corrector's last orbit with the old contacts
+            # may lie beyond the change (by ~1e-9 next to a compliant graze), so its interval is
+            # widened to one that holds the change
             ev.quantity = "contacts"
+            ev.interval = contact_change_interval(pt.p, bracket, float(pt.tangent[2]))
+            ev.bracket = ev.interval[1] - ev.interval[0]
+            ev.note += (f"; located by the contact change only, in [{ev.interval[0]:.12g}, {ev.interval[1]:.12g}] "
+                        f"(the bisection's bracket widened by {CONTACT_CHANGE_SLACK:g} (1 + |p|) each side: "
+                        "its orbits are the corrector's, to 1e-10)")
         self.events.append(ev)
 
     def advance(self, pt: BranchPoint) -> None:
