@@ -41,10 +41,10 @@ import numpy as np
 
 from .arclength import illinois_update
 from .curves import CurvePoint, EventCurve, significant_turns
-from .periodic_map import MapEvaluation, PeriodMap
+from .periodic_map import MapEvaluation, PeriodMap, failed_evaluation
 from .sigma_axis import LOG, SigmaAxis, sigma_axis
 from .step_control import StepControl
-from ..errors import HarnessInputError
+from ..errors import FmuRejectedInput, HarnessInputError
 from ..fmu.simulator import Simulator
 
 __all__ = ["CurvePoint", "EventCurve", "PlaneMap", "continue_event", "significant_turns", "SMOOTH_KINDS"]
@@ -100,7 +100,12 @@ class PlaneMap:
     def evaluate(self, X: np.ndarray, derivatives: bool = True) -> MapEvaluation:
         """F^M at X (in w coordinates), with D(F^M) and d/dsigma when ``derivatives``."""
         self.pmap.params = {**self.base, self.param2: self.p2(float(X[3]))}
-        return self.pmap.evaluate(self.w(X), self.axis.of(float(X[2])), self.M, derivatives)
+        try:
+            return self.pmap.evaluate(self.w(X), self.axis.of(float(X[2])), self.M, derivatives)
+        except FmuRejectedInput:
+            # a corrector step beyond the FMU's domain of the second parameter (r > 1 near the end of
+            # a range reaching 0.95): a failed step (shorter, or the curve's end), not the chart's end
+            return failed_evaluation(self.M, derivatives)
 
     def test(self, kind: str, ev: MapEvaluation, X: np.ndarray) -> float:
         """The event's test function at an evaluation."""

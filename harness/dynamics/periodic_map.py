@@ -23,7 +23,7 @@ from .jacobian import free_propagator, resolve_method
 from ..errors import FmuRejectedInput, HarnessInputError
 from ..fmu.simulator import Simulator
 
-__all__ = ["MapEvaluation", "PeriodMap", "wall_free_offset"]
+__all__ = ["MapEvaluation", "PeriodMap", "failed_evaluation", "wall_free_offset"]
 
 TWO_PI = 2.0 * math.pi
 
@@ -150,10 +150,7 @@ class PeriodMap:
                 raise
             pts = None
         if pts is None:
-            nan = np.full(2, np.nan)
-            return MapEvaluation(nan, np.full((M, 2), np.nan), np.zeros(M, dtype=int),
-                                 None if not derivatives else np.full((2, 2), np.nan),
-                                 None if not derivatives else nan.copy())
+            return failed_evaluation(M, derivatives)
         image = pts[-1] - off
         if not derivatives:
             return MapEvaluation(image, pts[:-1], cont)
@@ -238,6 +235,15 @@ class PeriodMap:
             if abs(v) < 1e-14:
                 break
         return float(u)
+
+
+def failed_evaluation(M: int, derivatives: bool = True) -> MapEvaluation:
+    """A failed evaluation of F^M: non-finite image, points and derivatives (every caller treats
+    it as "no orbit here": a shorter step, or the end of a search)."""
+    nan = np.full(2, np.nan)
+    return MapEvaluation(nan, np.full((M, 2), np.nan), np.zeros(M, dtype=int),
+                         None if not derivatives else np.full((2, 2), np.nan),
+                         None if not derivatives else nan.copy())
 
 
 def refine_orbit(pmap: PeriodMap, w0: np.ndarray, p: float, M: int, tol: float = 1e-10,

@@ -153,3 +153,22 @@ def test_an_impact_added_after_another_is_located_on_the_flights_gap(sim, coco_b
     lo, hi = graze.interval
     assert abs(graze.value - exact) < 1e-9 and hi - lo < 1e-9, (graze.value, exact, graze.interval)
     assert graze.value - br.values[graze.index] > 1e-9  # not the last orbit with one impact
+
+
+def test_a_flip_curve_runs_to_the_end_of_a_range_next_to_the_fmus_domain(sim, coco_branches) -> None:
+    """COCO's flip at omega = 0.8 continued in the restitution r from 0.8 to 0.97: near the range's
+    end the corrector's steps reach r > 1, which the FMU refuses; that is a failed step, not the end
+    of the curve (it was: chart over r reported the edge "not continued").  The curve reaches the
+    range's end, every point in the FMU's domain, each a flip of the closed-form orbit at its r."""
+    from harness.dynamics.event_curves import continue_event
+
+    p, br = coco_branches[0.8]
+    (flip,) = [e for e in br.events if e.kind == "flip"]
+    curve = continue_event(sim, p, "flip", 1, flip.value, flip.point, "r", (0.8, 0.97), log2=False,
+                           sigma_range=(-0.6, 1.0), ds_max=0.5)
+    assert curve.end["reason"] == "range" and curve.p2.max() <= 1.0 and curve.p2[-1] >= 0.97 - 1e-9, curve.end
+    for r, s in list(zip(curve.p2, curve.sigma))[:: max(1, len(curve.p2) // 4)]:
+        if r > 0.97:
+            continue
+        vs = flip_velocities(p["nu"], p["Omega"], float(r), 0.5, 5.0)
+        assert min(abs(s - one_impact_orbit(p["nu"], p["Omega"], float(r), v).sigma) for v in vs) < 1e-8, (r, s)
