@@ -263,6 +263,31 @@ def scan_check(windows: Sequence[Mapping[str, Any]], scans: Mapping[str, Any], r
     return out
 
 
+def _stretches(w: Mapping[str, Any]) -> list[tuple[Mapping[str, Any], float | None, float | None]]:
+    """The window's edge curves with the stretch of p2 over which each bounds it: those continued from
+    the start up to the first hand-over of its boundary (:mod:`.window_region`), then those continued
+    after each hand-over up to the next one, the last up to the closing."""
+    cl = w["closing"]
+    first = cl.get("edges_bound_until", cl["closes"])
+    hs = sorted(w.get("handovers", []), key=lambda h: float(h["p2"]))
+    ends = [float(h["p2"]) for h in hs[1:]] + [cl["closes"]]
+    return [(w["curves"], None, first)] + [(h["curves"], float(h["p2"]), e) for h, e in zip(hs, ends)]
+
+
+def _orbit_across(sim: Any, params: Mapping[str, Any], param2: str, theta: float, M: int, impacts: int, z: Any,
+                  s: float, v: float) -> tuple[bool, bool]:
+    """(an orbit with the contacts found by Newton from ``z`` at (sigma, p2) = (s, v), and stable)."""
+    from ..dynamics.periodic_map import PeriodMap, refine_orbit
+
+    s, v = float(s), float(v)
+    pmap = PeriodMap(sim, {**params, param2: v}, "sigma", theta)
+    # the residual relative to the orbit's size (1 + sigma), as on the curve itself: an absolute
+    # 1e-10 is below CVODE's accuracy on an orbit of size 1e3
+    _, ev, ok, _ = refine_orbit(pmap, np.asarray(z, float) - pmap.offset(s), s, M, tol=1e-10 * (1.0 + s))
+    same = ok and int(ev.contacts.sum()) == impacts
+    return same, same and bool(np.all(np.abs(np.linalg.eigvals(ev.J)) < 1.0))
+
+
 def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Sequence[Mapping[str, Any]],
                log2: bool = True, theta: float = 0.5, d: float = 1e-5, sigma_log: bool = True) -> dict[str, Any]:
     """Check the continued edges across themselves, at every point of every edge curve.
@@ -272,11 +297,11 @@ def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Seq
     with ``sigma_log`` False, a chart reaching sigma <= 0), q = ln p2 on a
     log axis; the tangent from the neighbouring points): a flip/NS point must have a stable
     orbit on one side and an unstable one with the same contacts on the other; a fold or graze point a
-    stable orbit on one side and no orbit with its contacts on the other.  Points beyond the
-    window's closing (where the edge no longer bounds a window) are not checked.  Returns per M:
-    ``{"checked", "confirmed", "failed": [...]}``.
+    stable orbit on one side and no orbit with its contacts on the other.  Each curve is checked
+    over the stretch of p2 where it bounds the window (:func:`_stretches`: up to the first hand-over
+    of the boundary, the edges continued after a hand-over from there, none beyond the closing).
+    Returns per M: ``{"checked", "confirmed", "failed": [...]}``.
     """
-    from ..dynamics.periodic_map import PeriodMap, refine_orbit
     from ..fmu.simulator import FmuSimulator
 
     sim = FmuSimulator(source, instance_name="chart-edge-check")
@@ -284,40 +309,31 @@ def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Seq
     to_s, of_s = (np.log, np.exp) if sigma_log else (np.asarray, np.asarray)
     out: dict[str, Any] = {}
     for w in windows:
-        # past a hand-over of the boundary (harness.analysis.window_region) these curves bound the window no more
-        M, closes = w["M"], w["closing"].get("edges_bound_until", w["closing"]["closes"])
-        rep = out.setdefault(str(M), {"checked": 0, "confirmed": 0, "failed": []})
-        for side in ("lower", "upper"):
-            c = w["curves"].get(side)
-            if not c or "failed" in c or len(c["sigma"]) < 2:
-                continue
-            Y = np.column_stack([to_s(np.asarray(c["sigma"], float)), to_q(np.asarray(c["p2"], float))])
-            for i, z in enumerate(c["points"]):
-                if closes is not None and c["p2"][i] > closes * (1.0 - 1e-3):
+        rep = out.setdefault(str(w["M"]), {"checked": 0, "confirmed": 0, "failed": []})
+        for curves, p_lo, p_hi in _stretches(w):
+            for side in ("lower", "upper"):
+                c = curves.get(side)
+                if not c or "failed" in c or len(c["sigma"]) < 2:
                     continue
-                t = Y[min(i + 1, len(Y) - 1)] - Y[max(i - 1, 0)]
-                n = np.array([-t[1], t[0]]) / np.linalg.norm(t)
-                sides = []
-                for sgn in (1.0, -1.0):
-                    ls, q = Y[i] + sgn * d * n
-                    s, v = float(of_s(ls)), float(of_q(q))
-                    pmap = PeriodMap(sim, {**params, param2: v}, "sigma", theta)
-                    # the residual relative to the orbit's size (1 + sigma), as on the curve itself:
-                    # an absolute 1e-10 is below CVODE's accuracy on an orbit of size 1e3
-                    _, ev, ok, _ = refine_orbit(pmap, np.asarray(z, float) - pmap.offset(s), s, M, tol=1e-10 * (1.0 + s))
-                    same = ok and int(ev.contacts.sum()) == c["impacts"]
-                    sides.append((same, same and bool(np.all(np.abs(np.linalg.eigvals(ev.J)) < 1.0))))
-                (a_same, a_stable), (b_same, b_stable) = sides
-                if c["kind"] in ("graze", "stick", "fold"):
-                    # a fold: the stable orbit meets its unstable partner and both end there, so
-                    # across it there is no orbit at all (not an unstable one, as across a flip)
-                    good = (a_stable and not b_same) or (b_stable and not a_same)
-                else:
-                    good = a_same and b_same and a_stable != b_stable
-                rep["checked"] += 1
-                rep["confirmed"] += int(good)
-                if not good:
-                    rep["failed"].append({"p2": float(c["p2"][i]), "side": side, "kind": c["kind"],
-                                          "sigma": float(c["sigma"][i]), "one_side": {"orbit": a_same, "stable": a_stable},
-                                          "other_side": {"orbit": b_same, "stable": b_stable}})
+                Y = np.column_stack([to_s(np.asarray(c["sigma"], float)), to_q(np.asarray(c["p2"], float))])
+                for i, z in enumerate(c["points"]):
+                    if (p_hi is not None and c["p2"][i] > p_hi * (1.0 - 1e-3)) or (p_lo is not None and c["p2"][i] < p_lo):
+                        continue
+                    t = Y[min(i + 1, len(Y) - 1)] - Y[max(i - 1, 0)]
+                    n = np.array([-t[1], t[0]]) / np.linalg.norm(t)
+                    sides = [_orbit_across(sim, params, param2, theta, w["M"], c["impacts"], z, of_s(ls), of_q(q))
+                             for ls, q in (Y[i] + d * n, Y[i] - d * n)]
+                    (a_same, a_stable), (b_same, b_stable) = sides
+                    if c["kind"] in ("graze", "stick", "fold"):
+                        # a fold: the stable orbit meets its unstable partner and both end there, so
+                        # across it there is no orbit at all (not an unstable one, as across a flip)
+                        good = (a_stable and not b_same) or (b_stable and not a_same)
+                    else:
+                        good = a_same and b_same and a_stable != b_stable
+                    rep["checked"] += 1
+                    rep["confirmed"] += int(good)
+                    if not good:
+                        rep["failed"].append({"p2": float(c["p2"][i]), "side": side, "kind": c["kind"],
+                                              "sigma": float(c["sigma"][i]), "one_side": {"orbit": a_same, "stable": a_stable},
+                                              "other_side": {"orbit": b_same, "stable": b_stable}})
     return out

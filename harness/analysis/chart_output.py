@@ -209,7 +209,7 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
                          f"stability changes: {turns}; ends at ({problem.param2} = {c['end']['p2']:.6g}, sigma = "
                          f"{c['end']['sigma']:.5g}): {c['end']['note']}")
     lines += ["", "Each continued edge checked across itself at every point of its curve up to the window's closing "
-              "(or the first hand-over of its boundary) "
+              "(the edges continued after a hand-over of its boundary from there) "
               "(Newton 1e-5 away on either side, across the curve "
               f"in (ln sigma, {'ln ' if problem.log else ''}{problem.param2}): a flip has a stable orbit on one side and an unstable one on the other, a graze a "
               "stable orbit on one side and none with its contacts on the other; `edge_check` in chart.json):", ""]
