@@ -54,6 +54,18 @@ class ExactFlow:
     def orbit(self, sigma: float, M: int, z0) -> PeriodicOrbit:
         return solve_periodic_orbit(self.step_of(sigma), np.asarray(z0, dtype=float), M, **NEWTON)
 
+    def multipliers(self, sigma: float, z0, M: int) -> np.ndarray:
+        """The multipliers of the period-M orbit through ``z0`` to ~1e-10: central differences at
+        h and 2h (h = 1e-5 x the Newton scale), Richardson-extrapolated.  The orbit's own ones
+        (h = 1e-6 x scale) carry ~1e-8 of rounding, too much to tell which side of -1 a multiplier
+        is 1e-8 from a flip (slope d mu / d sigma ~ 1)."""
+        from mapcheck.orbits import _jacobian
+
+        h, step = 1e-5 * NEWTON["scale"], self.step_of(sigma)
+        z = np.asarray(z0, dtype=float)
+        J1, J2 = _jacobian(step, z, M, h), _jacobian(step, z, M, 2.0 * h)
+        return np.linalg.eigvals(J1 + (J1 - J2) / 3.0)
+
     def settle(self, sigma: float, M: int, n: int = 100) -> PeriodicOrbit:
         """The period-M orbit the flow settles on from the wall-free orbit p(theta) (4): n periods
         of the exact map, then Newton."""
