@@ -13,7 +13,7 @@ import numpy as np
 from ..analysis.chart import ChartProblem, parse_range
 from ..analysis.chart_output import chart
 from ..errors import HarnessInputError
-from .options import model_shortcuts, positive, solver_option
+from .options import model_shortcuts, solver_option, xtol_option
 
 __all__ = ["register", "cmd_chart"]
 
@@ -51,11 +51,7 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     p.add_argument("--sigma-range", default="0.05:400", metavar="LO:HI",
                    help="sigma range of the scans (default 0.05:400, geometric); LO <= 0 (> -1) reaches below "
                    "grazing, an even grid of 4 x --per-decade intervals (--sigma-range=-0.3:0.3)")
-    p.add_argument("--xtol", type=positive, metavar="DS",
-                   help="the per-value scans' edges are located by the continuation (1e-9 for flips and folds, an "
-                   "interval of ~1e-8 for grazes, --quick too); this is the absolute tolerance, in sigma, of the "
-                   "march-and-bisection fallback for an edge it could not locate (default: 1e-4 x the edge's sigma, "
-                   "1e-3 with --quick)")
+    xtol_option(p, "1e-4 x the edge's sigma, 1e-3 with --quick")
     p.add_argument("--per-decade", type=int, default=None, help="scan points per decade of sigma (default 16, quick 10)")
     p.add_argument("--quick", action="store_true", help="coarser scans and tolerances")
     solver_option(p)

@@ -145,6 +145,16 @@ def execution_options(p: argparse.ArgumentParser, what: str) -> None:
     b.add_argument("--no-resume", action="store_true", help="discard an existing checkpoint and start over")
 
 
+def xtol_option(g: Any, default_text: str) -> None:
+    """``--xtol``: the march-and-bisection fallback's absolute tolerance (``windows``, ``chart``); the
+    edges the continuation locates do not depend on it (one wording for both commands)."""
+    g.add_argument("--xtol", type=positive, metavar="DS",
+                   help="absolute tolerance, in sigma, of the march-and-bisection fallback, used only for an edge "
+                   "the continuation could not locate ('located' in the JSON says which); edges located by the "
+                   "continuation are located to 1e-9 (flips, folds) or within an interval of ~1e-8 (grazes) "
+                   f"whatever this is, with --quick too (default: {default_text})")
+
+
 def solver_option(g: Any, default: str | None = DEFAULT_SOLVER) -> None:
     """``--solver``: the same choices, default and help in every command."""
     g.add_argument("--solver", choices=SOLVERS, default=default, help=SOLVER_HELP)

@@ -11,7 +11,7 @@ from mapcheck.compare import markdown_window_table
 
 from ..analysis.window_problem import MAP_WALLS, WALL_CODES
 from ..analysis.windows import compare_windows
-from .options import model_shortcuts, positive, solver_option, theta_option
+from .options import model_shortcuts, solver_option, theta_option, xtol_option
 
 __all__ = ["register", "cmd_windows"]
 
@@ -39,12 +39,8 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     s.add_argument("--sigma-range", type=sigma_range, metavar="LO:HI",
                    help="sigma interval of the scans and the shooting, negative values allowed (--sigma-range=-0.2:1; "
                    "default: 1e-3 to 3, widened to the maps' windows, edges followed down to 1e-4 and up to 12)")
-    s.add_argument("--xtol", type=positive, metavar="DS",
-                   help="absolute tolerance, in sigma, of the march-and-bisection fallback, used only for an edge the "
-                   "continuation could not locate (the report and windows.json's 'located' say which); edges located "
-                   "by the continuation are located to 1e-9 (flips, folds) or within an interval of ~1e-8 (grazes) "
-                   "whatever this is, with --quick too (default: 1e-4 x the window's sigma, 1e-3 with --quick; with "
-                   "a --sigma-range reaching sigma <= 0: 1e-8 x its width, 1e-6 quick)")
+    xtol_option(s, "1e-4 x the window's sigma, 1e-3 with --quick; with a --sigma-range reaching sigma <= 0: "
+                   "1e-8 x its width, 1e-6 quick")
     theta_option(s)
     s.add_argument("--M-max", type=_m_max, default=None, dest="M_max", metavar="{auto,1..12}",
                    help="highest period; auto (default): until period adding truncates (no stable window at M "
