@@ -47,8 +47,8 @@ def child(spec: dict) -> dict:
     import numpy as np
 
     from harness import FmuModel, SamplingSpec
-    from harness.runs.basin_kernel_scan import run_basins_kernel
-    from harness.runs.basin_scan import run_basins
+    from harness.runs.basins.kernel_scan import run_basins_kernel
+    from harness.runs.basins.scan import run_basins
 
     import xarray as xr
 
@@ -99,8 +99,8 @@ def child(spec: dict) -> dict:
 
 def _measures(model, ds, params: dict, s, check: int) -> dict:
     """Quantifiers of the scan and its agreement with the FMU (both solvers)."""
-    from harness.analysis.basin_agreement import fmu_agreement
-    from harness.analysis.basin_summary import measure_lines, with_measures
+    from harness.analysis.basins.agreement import fmu_agreement
+    from harness.analysis.basins.summary import measure_lines, with_measures
 
     ds = with_measures(ds)
     names = json.loads(ds.attrs["basins.attractors"])

@@ -25,8 +25,8 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 from harness import FmuModel, FmuSimulator  # noqa: E402
-from harness.dynamics.attractors import find_attractors  # noqa: E402
-from harness.dynamics.continuation import continue_orbit  # noqa: E402
+from harness.dynamics.attractors.scans import find_attractors  # noqa: E402
+from harness.dynamics.continuation.continue_orbit import continue_orbit  # noqa: E402
 from sections import write_section  # noqa: E402
 
 FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"

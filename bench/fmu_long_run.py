@@ -15,7 +15,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from mapcheck.exact import ExactOscillator  # noqa: E402
-from tests.fmu_support import LoggedSlave, on_orbit  # noqa: E402
+from tests.support.fmu import LoggedSlave, on_orbit  # noqa: E402
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
 

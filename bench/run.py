@@ -53,7 +53,7 @@ import numpy as np  # noqa: E402
 from scipy.integrate import solve_ivp  # noqa: E402
 
 from harness.fmu.fmi import FmuModel, open_source  # noqa: E402
-from harness.dynamics.sampling import sample_periods, strobe  # noqa: E402
+from harness.dynamics.maps.sampling import sample_periods, strobe  # noqa: E402
 from harness.fmu.simulator import FmuSimulator  # noqa: E402
 from mapcheck.exact import ExactOscillator, forcing_amplitude_phase  # noqa: E402
 from sections import keep_sections  # noqa: E402  (bench/sections.py, next to this script)

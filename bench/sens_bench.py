@@ -186,8 +186,8 @@ def accuracy() -> dict:
     - CVODE mode against closed-form mode, one period from the same state, max |du|, |dv| over
       12 periods of each case of tests/fmu/test_closed_form.py.
     """
-    from tests.fmu_support import on_orbit
-    from tests.sens_support import UNDERDAMPED, Fmu, exact_derivatives, one_period
+    from tests.support.fmu import on_orbit
+    from tests.support.sensitivities import UNDERDAMPED, Fmu, exact_derivatives, one_period
     from tests.fmu.test_closed_form import CASES as CF_CASES
     from tests.fmu.test_sensitivities import CASES as SENS_CASES
 

@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 
 from harness.fmu.fmi import FmuModel
-from harness.dynamics.lyapunov import lyapunov_exponents
+from harness.dynamics.maps.lyapunov import lyapunov_exponents
 from harness.reproduce.fig9 import problem, settings
-from harness.analysis.windows import predicted_windows
-from harness.dynamics.shooting import StroboscopicMap, map_guided_windows
+from harness.analysis.windows.compare_windows import predicted_windows
+from harness.dynamics.maps.shooting import StroboscopicMap, map_guided_windows
 from sections import write_section as write_marked_section  # bench/sections.py, next to this script
 from harness.fmu.simulator import FmuSimulator
 
@@ -89,7 +89,7 @@ def write_section(out: dict, lyap: dict, worst: float, xtol, quick: bool) -> Non
          f"`python bench/shooting_derivatives.py{' --quick' if quick else ''} --write`, one run on "
          f"{platform.node() or 'this machine'} ({time.strftime('%Y-%m-%d')}); Figure 9 (alpha, gamma) = (0.99, 0.01), "
          "r = 0.9, Gamma = 10, CVODE.", "",
-         "Window edges by Newton shooting (`harness.dynamics.shooting.map_guided_windows`, bisection tolerance "
+         "Window edges by Newton shooting (`harness.dynamics.maps.shooting.map_guided_windows`, bisection tolerance "
          f"{xtol if not isinstance(xtol, dict) else max(xtol.values()):g}): the FMU's derivatives (variational "
          "equations with saltation matrices; one run per period and Newton iteration) against central "
          "differences (restarts from perturbed states).", "",

@@ -183,7 +183,7 @@ def main() -> None:
         *times,
         "",
         "A wall-free orbit's graze is reported as 0 where its bracket (before) or interval (after) holds 0",
-        "(`harness/analysis/edge_coincidence.py`): the widths say how closely. Figure 9's grazes are located on",
+        "(`harness/analysis/windows/edge_coincidence.py`): the widths say how closely. Figure 9's grazes are located on",
         "their free passage's gap, each interval holding its reference (itself bisected to 1e-10 on the exact",
         "flow). Before that fix they came from the contact change, 1.3e-9 to 2.9e-9 beyond the references with",
         "brackets 5e-10 to 8e-10 wide that excluded them (the corrector's orbits, to 1e-10); a contact change",

@@ -21,7 +21,7 @@ The public entry points, grouped as you look for them:
 * `strobe` -> `StrobeResult` -- samples at t = n + theta after a transient;
 * `SamplingSpec` -- transient, samples, tolerance, section phase;
 * `classify_orbit` -> `OrbitClass`, `classify_samples` -- period and impacts per period (codes in
-  `harness.dynamics.classify`: period > 0 periodic, <= 0 not periodic or not converged);
+  `harness.dynamics.maps.classify`: period > 0 periodic, <= 0 not periodic or not converged);
 * `windows` -- runs of equal period along a scan.
 
 # Sweeps
@@ -53,8 +53,8 @@ The public entry points, grouped as you look for them:
   wall-free orbit;
 * `map_guided_windows` -- ODE window edges of maximal period-M orbits, started in a map's
   windows; each edge the midpoint of a bracket the shooting bisected, or unresolved (``windows``
-  locates its edges by continuation instead: :mod:`harness.analysis.located_edges`);
-* `harness.dynamics.shooting.window_edges`, `harness.dynamics.shooting.Edge`.
+  locates its edges by continuation instead: :mod:`harness.analysis.windows.located_edges`);
+* `harness.dynamics.maps.shooting.window_edges`, `harness.dynamics.maps.shooting.Edge`.
 
 # Lyapunov exponents
 
@@ -109,23 +109,23 @@ except _metadata.PackageNotFoundError:  # pragma: no cover - running from a bare
 # Public names -> defining module.  Loaded lazily (PEP 562) so that a worker process that
 # only needs harness.runs.tasks does not import xarray, matplotlib or Dask.
 _EXPORTS = {
-    "OrbitClass": "dynamics.classify", "classify_orbit": "dynamics.classify", "classify_samples": "dynamics.classify", "windows": "dynamics.classify",
+    "OrbitClass": "dynamics.maps.classify", "classify_orbit": "dynamics.maps.classify", "classify_samples": "dynamics.maps.classify", "windows": "dynamics.maps.classify",
     "Experiment": "runs.experiment", "SamplingSpec": "config", "SweepSpec": "config",
     "FmuError": "errors", "HarnessInputError": "errors",
     "FmuModel": "fmu.fmi", "FmuSource": "fmu.fmi",
-    "JacobianResult": "dynamics.jacobian", "JacobianScan": "dynamics.jacobian", "jacobian_vs_x": "dynamics.jacobian", "map_jacobian": "dynamics.jacobian",
-    "LyapunovResult": "dynamics.lyapunov", "lyapunov_exponents": "dynamics.lyapunov", "lyapunov_from_jacobians": "dynamics.lyapunov",
-    "classify_dynamics": "dynamics.classify",
+    "JacobianResult": "dynamics.maps.jacobian", "JacobianScan": "dynamics.maps.jacobian", "jacobian_vs_x": "dynamics.maps.jacobian", "map_jacobian": "dynamics.maps.jacobian",
+    "LyapunovResult": "dynamics.maps.lyapunov", "lyapunov_exponents": "dynamics.maps.lyapunov", "lyapunov_from_jacobians": "dynamics.maps.lyapunov",
+    "classify_dynamics": "dynamics.maps.classify",
     "read_netcdf": "io.results", "write_netcdf": "io.results",
-    "StrobeResult": "dynamics.sampling", "simulate": "dynamics.sampling", "strobe": "dynamics.sampling",
+    "StrobeResult": "dynamics.maps.sampling", "simulate": "dynamics.maps.sampling", "strobe": "dynamics.maps.sampling",
     "FmuSimulator": "fmu.simulator", "MappingSimulator": "fmu.simulator", "Simulator": "fmu.simulator",
     "SweepStats": "runs.sweeps", "run_sweep": "runs.sweeps",
-    "StroboscopicMap": "dynamics.shooting", "map_guided_windows": "dynamics.shooting",
-    "compare_windows": "analysis.windows",
-    "run_basins": "runs.basin_scan", "Attractor": "dynamics.basins", "identify_attractors": "dynamics.basins",
-    "run_basins_kernel": "runs.basin_kernel_scan", "basin_fractions": "analysis.basin_measures",
-    "basin_entropy": "analysis.basin_measures", "uncertainty_exponent": "analysis.basin_measures",
-    "fmu_agreement": "analysis.basin_agreement", "uncertainty_from_pairs": "analysis.basin_uncertainty",
+    "StroboscopicMap": "dynamics.maps.shooting", "map_guided_windows": "dynamics.maps.shooting",
+    "compare_windows": "analysis.windows.compare_windows",
+    "run_basins": "runs.basins.scan", "Attractor": "dynamics.attractors.identity", "identify_attractors": "dynamics.attractors.identity",
+    "run_basins_kernel": "runs.basins.kernel_scan", "basin_fractions": "analysis.basins.measures",
+    "basin_entropy": "analysis.basins.measures", "uncertainty_exponent": "analysis.basins.measures",
+    "fmu_agreement": "analysis.basins.agreement", "uncertainty_from_pairs": "analysis.basins.uncertainty",
 }
 
 __all__ = sorted(_EXPORTS) + ["__version__"]

@@ -15,7 +15,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tests import test_importer_fmusim as F  # noqa: E402
 from tests import test_importer_libcosim as L  # noqa: E402
-from tests.importer_support import compare_per_period, run_fmusim, write_input_csv  # noqa: E402
+from tests.support.importers import compare_per_period, run_fmusim, write_input_csv  # noqa: E402
 
 
 def _row(label: str, checks: list) -> str:

@@ -29,7 +29,7 @@ is allowed are one table, `STATE_TABLE` in fmu_src/fmu_states.c, taken from FMI 
 Co-Simulation column. This page is generated from that table
 (`python scripts/state_table_doc.py`; a test fails when they differ), and
 tests/fmu/test_fmi_conformance.py checks every (state, function) pair of the built FMUs against a
-second table written from the standards' text (tests/fmi_standard.py).
+second table written from the standards' text (tests/support/fmi_standard.py).
 
 **After an error.** Any call that returns Error (a call in the wrong state, a bad argument, a
 failed step) leaves the instance in the standard's error state:

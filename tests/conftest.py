@@ -6,7 +6,7 @@ import os
 import pytest
 
 from harness import FmuModel, FmuSimulator
-from tests.fmu_support import FMU_PATH
+from tests.support.fmu import FMU_PATH
 
 
 @pytest.fixture(scope="session")

@@ -94,7 +94,7 @@ def _use_batch(args: argparse.Namespace, exp: Any) -> bool:
 
 def cmd_basins(args: argparse.Namespace) -> int:
     """``basins``: the scan, the attractors, the quantifiers, NetCDF + figure."""
-    from ..analysis.basin_summary import with_measures
+    from ..analysis.basins.summary import with_measures
     from ..io.results import write_netcdf
     from ..runs.sweeps import SweepStats
 
@@ -127,13 +127,13 @@ def cmd_basins(args: argparse.Namespace) -> int:
     if "attractor_zoom" in ds:
         ds = with_measures(ds, suffix="_zoom")
     if args.uncertainty_pairs:
-        from ..analysis.basin_uncertainty import uncertainty_from_pairs, with_pairs
+        from ..analysis.basins.uncertainty import uncertainty_from_pairs, with_pairs
 
         ds = with_pairs(ds, uncertainty_from_pairs(ds, exp.params, s, args.uncertainty_pairs,
                                                    threads=exp.run.workers))
     if args.check_fmu:
-        from ..analysis.basin_agreement import fmu_agreement
-        from ..analysis.basin_summary import with_agreement
+        from ..analysis.basins.agreement import fmu_agreement
+        from ..analysis.basins.summary import with_agreement
 
         solver = "closed form" if int(exp.params.get("solver", 0)) == 1 else "CVODE"
         ds = with_agreement(ds, fmu_agreement(exp.model, ds, exp.params, s, args.check_fmu), solver)
@@ -149,7 +149,7 @@ def cmd_basins(args: argparse.Namespace) -> int:
 
 
 def _fmu_scan(args: argparse.Namespace, exp: Any, u0: np.ndarray, v0: np.ndarray, stats: Any) -> Any:
-    from ..runs.basin_scan import run_basins
+    from ..runs.basins.scan import run_basins
 
     def scan(checkpoint: str) -> Any:
         return run_basins(exp.model, u0, v0, exp.params, exp.sampling, args.match_tol,
@@ -162,7 +162,7 @@ def _fmu_scan(args: argparse.Namespace, exp: Any, u0: np.ndarray, v0: np.ndarray
 
 def _batch_scan(args: argparse.Namespace, exp: Any, u0: np.ndarray, v0: np.ndarray,
                 zoom: tuple[float, float, float, float] | None, stats: Any) -> Any:
-    from ..runs.basin_kernel_scan import run_basins_kernel, with_zoom
+    from ..runs.basins.kernel_scan import run_basins_kernel, with_zoom
 
     kw = dict(backend=exp.run.backend, workers=exp.run.workers, scheduler=exp.run.scheduler,
               tile_size=args.tile_size, progress=exp.run.progress,
@@ -185,7 +185,7 @@ def _batch_scan(args: argparse.Namespace, exp: Any, u0: np.ndarray, v0: np.ndarr
 def report(ds: Any) -> str:
     """The attractors found, with their basins' shares and stroboscopic points, and the basins'
     quantifiers."""
-    from ..analysis.basin_summary import measure_lines
+    from ..analysis.basins.summary import measure_lines
 
     n = ds.sizes["u0"] * ds.sizes["v0"]
     lines = [f"basins over u0 in [{float(ds.u0[0]):g}, {float(ds.u0[-1]):g}] x v0 in [{float(ds.v0[0]):g}, "

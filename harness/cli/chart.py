@@ -1,5 +1,5 @@
 """``impact-harness chart``: where the ODE's windows close over (sigma, a second parameter)
-(:mod:`harness.analysis.chart`; written by :mod:`harness.analysis.chart_output`)."""
+(:mod:`harness.analysis.chart.run`; written by :mod:`harness.analysis.chart.chart`)."""
 from __future__ import annotations
 
 import argparse
@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from ..analysis.chart import ChartProblem, parse_range
-from ..analysis.chart_output import chart
+from ..analysis.chart.run import ChartProblem, parse_range
+from ..analysis.chart.chart import chart
 from ..errors import HarnessInputError
 from .options import model_shortcuts, solver_option, xtol_option
 
@@ -108,8 +108,8 @@ def cmd_chart(args: argparse.Namespace) -> int:
                     *(["--quick"] if args.quick else []),
                     *([f"--xtol {args.xtol!r}"] if args.xtol is not None else []), f"--solver {args.solver}", f"--out {args.out}"])
     res = chart(problem, args.out, args.fmu, args.backend, args.workers, args.scheduler, cmd)
-    from ..analysis.chart_contradictions import count_line
-    from ..analysis.chart_wall_free import row_label
+    from ..analysis.chart.contradictions import count_line
+    from ..analysis.chart.wall_free import row_label
 
     for M, cl in res["closes"].items():
         if cl["closes"] is None:

@@ -1,7 +1,7 @@
 """``impact-harness continue``: one-parameter continuation of a periodic orbit of the FMU.
 
 The orbit to start from is either given (``--state U,V`` at t = theta) or found by
-:func:`harness.dynamics.attractors.find_attractors` at ``--start`` (up/down/fresh scans).  The
+:func:`harness.dynamics.attractors.scans.find_attractors` at ``--start`` (up/down/fresh scans).  The
 branch is continued both ways (or one, ``--direction``), with flips, folds, Neimark-Sacker points,
 grazings and sticking onsets located; ``--switch`` adds the period-2M branch at each flip.
 Writes NetCDF (every branch point with its state, multipliers, stability, contacts and event
@@ -84,7 +84,7 @@ def _check_args(args: argparse.Namespace, exp: Any) -> tuple[float, float]:
 def _start_orbit(args: argparse.Namespace, sim: Any, params: dict[str, Any]) -> tuple[int, np.ndarray, str]:
     """The period, a point of the orbit to start from and how it was found (for the report):
     ``--state``, or the shortest attractor the scans find at ``--start``."""
-    from ..dynamics.attractors import find_attractors
+    from ..dynamics.attractors.scans import find_attractors
 
     if args.state is not None:
         if args.M is None:
@@ -109,7 +109,7 @@ def _branches(args: argparse.Namespace, sim: Any, params: dict[str, Any], M: int
               p_range: tuple[float, float]) -> tuple[list[Any], list[str]]:
     """The branch continued each way asked, and with ``--switch`` the period-2M branch at every
     flip; returns the branches and what each is (for the dataset and the report)."""
-    from ..dynamics.continuation import continue_orbit, switch_at_flip
+    from ..dynamics.continuation.continue_orbit import continue_orbit, switch_at_flip
 
     dirs = {"both": (-1.0, 1.0), "up": (1.0,), "down": (-1.0,)}[args.direction]
     branches, kinds = [], []
@@ -135,7 +135,7 @@ def _branches(args: argparse.Namespace, sim: Any, params: dict[str, Any], M: int
 
 def cmd_continue(args: argparse.Namespace) -> int:
     """``continue``: branches, NetCDF, plot, report."""
-    from ..dynamics.branch import branches_dataset
+    from ..dynamics.continuation.branch import branches_dataset
     from ..fmu.simulator import FmuSimulator
     from ..io.results import provenance, write_netcdf
 

@@ -46,11 +46,11 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
 
 def cmd_jacobian(args: argparse.Namespace) -> int:
     """``jacobian``: J at --state, or J(x) along the grazing family; NetCDF + plot."""
-    from ..dynamics.jacobian import jacobian_vs_x, map_jacobian
+    from ..dynamics.maps.jacobian import jacobian_vs_x, map_jacobian
     from ..io.plots import jacobian_plot
-    from ..dynamics.singularity_fit import describe, fits_dataset, grazing_fits
+    from ..dynamics.maps.singularity_fit import describe, fits_dataset, grazing_fits
     from ..io.results import jacobian_dataset, provenance, state_jacobian_dataset, write_netcdf
-    from ..dynamics.sampling import check_count, check_theta
+    from ..dynamics.maps.sampling import check_count, check_theta
     from ..fmu.simulator import FmuSimulator
 
     exp = experiment_of(args)

@@ -29,7 +29,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     """``simulate``: time series from (u0, v0) at --t0 to --t-end; NetCDF + PNG."""
     from ..io.plots import timeseries_plot
     from ..io.results import provenance, timeseries_dataset, write_netcdf
-    from ..dynamics.sampling import simulate
+    from ..dynamics.maps.sampling import simulate
     from ..fmu.simulator import FmuSimulator
 
     exp = experiment_of(args)

@@ -6,7 +6,7 @@ import argparse
 import time
 from typing import Any
 
-from ..dynamics.classify import classify_orbit
+from ..dynamics.maps.classify import classify_orbit
 from ..io.progress import progress_bar
 from ..runs.budget import Budget, strobe_estimate
 from .experiment_args import command_line, experiment_of, output_paths
@@ -27,7 +27,7 @@ def cmd_strobe(args: argparse.Namespace) -> int:
     """``strobe``: samples at t = n + theta, classified; NetCDF + Poincare section."""
     from ..io.plots import poincare_section
     from ..io.results import provenance, strobe_dataset, write_netcdf
-    from ..dynamics.sampling import strobe
+    from ..dynamics.maps.sampling import strobe
     from ..fmu.simulator import FmuSimulator
 
     exp = experiment_of(args)
@@ -46,8 +46,14 @@ def cmd_strobe(args: argparse.Namespace) -> int:
     orbit = classify_orbit(r.u, r.v, r.impacts, s.tol, s.max_period)
     ly = None
     if s.lyapunov:
-        from ..dynamics.classify import DECIDED, DYNAMICS_NAMES, REASON_NAMES, explain_dynamics, still_settling
-        from ..dynamics.lyapunov import lyapunov_continued
+        from ..dynamics.maps.classify import (
+            DECIDED,
+            DYNAMICS_NAMES,
+            REASON_NAMES,
+            explain_dynamics,
+            still_settling,
+        )
+        from ..dynamics.maps.lyapunov import lyapunov_continued
 
         ly = lyapunov_continued(sim, exp.params, s.lyapunov, exact)
         settling = orbit.periodic and still_settling(r.u, r.v, orbit.period, s.tol)

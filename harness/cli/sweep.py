@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..config import parameter_values
-from ..dynamics.classify import windows
+from ..dynamics.maps.classify import windows
 from ..errors import HarnessInputError
 from ..runs.budget import Budget, grid_count, sweep_estimate
 from ..runs.experiment import Experiment
@@ -125,7 +125,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
           f"(tasks used {ds.attrs['tasks_cpu_time_s']:.1f} CPU s)")
     grid = ds[spec.param].values
     if "lyapunov" in ds:
-        from ..dynamics.classify import DYNAMICS_NAMES
+        from ..dynamics.maps.classify import DYNAMICS_NAMES
 
         ran = ds["period"].values >= 0  # -1: a start inside a rigid wall, not run
         codes, counts = np.unique(ds["dynamics"].values[ran], return_counts=True)

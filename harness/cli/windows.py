@@ -1,5 +1,5 @@
 """``impact-harness windows``: the window edges of the maps vs the ODE for any parameter set
-(:func:`harness.analysis.windows.compare_windows`)."""
+(:func:`harness.analysis.windows.compare_windows.compare_windows`)."""
 from __future__ import annotations
 
 import argparse
@@ -9,8 +9,8 @@ from typing import Any
 
 from mapcheck.compare import markdown_window_table
 
-from ..analysis.window_problem import MAP_WALLS, WALL_CODES
-from ..analysis.windows import compare_windows
+from ..analysis.windows.problem import MAP_WALLS, WALL_CODES
+from ..analysis.windows.compare_windows import compare_windows
 from .options import model_shortcuts, solver_option, theta_option, xtol_option
 
 __all__ = ["register", "cmd_windows"]

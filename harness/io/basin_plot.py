@@ -113,8 +113,8 @@ def _draw_pairs(ax: Any, ds: Any) -> None:
 
 
 def basin_figure(ds: Any, path: str | Path) -> str:
-    """Draw the basins of a :func:`harness.runs.basin_scan.run_basins` (or
-    :func:`harness.runs.basin_kernel_scan.run_basins_kernel`) Dataset to ``path`` (PNG).
+    """Draw the basins of a :func:`harness.runs.basins.scan.run_basins` (or
+    :func:`harness.runs.basins.kernel_scan.run_basins_kernel`) Dataset to ``path`` (PNG).
 
     Returns the path written.
     """

@@ -53,7 +53,7 @@ def _annotate(ax: Any, labels: list[tuple[float, float, str, str]], span: float)
 
 
 def branch_figure(branches: Sequence[Any], path: str | Path, title: str) -> Path:
-    """Draw u at the section of every branch (:class:`harness.dynamics.branch.Branch`) against its
+    """Draw u at the section of every branch (:class:`harness.dynamics.continuation.branch.Branch`) against its
     parameter, and max |multiplier| below; write ``path``.  One colour and one legend entry per
     (period, impacts per period) of the stable parts; solid stable, dashed unstable (in the legend
     too); event labels that do not print over each other."""

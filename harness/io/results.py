@@ -192,7 +192,7 @@ def timeseries_dataset(series: Mapping[str, np.ndarray], attrs: Mapping[str, Any
 
 
 def jacobian_dataset(scan: Any, attrs: Mapping[str, Any]) -> xr.Dataset:
-    """Dataset of :func:`harness.dynamics.jacobian.jacobian_vs_x`: J(x) and the free-flight P(1)."""
+    """Dataset of :func:`harness.dynamics.maps.jacobian.jacobian_vs_x`: J(x) and the free-flight P(1)."""
     rows = ["d_u_next", "d_v_next"]
     cols = ["d_u", "d_v"]
     ds = xr.Dataset(

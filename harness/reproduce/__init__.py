@@ -16,7 +16,7 @@ Targets (one module each, ``harness/reproduce/*.py``):
 * ``rescaling`` -- window shift soft compliant vs rigid wall against (1+r)^2/(1-r)^2.
 * ``direct`` -- one-step map prediction against the FMU's pre-impact map, error order in eps.
 
-``impact-harness windows`` (:mod:`harness.analysis.windows`) is Figure 9's comparison for any
+``impact-harness windows`` (:mod:`harness.analysis.windows.compare_windows`) is Figure 9's comparison for any
 parameter set; ``reproduce fig9`` runs it with the paper's parameters.
 
 ``--quick`` gives a coarse version (under a minute on 2 cores); the default is the

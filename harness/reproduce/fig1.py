@@ -27,7 +27,7 @@ from mapcheck.linear import invert_alpha_gamma
 from mapcheck.windows import MapParams
 
 from ..config import SamplingSpec, SweepSpec
-from ..dynamics.shooting import StroboscopicMap, map_guided_windows
+from ..dynamics.maps.shooting import StroboscopicMap, map_guided_windows
 from . import Context
 
 ALPHA, GAMMA, R, GAMMA_WALL = 0.25, 0.01, 0.9, 10.0

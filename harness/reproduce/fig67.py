@@ -24,8 +24,15 @@ import numpy as np
 from mapcheck.compare import power_law_with_offset
 
 from ..config import SamplingSpec, SweepSpec
-from ..dynamics.jacobian import jacobian_vs_x, resolve_method
-from ..dynamics.singularity_fit import HARD_BETA, RELIABLE, SOFT_BETA, contact_beta, fit_singularity, regime_masks
+from ..dynamics.maps.jacobian import jacobian_vs_x, resolve_method
+from ..dynamics.maps.singularity_fit import (
+    HARD_BETA,
+    RELIABLE,
+    SOFT_BETA,
+    contact_beta,
+    fit_singularity,
+    regime_masks,
+)
 from . import Context
 
 NU, OMEGA = 0.196, 7.368
@@ -93,7 +100,7 @@ def cross_check(ctx: Context, r: float) -> dict[str, Any]:
 
 def fit_regimes(x: np.ndarray, scan: Any, r: float, Gamma: float) -> dict[str, Any]:
     """Slopes of |J11 - P11| in the soft and hard regimes (plain log-log with its standard
-    error, :func:`harness.dynamics.singularity_fit.fit_singularity`, and with the regular O(1)
+    error, :func:`harness.dynamics.maps.singularity_fit.fit_singularity`, and with the regular O(1)
     part P (N - I) removed by fitting a x^q + b)."""
     d = scan.J[:, 0, 0] - scan.P1[0, 0]
     out: dict[str, Any] = {}

@@ -1,6 +1,6 @@
 """Figure 9: truncated period adding at (alpha, gamma) = (0.99, 0.01), r = 0.9.
 
-This is ``impact-harness windows`` (:mod:`harness.analysis.windows`) with the paper's
+This is ``impact-harness windows`` (:mod:`harness.analysis.windows.compare_windows`) with the paper's
 parameters and grids:
 
 * ``theory_64``   -- (64), rho in [1/(4M), 1/M^2], with rho(sigma) linear from (48);
@@ -20,7 +20,7 @@ import numpy as np
 
 from . import Context
 from .fig9_maps import ALPHA, GAMMA, R
-from ..analysis.windows import WindowProblem, WindowSettings, run_windows
+from ..analysis.windows.compare_windows import WindowProblem, WindowSettings, run_windows
 
 GAMMA_WALL = 10.0
 M_MAX = 4
@@ -51,6 +51,6 @@ def settings(quick: bool) -> WindowSettings:
 
 def run(ctx: Context) -> tuple[dict[str, Any], str]:
     result, _ = run_windows(ctx, problem(), settings(ctx.quick))
-    from ..analysis.windows_report import report
+    from ..analysis.windows.report import report
 
     return result, report(ctx, problem(), result, title="Figure 9: truncated period adding, map vs ODE")

@@ -12,7 +12,7 @@ the 1D regime of (54)-(56), rho/sigma ~ nu Omega^2 / (2 |A| (1 -+ r)^2)), so tha
 windows lie at sigma < 0.3, where the A~(sigma) map matched the ODE at Figure 9.
 
 The ODE window edges are measured on both walls by Newton shooting on the FMU's map
-(:func:`harness.dynamics.shooting.map_guided_windows`), and the factor is measured edge by edge,
+(:func:`harness.dynamics.maps.shooting.map_guided_windows`), and the factor is measured edge by edge,
 in sigma and in rho~ = rho/sigma * sigma |A|/|A~(sigma)| (which removes the A~ nonlinearity
 that is common to both walls).
 """
@@ -27,7 +27,7 @@ from mapcheck.coeffs import coefficients, grazing_acceleration
 from mapcheck.compare import map_windows, markdown_window_table
 from mapcheck.linear import alpha_gamma
 
-from ..dynamics.shooting import StroboscopicMap, map_guided_windows
+from ..dynamics.maps.shooting import StroboscopicMap, map_guided_windows
 from . import Context
 
 NU, OMEGA, R, GAMMA_WALL = 100.0, math.sqrt(2.0), 0.5, 10.0

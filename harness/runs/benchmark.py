@@ -4,7 +4,7 @@
 
 The bare loop is what a user would write by hand: one FMU2Slave, ``doStep(t, 1)`` and a
 ``getReal``/``getInteger`` of (u, v, impacts) per period.  The harness loop is
-:func:`harness.dynamics.sampling.strobe` on :class:`harness.fmu.simulator.FmuSimulator`, which does the
+:func:`harness.dynamics.maps.sampling.strobe` on :class:`harness.fmu.simulator.FmuSimulator`, which does the
 same FMI calls plus its bookkeeping.  Both run the same parameters from the same state;
 the best of ``repeat`` runs is reported (the machine may be shared).
 """
@@ -18,7 +18,7 @@ import numpy as np
 
 from ..config import default_fmu_path
 from ..fmu.fmi import FmuModel, open_source
-from ..dynamics.sampling import strobe
+from ..dynamics.maps.sampling import strobe
 from ..fmu.simulator import FmuSimulator
 
 
@@ -59,7 +59,7 @@ def bare_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, floa
 
 def harness_loop(model: FmuModel, params: dict[str, Any], state0: tuple[float, float],
                  periods: int) -> tuple[float, np.ndarray]:
-    """Seconds for ``periods`` sampled periods through :func:`harness.dynamics.sampling.strobe`, and
+    """Seconds for ``periods`` sampled periods through :func:`harness.dynamics.maps.sampling.strobe`, and
     the samples (u, v, cumulative impacts)."""
     sim = FmuSimulator(model.source(), instance_name="bench")
     t0 = time.perf_counter()

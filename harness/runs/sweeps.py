@@ -169,7 +169,7 @@ def assemble(spec: SweepSpec, tasks: Mapping[str, SweepTask], results: Mapping[s
         coords=coords,
         attrs=dict(attrs),
     )
-    from ..dynamics.classify import dynamics_attrs, reason_attrs
+    from ..dynamics.maps.classify import dynamics_attrs, reason_attrs
 
     ds["dynamics"] = (dims, arrays["dynamics"], dynamics_attrs())
     ds["dynamics_reason"] = (dims, arrays["dynamics_reason"], reason_attrs())

@@ -14,10 +14,10 @@ from typing import Any, Callable
 import numpy as np
 
 from ..io.children import _exit_on_signal, die_with_parent
-from ..dynamics.classify import classify_orbit, explain_dynamics, still_settling
+from ..dynamics.maps.classify import classify_orbit, explain_dynamics, still_settling
 from ..config import SamplingSpec
 from ..fmu.fmi import INITIAL_STATE, WALL_NAMES, FmuSource
-from ..dynamics.sampling import sample_periods
+from ..dynamics.maps.sampling import sample_periods
 from ..fmu.simulator import has_derivatives, simulator_for
 
 RESULT_FIELDS = ("u", "v", "impacts", "t", "period", "orbit_impacts", "dynamics", "dynamics_reason", "lyapunov",
@@ -159,7 +159,7 @@ def _run_points(task: SweepTask, sim: Any, params: dict[str, Any], state0: tuple
         lam = err = float("nan")
         if s.lyapunov:
             now = dict(params) if task.param in INITIAL_STATE else {**params, task.param: value}
-            from ..dynamics.lyapunov import lyapunov_continued
+            from ..dynamics.maps.lyapunov import lyapunov_continued
 
             ly = lyapunov_continued(sim, now, s.lyapunov, exact)
             out["lyapunov"][i], out["lyapunov_err"][i] = ly.exponents, ly.uncertainty

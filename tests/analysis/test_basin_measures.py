@@ -10,7 +10,7 @@ from itertools import product
 import numpy as np
 import pytest
 
-from harness.analysis.basin_measures import basin_entropy, basin_fractions, uncertainty_exponent
+from harness.analysis.basins.measures import basin_entropy, basin_fractions, uncertainty_exponent
 
 
 def _grid(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -110,7 +110,7 @@ def test_one_class_has_no_boundary() -> None:
 # -- from random pairs of starts (Grebogi et al.'s own procedure) ---------------------------------
 @pytest.mark.parametrize("shape", ["line", "disc"])
 def test_pairs_of_a_smooth_boundary_give_exponent_one(shape: str) -> None:
-    from harness.analysis.basin_uncertainty import pairs_fit
+    from harness.analysis.basins.uncertainty import pairs_fit
 
     def classify(u: np.ndarray, v: np.ndarray) -> np.ndarray:
         return (u + 0.37 * v > 0.05) if shape == "line" else (u ** 2 + v ** 2 < 0.5)
@@ -121,7 +121,7 @@ def test_pairs_of_a_smooth_boundary_give_exponent_one(shape: str) -> None:
 
 
 def test_pairs_of_a_cantor_boundary_give_the_exponent_of_its_dimension() -> None:
-    from harness.analysis.basin_uncertainty import pairs_fit
+    from harness.analysis.basins.uncertainty import pairs_fit
 
     # labels exact down to 3^-14 ~ 2e-7, far below the smallest eps (2^-10); each level's thirds a
     # class of its own (with two classes alternating, pairs that land in different thirds of the

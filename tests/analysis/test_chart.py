@@ -13,7 +13,7 @@ import math
 import pytest
 
 from harness.cli.main import main
-from harness.analysis.chart import closing, parse_range
+from harness.analysis.chart.run import closing, parse_range
 from harness.errors import HarnessInputError
 
 pytestmark = pytest.mark.slow
@@ -179,8 +179,8 @@ def test_a_window_beyond_the_sigma_axis_is_drawn_to_its_edge_with_an_arrow(chart
     import numpy as np
     from matplotlib.text import Annotation
 
-    from harness.analysis.chart import ChartProblem
-    from harness.analysis.chart_output import chart_figure
+    from harness.analysis.chart.run import ChartProblem
+    from harness.analysis.chart.chart import chart_figure
 
     _, res = chart
     p = res["parameters"]
@@ -207,7 +207,7 @@ def test_a_chart_below_grazing_continues_the_flip_of_the_coexisting_orbit_on_the
     (mapcheck's own Newton: a multiplier -1, one impact per period), across the range of r."""
     import numpy as np
 
-    from tests.edge_support import ExactFlow
+    from tests.support.edges import ExactFlow
 
     assert main(["chart", "--nu", "0.8", "--Omega", "2.5", "--r", "0.95", "--wall", "rigid", "--param2", "r",
                  "--range", "0.85:0.95", "--num", "3", "--M-max", "4", "--quick", "--sigma-range=-0.3:0.3",
@@ -238,7 +238,7 @@ def test_a_fold_below_grazing_continued_over_gamma_is_the_exact_flows_fold(tmp_p
     confirms every point (a fold has no orbit beyond it, stable or not)."""
     import numpy as np
 
-    from tests.edge_support import ExactFlow
+    from tests.support.edges import ExactFlow
 
     assert main(["chart", "--nu", "0.3", "--Omega", "1.2", "--r", "0.8", "--wall", "compliant", "--Gamma", "10",
                  "--param2", "Gamma", "--range", "10:40", "--log", "--num", "3", "--M-max", "3", "--quick",

@@ -7,7 +7,7 @@ sigma = 0 as nu grows.
 
 Independent truth: the wall-free orbit (4) grazes at sigma = 0 exactly and its multipliers are the
 free oscillator's, |mu| = exp(-nu/2) (docs/theory.md section 10); every other orbit is checked on
-the exact closed-form flow (mapcheck's own Newton, :class:`tests.edge_support.ExactFlow`), never
+the exact closed-form flow (mapcheck's own Newton, :class:`tests.support.edges.ExactFlow`), never
 against numbers this code produced.
 """
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from harness.cli.main import main
-from tests.edge_support import ExactFlow
+from tests.support.edges import ExactFlow
 
 pytestmark = pytest.mark.slow
 
@@ -153,7 +153,7 @@ def test_every_contradiction_found_is_settled_as_the_exact_flow_says(bistable) -
 def _point_near(res, c):
     """A start for the exact flow's Newton (the shooting's own orbit is not stored): the wall-free
     point, or the exact flow's impacting orbit walked down to that sigma."""
-    from harness.dynamics.periodic_map import wall_free_offset
+    from harness.dynamics.maps.periodic_map import wall_free_offset
 
     ev = c["evidence"]
     if c["window"] == "1/0":
@@ -169,8 +169,8 @@ def test_a_window_removed_from_the_scans_is_restored_by_shooting(bistable) -> No
     continued windows of the fixture's run: the continuation says present, the scans absent, and
     the shooting finds the stable orbit, which the exact flow confirms; the continuation is right.
     Then the other way: the continued window removed, the scans' window found by shooting."""
-    from harness.analysis.chart import ChartProblem, chart_value_task
-    from harness.analysis.chart_contradictions import contradiction_lines, contradictions
+    from harness.analysis.chart.run import ChartProblem, chart_value_task
+    from harness.analysis.chart.contradictions import contradiction_lines, contradictions
     from harness.config import default_fmu_path
     from harness.fmu.fmi import FmuModel
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from harness.cli.main import main
-from tests.edge_support import ExactFlow
+from tests.support.edges import ExactFlow
 
 pytestmark = pytest.mark.slow  # three quick windows runs, ~20 s
 

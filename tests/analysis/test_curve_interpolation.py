@@ -1,5 +1,5 @@
 """The chord error of a continued edge read between two points of its curve
-(:mod:`harness.analysis.curve_interpolation`), against curves known in closed form."""
+(:mod:`harness.analysis.chart.curve_interpolation`), against curves known in closed form."""
 from __future__ import annotations
 
 import math
@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from harness.analysis.chart_curves import _edge_at
-from harness.analysis.curve_interpolation import chord_error
+from harness.analysis.chart.edge_curves import _edge_at
+from harness.analysis.chart.curve_interpolation import chord_error
 
 
 def _curve(p2: np.ndarray, sigma: np.ndarray) -> dict:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import pytest
 
-from harness.analysis.edge_coincidence import reconcile, warnings
+from harness.analysis.windows.edge_coincidence import reconcile, warnings
 
 
 def _row(M, k, lo, hi, kinds, lo_iv, hi_iv):

@@ -17,10 +17,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.analysis.located_edges import locate_side
-from harness.dynamics.periodic_map import PeriodMap
-from harness.dynamics.shooting import StroboscopicMap
-from tests.edge_support import ExactFlow
+from harness.analysis.windows.located_edges import locate_side
+from harness.dynamics.maps.periodic_map import PeriodMap
+from harness.dynamics.maps.shooting import StroboscopicMap
+from tests.support.edges import ExactFlow
 
 FIG9 = {"nu": 4.605170185988091, "Omega": 0.3059238689620112, "r": 0.9, "wall": 1, "Gamma": 10.0, "solver": 1}
 
@@ -87,7 +87,7 @@ def test_fig9_graze_edges_by_the_contact_change_alone_have_honest_intervals(sim,
     """With the defining quantity's location switched off, the same edges come from the contact
     change: its bracket alone excluded the exact graze (1.3e-9 to 2.9e-9 beyond it); widened, the
     interval holds it and is still narrower than 2e-8, and the entry says it was widened."""
-    from harness.dynamics import orbit_walk
+    from harness.dynamics.continuation import orbit_walk
 
     monkeypatch.setattr(orbit_walk, "locate_graze", lambda *args: None)
     edge, how, z0 = _upper_edge(sim, M)

@@ -1,4 +1,4 @@
-"""The per-value scans' edges located by the continuation (:mod:`harness.analysis.located_edges`),
+"""The per-value scans' edges located by the continuation (:mod:`harness.analysis.windows.located_edges`),
 on the two failure modes of Figure 9's chart (issue 26) and on COCO's impact example.
 
 Figure 9's family (nu = 4.605, Omega = 0.3059, r = 0.9) at Gamma = 48.9, the chart's fifth value:
@@ -17,10 +17,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.analysis.ode_windows import Family, shoot_family
-from harness.dynamics.shooting import StroboscopicMap
+from harness.analysis.windows.ode_windows import Family, shoot_family
+from harness.dynamics.maps.shooting import StroboscopicMap
 from mapcheck.impact_orbit import fold_velocity, one_impact_orbit, sigma_of_v
-from tests.edge_support import ExactFlow, dominant, edge_sides, good
+from tests.support.edges import ExactFlow, dominant, edge_sides, good
 from tests.mapcheck.test_impact_orbit import coco, section_state
 
 FIG9 = {"nu": 4.605170185988091, "Omega": 0.3059238689620112, "r": 0.9, "wall": 1, "Gamma": 48.9, "solver": 1}
@@ -116,7 +116,7 @@ def test_a_side_the_continuation_cannot_settle_is_bisected_and_says_so(sim, monk
     """With a continuation budget too small to reach the fold, the lower edge comes from the march
     and bisection, to its own tolerance (1e-6 here) of the closed form's fold, and the entry says
     "bisection" with the reason."""
-    from harness.analysis import located_edges
+    from harness.analysis.windows import located_edges
 
     monkeypatch.setattr(located_edges, "SEGMENTS", 1)
     monkeypatch.setattr(located_edges, "SEGMENT_POINTS", 3)

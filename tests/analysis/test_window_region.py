@@ -9,7 +9,7 @@ first candidate (the graze edge's loss of stability, which the chart used to rep
 closing.
 
 Independent truth: mapcheck's closed-form flow and its own Newton shooting
-(:class:`tests.edge_support.ExactFlow`), sharing nothing with the FMU: just above the hand-over
+(:class:`tests.support.edges.ExactFlow`), sharing nothing with the FMU: just above the hand-over
 the exact flow still has the stable period-2 orbit between the new edges; just below the reported
 closing it has it, just above it has none across the window's sigma interval.
 """
@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.analysis.window_region import chart_regions, closing_kind, edge_crossings
-from tests.edge_support import ExactFlow, good
+from harness.analysis.chart.window_region import chart_regions, closing_kind, edge_crossings
+from tests.support.edges import ExactFlow, good
 
 pytestmark = pytest.mark.slow
 

@@ -3,7 +3,7 @@
 (alpha, gamma) = (0.5, 0.05), r = 0.8, compliant wall Gamma = 10.  Independent truths: every
 ODE edge against the exact closed-form flow (mapcheck.exact, Newton of mapcheck.orbits; no
 harness, no FMU), which must change from a stable maximal orbit to none across the reported
-bracket for the reported reason (tests/edge_support.py); the 2D map with A~(sigma) (closed-form
+bracket for the reported reason (tests/support/edges.py); the 2D map with A~(sigma) (closed-form
 maximal orbits, mapcheck) near its lower edges, where the orbit is closest to grazing; the FMU's
 own up/down scans (plain simulation, no Newton), whose periods the test recomputes from the
 samples.
@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 from harness.cli.main import main
-from harness.analysis.windows import WindowProblem, default_settings
-from tests.edge_support import ExactFlow, dominant, edge_sides, good
+from harness.analysis.windows.compare_windows import WindowProblem, default_settings
+from tests.support.edges import ExactFlow, dominant, edge_sides, good
 
 ARGS = ["--alpha", "0.5", "--gamma", "0.05", "--r", "0.8", "--wall", "compliant", "--Gamma", "10"]
 

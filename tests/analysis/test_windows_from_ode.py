@@ -119,7 +119,7 @@ def test_alpha_messages_match_nu_omega(tmp_path) -> None:
 
 def test_underdamped_alpha_gamma_with_a_branch_is_the_nu_omega_oscillator() -> None:
     """(alpha, gamma) of nu = 0.8, Omega = 2.5 with --branch 0 gives back that oscillator."""
-    from harness.analysis.windows import WindowProblem
+    from harness.analysis.windows.compare_windows import WindowProblem
     from mapcheck.linear import alpha_gamma
 
     a, g = alpha_gamma(0.8, 2.5)

@@ -5,7 +5,7 @@ from typing import Iterator
 
 import pytest
 
-from tests.fmu_support import LoggedSlave
+from tests.support.fmu import LoggedSlave
 
 
 def _open(request: pytest.FixtureRequest) -> Iterator[LoggedSlave]:

@@ -14,7 +14,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave
 
-from tests.fmu_support import FMU3_PATH, LoggedSlave, on_orbit
+from tests.support.fmu import FMU3_PATH, LoggedSlave, on_orbit
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)

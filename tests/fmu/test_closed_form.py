@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from tests.fmu_support import FMU3_PATH, on_orbit
-from tests.sens_support import FIG9, UNDERDAMPED, Fmu, one_period, oracle
+from tests.support.fmu import FMU3_PATH, on_orbit
+from tests.support.sensitivities import FIG9, UNDERDAMPED, Fmu, one_period, oracle
 
 CASES = {
     "fig9_compliant": dict(FIG9, wall=1),
@@ -131,7 +131,7 @@ def test_fmi3_closed_form_equals_fmi2():
 def test_ramped_ports_closed_form_equals_cvode(wall):
     """F_ext and u_wall as ramps (values and first derivatives per step, FMI 2.0): a moving
     wall, with contacts; the closed form against CVODE mode step by step."""
-    from tests.fmu_support import WALLS, LoggedSlave
+    from tests.support.fmu import WALLS, LoggedSlave
     runs = {}
     for solver in (0, 1):
         f = LoggedSlave(name=f"ramp{solver}")
@@ -159,7 +159,7 @@ def test_fmi3_early_return_at_every_event_in_closed_form(wall, sigma):
     left to the importer's event mode) at the oracle's crossing times."""
     from fmpy import simulate_fmu
 
-    from tests.fmu_support import WALLS
+    from tests.support.fmu import WALLS
     lin = {k: FIG9[k] for k in ("nu", "Omega")}
     start = dict(wall=WALLS[wall], sigma=sigma, Gamma=10.0, **on_orbit(sigma, 0.5), **lin, solver=1)
     res = simulate_fmu(str(FMU3_PATH), fmi_type="CoSimulation", start_time=0.5, stop_time=10.5,
@@ -181,7 +181,7 @@ def test_bare_c_driver_runs_the_fmus_code(tmp_path, fmu2):
     import shutil
     import subprocess
 
-    from tests.fmu_support import ROOT
+    from tests.support.fmu import ROOT
     cc = shutil.which("cc") or shutil.which("gcc")
     if cc is None:
         pytest.skip("no C compiler")

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.fmu_support import FMU_PATH, LoggedSlave, expect_error, on_orbit
+from tests.support.fmu import FMU_PATH, LoggedSlave, expect_error, on_orbit
 
 FREE = dict(nu=0.0, Omega=3.0, sigma=-1.0 + 1e-15, Gamma=10.0, wall="compliant",
             u0=-1.0, v0=6.0)  # amplitude 2 about u = -1: into the wall once per free period

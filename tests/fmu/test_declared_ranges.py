@@ -15,7 +15,7 @@ import pytest
 from fmpy import read_model_description
 from fmpy.fmi1 import FMICallException
 
-from tests.fmu_support import FMU3_PATH, FMU_PATH, LoggedSlave
+from tests.support.fmu import FMU3_PATH, FMU_PATH, LoggedSlave
 
 MD2 = read_model_description(str(FMU_PATH))
 MD3 = read_model_description(str(FMU3_PATH))

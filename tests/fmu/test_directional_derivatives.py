@@ -19,8 +19,8 @@ from scipy.linalg import logm
 
 from mapcheck.exact import forcing_amplitude_phase
 from mapcheck.linear import propagator_k2
-from tests.derivative_support import INTERFACES, KNOWNS, Instance
-from tests.fmu_support import FMU3_PATH, FMU_PATH
+from tests.support.derivatives import INTERFACES, KNOWNS, Instance
+from tests.support.fmu import FMU3_PATH, FMU_PATH
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112, Gamma=10.0)
 UNDER = dict(nu=0.196, Omega=7.368, Gamma=1000.0)

@@ -24,7 +24,7 @@ import numpy as np
 import pytest
 
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import LoggedSlave, on_orbit
+from tests.support.fmu import LoggedSlave, on_orbit
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)  # strongly damped (alpha = 0.99)
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)

@@ -13,7 +13,7 @@ from fmpy.fmi3 import FMU3Slave
 from fmpy.validation import validate_fmu
 
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import FMU3_PATH, FMU_PATH, WALLS, at_times, on_orbit, simulate
+from tests.support.fmu import FMU3_PATH, FMU_PATH, WALLS, at_times, on_orbit, simulate
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)

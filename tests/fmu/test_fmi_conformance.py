@@ -3,7 +3,7 @@
 For each interface (FMI 2.0 CS, FMI 2.0 ME, FMI 3.0 CS without and with eventModeUsed, FMI 3.0
 ME), each state of its state machine and each function of its version, a fresh instance of the
 real built FMU is driven into the state and the function called once with valid arguments. The
-reference is tests/fmi_standard.py, written from the standards' text (not from fmu_states.c):
+reference is tests/support/fmi_standard.py, written from the standards' text (not from fmu_states.c):
 
 * allowed there: the call is not refused for its state (no "not allowed in" in the log; OK or
   Warning, except for the functions this FMU does not provide, which fail for that reason);
@@ -23,8 +23,8 @@ import ctypes as C
 
 import pytest
 
-from tests import fmi_standard as std
-from tests.fmi_probes import Instance, call_in_update, calls, drive
+from tests.support import fmi_standard as std
+from tests.support.fmi_probes import Instance, call_in_update, calls, drive
 from tests.fuzz.bindings import ERROR, OK, WARNING
 
 INTERFACES = ("fmi2-cs", "fmi2-me", "fmi3-cs", "fmi3-cs-event", "fmi3-me")

@@ -2,7 +2,7 @@
 
 The page is generated (scripts/state_table_doc.py, run by scripts/docs.sh); this test fails when
 the C table changed without the page. It also compares the C table, row by row, with
-tests/fmi_standard.py (written from the standards' text): the conformance suite checks the
+tests/support/fmi_standard.py (written from the standards' text): the conformance suite checks the
 FMU's behaviour, this the table itself, so a disagreement names the row.
 """
 from __future__ import annotations
@@ -12,7 +12,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from tests import fmi_standard as std
+from tests.support import fmi_standard as std
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "scripts" / "state_table_doc.py"

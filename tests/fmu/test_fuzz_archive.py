@@ -15,7 +15,7 @@ import pytest
 
 from harness.errors import HarnessInputError
 from harness.fmu.fmi import check_archive
-from tests.fmu_support import FMU_PATH
+from tests.support.fmu import FMU_PATH
 
 
 @pytest.mark.parametrize("where", [i / 40 for i in range(40)])

@@ -36,7 +36,7 @@ import numpy as np
 import pytest
 
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import EVENTS_LOG, FMU_PATH, ROOT, LoggedSlave, on_orbit
+from tests.support.fmu import EVENTS_LOG, FMU_PATH, ROOT, LoggedSlave, on_orbit
 from tests.fmu.test_events_total import BUDGET, allowance
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)

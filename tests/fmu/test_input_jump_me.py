@@ -16,7 +16,7 @@ import pytest
 from fmpy import simulate_fmu
 
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import FMU3_PATH, FMU_PATH, LoggedSlave
+from tests.support.fmu import FMU3_PATH, FMU_PATH, LoggedSlave
 
 LIN = dict(nu=4.605170185988091, Omega=0.3059238689620112)
 SIGMA, GAMMA, R = 0.5, 10.0, 0.8
@@ -113,7 +113,7 @@ def test_an_input_jump_in_event_mode_asks_the_importer_to_restart(interface, jum
     iteration reports valuesOfContinuousStatesChanged (the flag on which fmusim restarts its
     integrator; FMPy restarts at every event), with the state itself unchanged unless the input-jump rule moves it (the
     wall stepping 0.1 past the mass into the compliant wall: the state kept, contact taken)."""
-    from tests.derivative_support import Instance
+    from tests.support.derivatives import Instance
 
     x = Instance(interface, u0=-0.5, v0=0.2, wall=1)
     try:

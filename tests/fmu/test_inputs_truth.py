@@ -18,7 +18,7 @@ import pytest
 
 from mapcheck.exact import forcing_amplitude_phase
 from mapcheck.inputs_reference import InputsReference, Piece, RefState
-from tests.fmu_support import EVENTS_LOG, WALLS, LoggedSlave
+from tests.support.fmu import EVENTS_LOG, WALLS, LoggedSlave
 
 #: the FMU logs from instantiation on (the fixture in conftest reads this)
 FMU_LOGGING = True

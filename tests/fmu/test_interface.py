@@ -11,7 +11,7 @@ import pytest
 from fmpy.validation import validate_fmu
 
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import (FMU_PATH, LoggedSlave, expect_error, on_orbit,
+from tests.support.fmu import (FMU_PATH, LoggedSlave, expect_error, on_orbit,
                                refused_and_restored)
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)

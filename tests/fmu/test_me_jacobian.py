@@ -1,5 +1,5 @@
 """The FMU's Jacobian in use: a Model Exchange integration (scikit-sundae's CVODE driving the FMU
-through fmpy, tests/me_jacobian_support.py) with CVODE's Newton iteration given the FMU's exact
+through fmpy, tests/support/me_jacobian.py) with CVODE's Newton iteration given the FMU's exact
 Jacobian (directional derivatives, one call per state), against the same run with CVODE's
 difference quotients. Both follow the closed form (mapcheck.exact) within the Model Exchange
 bound of the project (2e-6 of the state's size at rtol 1e-10, tests/fmu/test_model_exchange.py),
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from mapcheck.exact import ExactOscillator
-from tests.me_jacobian_support import run_me
+from tests.support.me_jacobian import run_me
 
 RTOL = 1e-10
 ME_TOL = 2e-6

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from tests.derivative_support import Instance
+from tests.support.derivatives import Instance
 
 TOL = 1e-6
 R = 0.8

@@ -8,7 +8,7 @@ import pytest
 from fmpy import read_model_description
 
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import FMU3_PATH, FMU_PATH, LoggedSlave, at_times, on_orbit, simulate
+from tests.support.fmu import FMU3_PATH, FMU_PATH, LoggedSlave, at_times, on_orbit, simulate
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import LoggedSlave
+from tests.support.fmu import LoggedSlave
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)

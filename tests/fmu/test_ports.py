@@ -13,7 +13,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from mapcheck.exact import ExactOscillator, forcing_amplitude_phase
-from tests.fmu_support import (FMU3_PATH, LoggedSlave, at_times, expect_error,
+from tests.support.fmu import (FMU3_PATH, LoggedSlave, at_times, expect_error,
                                refused_and_restored, simulate)
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
@@ -417,7 +417,7 @@ def test_a_moving_wall_reflects_relative_to_its_velocity(fmu, wall, r):
 def test_model_structure_declares_outputs_on_inputs():
     from fmpy import read_model_description
 
-    from tests.fmu_support import FMU_PATH
+    from tests.support.fmu import FMU_PATH
     for path in (FMU_PATH, FMU3_PATH):
         md = read_model_description(str(path))
         deps = {o.variable.name: sorted(d.name for d in (o.dependencies or []))
@@ -434,7 +434,7 @@ def test_model_exchange_wall_jump_is_an_event_with_the_same_rule():
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Model
 
-    from tests.fmu_support import FMU_PATH
+    from tests.support.fmu import FMU_PATH
     md = read_model_description(str(FMU_PATH))
     vr = {v.name: v.valueReference for v in md.modelVariables}
     me = FMU2Model(guid=md.guid, unzipDirectory=extract(str(FMU_PATH)),

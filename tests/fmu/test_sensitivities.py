@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tests.fmu_support import on_orbit
-from tests.sens_support import FIG9, UNDERDAMPED, Fmu, exact_derivatives, one_period, oracle
+from tests.support.fmu import on_orbit
+from tests.support.sensitivities import FIG9, UNDERDAMPED, Fmu, exact_derivatives, one_period, oracle
 
 # (name, parameters, starts (t0, sigma-orbit phase)): every case has wall events in its period
 CASES = {

@@ -19,7 +19,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Slave
 
-from tests.fmu_support import (FMU3_PATH, FMU_PATH, LoggedSlave, expect_error,
+from tests.support.fmu import (FMU3_PATH, FMU_PATH, LoggedSlave, expect_error,
                                refused_and_restored)
 
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)

@@ -1,6 +1,6 @@
 """The cases of an independent audit of every (state, function) pair, as conformance tests.
 
-Each case names the standard's text that decides it (tests/fmi_standard.py holds the same
+Each case names the standard's text that decides it (tests/support/fmi_standard.py holds the same
 sections); the full pair-by-pair comparison with that table is tests/fmu/test_fmi_conformance.py
 and tests/twin/test_fmi_conformance.py.
 """
@@ -13,9 +13,9 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave, fmi2LastSuccessfulTime
 
-from tests import fmi_standard as std
-from tests.derivative_support import Instance
-from tests.fmu_support import FMU_PATH, ROOT
+from tests.support import fmi_standard as std
+from tests.support.derivatives import Instance
+from tests.support.fmu import FMU_PATH, ROOT
 
 TWIN = ROOT / "build" / "fmu" / "ImpactOscillatorPy.fmu"
 

@@ -26,7 +26,7 @@ from fmpy.fmi2 import FMU2Slave
 from fmpy.fmi3 import FMU3Slave
 
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import FMU3_PATH, FMU_PATH, WALLS
+from tests.support.fmu import FMU3_PATH, FMU_PATH, WALLS
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)
 SIGMA, R, GAMMA = 0.5, 0.9, 10.0  # Figure 9, sigma = 0.5 (period 2)

@@ -67,7 +67,7 @@ def test_memcheck_sees_a_leak(driver: Path) -> None:
     assert "definitely lost" in res.stderr
 
 
-# -- the refused initialisation through fmpy (tests/refused_init_repro.py) ----------------------
+# -- the refused initialisation through fmpy (tests/support/refused_init_process.py) ----------------------
 # CPython itself has benign memcheck reports (e.g. int.from_bytes on a partly uninitialised
 # buffer); only errors whose stack passes through the FMU's binary or fmpy's logger proxy count.
 _OURS = re.compile(r"ImpactOscillator|fmpy/logging|logMessage")
@@ -76,7 +76,7 @@ _ERROR = re.compile(r"Invalid (read|write|free)|uninitialised|Jump to|Process te
 
 def _memcheck_repro(*extra: str) -> tuple[subprocess.CompletedProcess, list[str]]:
     env = dict(os.environ, PYTHONMALLOC="malloc", PYTHONPATH=str(ROOT))
-    res = subprocess.run(["valgrind", "-q", sys.executable, "-m", "tests.refused_init_repro", "1",
+    res = subprocess.run(["valgrind", "-q", sys.executable, "-m", "tests.support.refused_init_process", "1",
                           *extra], cwd=ROOT, env=env, capture_output=True, text=True,
                          timeout=600)
     blocks = re.split(r"\n==\d+== \n", res.stderr)

@@ -17,7 +17,7 @@ from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Slave
 
 from harness.fmu.fmi2_logging import Fmi2Callbacks
-from tests.fmu_support import FMU3_PATH, FMU_PATH, LoggedSlave, expect_error, refused_and_restored
+from tests.support.fmu import FMU3_PATH, FMU_PATH, LoggedSlave, expect_error, refused_and_restored
 
 OUTPUTS_REAL = ("u", "v", "F_contact", "v_impact", "t_impact", "F_g", "phi", "kappa")
 

@@ -11,7 +11,7 @@ parent process, runner.py), and in this process
 * ``roundtrip``: a state serialised and deserialised restores the very same variables;
 * ``fatal``: no call answers fmi2Fatal/fmi3Fatal;
 * ``illegal-ok``: no call the standard's state machine does not allow in the instance's state
-  (tests/fmi_standard.py, followed by tests/fuzz/standard_model.py) is answered OK or Warning;
+  (tests/support/fmi_standard.py, followed by tests/fuzz/standard_model.py) is answered OK or Warning;
 * ``bricked``: at the end of every sequence, whatever happened, reset + a fresh initialisation +
   one step work and give finite values.
 

@@ -1,7 +1,7 @@
 """The standard's state machine as the fuzzer's oracle.
 
 Every FMI call the executor makes goes through :class:`RecordingLibrary`, which records the
-function's name and status. :class:`StateModel` replays them against tests/fmi_standard.py (the
+function's name and status. :class:`StateModel` replays them against tests/support/fmi_standard.py (the
 table written from the standards' text): a call the standard does not allow in the modelled
 state that the FMU answers OK or Warning is a finding (``illegal-ok``). The model then follows
 the standard's transitions: any Error puts the instance in the error state (FMI 2.0: Error; FMI
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
-from tests import fmi_standard as std
+from tests.support import fmi_standard as std
 
 OK, WARNING, ERROR = 0, 1, 3
 

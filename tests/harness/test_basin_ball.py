@@ -1,4 +1,4 @@
-"""The tolerance-ball check (harness/runs/basin_ball.py) that lets one period within the
+"""The tolerance-ball check (harness/runs/basins/ball.py) that lets one period within the
 tolerance of an attractor's point label a start: its verdicts against the FMU's CVODE mode (an
 independent solver, every start run in full), and the one-period stop changing no label of a
 grid against the same grid run in full."""
@@ -10,13 +10,13 @@ import numpy as np
 import pytest
 
 from harness import FmuModel, SamplingSpec
-from harness.dynamics.basins import hausdorff
-from harness.dynamics.sampling import strobe
+from harness.dynamics.attractors.identity import hausdorff
+from harness.dynamics.maps.sampling import strobe
 from harness.fmu import batch_kernel as bk
 from harness.fmu.simulator import FmuSimulator
-from harness.runs.basin_ball import ball_starts, check_balls
-from harness.runs.basin_registry import Registry
-from harness.runs.basin_tiles import label_result
+from harness.runs.basins.ball import ball_starts, check_balls
+from harness.runs.basins.registry import Registry
+from harness.runs.basins.tiles import label_result
 
 #: Figure 7 at sigma = 0.01: two period-3 orbits, the two-impact one with a basin boundary
 #: within the matching tolerance of one of its points

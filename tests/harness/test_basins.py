@@ -16,12 +16,12 @@ import pytest
 import xarray as xr
 
 from harness import FmuModel, SamplingSpec, SweepSpec, run_sweep
-from harness.dynamics.basins import INVALID, NOT_PERIODIC, hausdorff, identify_attractors
-from harness.runs.basin_scan import run_basins
+from harness.dynamics.attractors.identity import INVALID, NOT_PERIODIC, hausdorff, identify_attractors
+from harness.runs.basins.scan import run_basins
 from harness.runs.tasks import TEST_HOOK_ENV
 from mapcheck.exact import ExactOscillator
 
-from tests.cli_support import run_main
+from tests.support.cli import run_main
 
 ROOT = Path(__file__).resolve().parents[2]
 

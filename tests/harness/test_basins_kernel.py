@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 from harness import FmuModel, SamplingSpec
-from harness.dynamics.basins import STICKING
-from harness.dynamics.sampling import strobe
+from harness.dynamics.attractors.identity import STICKING
+from harness.dynamics.maps.sampling import strobe
 from harness.errors import HarnessInputError
 from harness.fmu import batch_kernel as bk
 from harness.fmu.simulator import FmuSimulator
-from harness.runs.basin_kernel_scan import run_basins_kernel
-from harness.runs.basin_tiles import label_result
+from harness.runs.basins.kernel_scan import run_basins_kernel
+from harness.runs.basins.tiles import label_result
 from mapcheck.exact import ExactOscillator
 
 #: name -> FMU parameters, section phase, box of starts (u1, u2, v1, v2)
@@ -94,7 +94,7 @@ def test_kernel_agrees_with_the_exact_flow_of_mapcheck(case: str) -> None:
 def test_early_stopping_changes_no_label(match_tol: float | None) -> None:
     """Also with a coarse matching tolerance (up to the distance between the two attractors'
     nearest points, 1.2), where a single passage near an attractor's point would mislabel
-    hundreds of starts: there the tolerance balls reach other basins (harness/runs/basin_ball.py)
+    hundreds of starts: there the tolerance balls reach other basins (harness/runs/basins/ball.py)
     and the orbit must come round twice; at the scan's own tolerance one attractor's balls pass
     and one period labels its starts."""
     params, theta, box = CASES["fig7-compliant"]
@@ -198,7 +198,7 @@ def test_cli_interrupted_at_a_tile_resumes_it_and_keeps_the_rest(tmp_path) -> No
 def test_cli_zoom_check_and_figure(tmp_path, capsys) -> None:
     import xarray as xr
 
-    from tests.cli_support import run_main
+    from tests.support.cli import run_main
 
     out = tmp_path / "b.nc"
     code, stdout, err = run_main([*FIG7, "--u0-grid=-1.2:0:40", "--v0-grid=-8:8:40", "--zoom=-1:-0.8:-2:2",
@@ -226,7 +226,7 @@ def test_cli_zoom_check_and_figure(tmp_path, capsys) -> None:
     (["--uncertainty-pairs", "10", "--kernel", "fmu"], "--uncertainty-pairs", "batch kernel"),
 ])
 def test_cli_bad_input_is_one_line(tmp_path, capsys, bad: list[str], flag: str, what: str) -> None:
-    from tests.cli_support import run_main
+    from tests.support.cli import run_main
 
     code, _, err = run_main([*FIG7, "--u0-grid=-1.2:0:4", "--v0-grid=-8:8:4", *bad, "--out", str(tmp_path / "b.nc")],
                             capsys)

@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.dynamics.classify import NOT_PERIODIC, classify_orbit, classify_samples, windows
+from harness.dynamics.maps.classify import NOT_PERIODIC, classify_orbit, classify_samples, windows
 
 
 def _cycle(points: list[tuple[float, float]], impacts: list[int], n: int, noise: float = 0.0, seed: int = 0):
@@ -82,7 +82,7 @@ def test_windows_groups_runs_of_maximal_orbits() -> None:
 
 
 def test_still_settling_tells_a_converging_alternation_from_a_true_period_two() -> None:
-    from harness.dynamics.classify import still_settling
+    from harness.dynamics.maps.classify import still_settling
 
     k = np.arange(40)
     converging = 0.5 + 1e-3 * (-0.97) ** k      # period 1 approached with multiplier -0.97
@@ -140,7 +140,7 @@ def test_settling_threshold_scales_with_the_orbit_on_both_sides(size: float, fac
     samples look like period 4): still settling while the modulation's 2-shift differences start
     above the threshold tol (1 + size) (3 times it), converged when they start below it (0.3
     times): the transient is over once it is within the periodicity tolerance, at every size."""
-    from harness.dynamics.classify import still_settling
+    from harness.dynamics.maps.classify import still_settling
 
     tol = 1e-5
     k = np.arange(40)

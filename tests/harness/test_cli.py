@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 import xarray as xr
 
-from tests.cli_support import run_main as _run_main
+from tests.support.cli import run_main as _run_main
 
 ROOT = Path(__file__).resolve().parents[2]
 FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"
@@ -183,7 +183,7 @@ def test_stale_default_checkpoint_is_discarded_explicit_one_refused(tmp_path: Pa
 def test_default_sweep_shows_the_period_adding_windows(tmp_path: Path, capsys) -> None:
     """The default `impact-harness sweep` (Figure 9, up and down), on a coarser grid: in both
     directions the maximal orbits come as period 1, 2, 3 with decreasing sigma."""
-    from harness.dynamics.classify import windows
+    from harness.dynamics.maps.classify import windows
 
     out = tmp_path / "default.nc"
     code, stdout, err = _run_main(["sweep", "--num", "19", "--workers", "2", "--out", str(out), "--no-progress"], capsys)

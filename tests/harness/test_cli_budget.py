@@ -12,7 +12,7 @@ import pytest
 import xarray as xr
 
 from harness.runs.budget import Budget, parse_size, simulate_estimate, sweep_estimate
-from tests.cli_support import run_main as _run_main
+from tests.support.cli import run_main as _run_main
 
 ROOT = Path(__file__).resolve().parents[2]
 

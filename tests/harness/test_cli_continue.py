@@ -9,7 +9,7 @@ import pytest
 from harness.io.results import read_netcdf
 from harness.config import DEFAULT_SOLVER
 from harness.fmu.fmi import SOLVER_NAMES
-from tests.cli_support import run_main
+from tests.support.cli import run_main
 
 FIG9 = ["--nu", "4.605170185988091", "--Omega", "0.3059238689620112", "--r", "0.9", "--wall", "compliant",
         "--Gamma", "10"]

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.cli_support import run_main as _run_main
+from tests.support.cli import run_main as _run_main
 
 ROOT = Path(__file__).resolve().parents[2]
 FMU = ROOT / "build" / "fmu" / "ImpactOscillator.fmu"

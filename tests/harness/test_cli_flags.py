@@ -6,7 +6,7 @@ import pytest
 
 from harness.cli.flags import flag_for, with_flags
 from harness.cli.main import build_parser
-from harness.dynamics.continuation import continue_orbit
+from harness.dynamics.continuation.continue_orbit import continue_orbit
 from harness.errors import HarnessInputError, SettingsErrors
 from harness.runs.backends import make_backend
 from harness.runs.checkpoint import CheckpointMismatch

@@ -17,7 +17,7 @@ import xarray as xr
 
 from harness import FmuModel, FmuSimulator, SamplingSpec, SweepSpec, run_sweep
 from harness.config.defaults import SECTION_PHASE
-from harness.dynamics.sampling import sample_periods
+from harness.dynamics.maps.sampling import sample_periods
 from harness.runs.tasks import TEST_HOOK_ENV
 from harness.io.tempdirs import PREFIX, remove_stale
 

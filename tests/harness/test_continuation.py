@@ -14,8 +14,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.dynamics.attractors import find_attractors
-from harness.dynamics.continuation import continue_orbit, switch_at_flip
+from harness.dynamics.attractors.scans import find_attractors
+from harness.dynamics.continuation.continue_orbit import continue_orbit, switch_at_flip
 from mapcheck.exact import ExactOscillator
 from mapcheck.orbits import solve_periodic_orbit
 
@@ -193,7 +193,7 @@ def test_exact_and_difference_parameter_derivative_agree(sim, fig9) -> None:
 
 
 def test_branch_dataset(sim, fig9, tmp_path) -> None:
-    from harness.dynamics.branch import branches_dataset
+    from harness.dynamics.continuation.branch import branches_dataset
     from harness.io.results import read_netcdf, write_netcdf
 
     a = _seed(sim, fig9, 1.0, 1)
@@ -252,7 +252,7 @@ def test_newton_steps_into_a_rigid_wall_are_failed_steps_not_errors(sim, model) 
     """A Newton iterate inside a rigid wall is not a state (the FMU refuses it at initialization).
     It used to end find_attractors with an error (nu = 0.5, Omega = 1, r = 0.5, rigid: u0 = 0.077
     inside the wall); now it is a failed evaluation and the search goes on."""
-    from harness.dynamics.periodic_map import PeriodMap, refine_orbit
+    from harness.dynamics.maps.periodic_map import PeriodMap, refine_orbit
 
     p = {**model.defaults(), "nu": 0.5, "Omega": 1.0, "r": 0.5, "wall": 2, "solver": 1}
     pmap = PeriodMap(sim, p, "sigma", THETA)

@@ -103,7 +103,7 @@ def test_cli_sweep_with_scheduler_address(model: FmuModel, cluster, tmp_path: Pa
 def test_batch_kernel_basins_on_dask_equal_the_local_scan(cluster, tmp_path: Path) -> None:
     """The batch kernel's tiles on the two workers: the same labels as in this process, and a
     rerun with the checkpoint computes nothing."""
-    from harness.runs.basin_kernel_scan import run_basins_kernel
+    from harness.runs.basins.kernel_scan import run_basins_kernel
     from harness.runs.sweep_collect import SweepStats
 
     client, _ = cluster

@@ -3,7 +3,7 @@
 A sweep over Figure 9's sigma in [0.01, 0.6] with a short transient holds chaos (sigma < 0.15),
 the period-adding windows and points near their edges that still converge (a period found in the
 samples, which still shrink towards a shorter one).  Every point's label is checked against its
-own period, samples and Lyapunov exponent by the rules of harness.dynamics.classify, and the labels "periodic" and
+own period, samples and Lyapunov exponent by the rules of harness.dynamics.maps.classify, and the labels "periodic" and
 "chaotic" against an independent truth: a run 40 times longer from the same start settles on a
 period dividing the one found (periodic), or finds no period at all (chaotic).
 """
@@ -13,10 +13,10 @@ import numpy as np
 import pytest
 
 from harness import SamplingSpec, SweepSpec, classify_orbit, run_sweep, strobe
-from harness.dynamics.classify import (CHAOTIC, DECIDED, NOT_CONVERGED, PERIODIC, QUASI_PERIODIC, REASON_KEYS,
+from harness.dynamics.maps.classify import (CHAOTIC, DECIDED, NOT_CONVERGED, PERIODIC, QUASI_PERIODIC, REASON_KEYS,
                                        SIGMAS, still_settling)
 from harness.fmu.simulator import FmuSimulator
-from tests.fmu_support import harness_params
+from tests.support.fmu import harness_params
 
 SAMPLING = SamplingSpec(theta=0.5, n_transient=60, n_samples=16, lyapunov=100)
 SIGMA = np.linspace(0.01, 0.6, 24)

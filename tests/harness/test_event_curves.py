@@ -23,12 +23,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from harness.dynamics.attractors import find_attractors
-from harness.dynamics.continuation import continue_orbit
-from harness.dynamics.event_curves import continue_event
-from harness.dynamics.graze_curves import continue_graze
-from harness.analysis.chart_curves import window_closing
-from tests.edge_support import ExactFlow
+from harness.dynamics.attractors.scans import find_attractors
+from harness.dynamics.continuation.continue_orbit import continue_orbit
+from harness.dynamics.curves.event_curves import continue_event
+from harness.dynamics.curves.graze_curves import continue_graze
+from harness.analysis.chart.edge_curves import window_closing
+from tests.support.edges import ExactFlow
 
 ROOT = Path(__file__).resolve().parents[2]
 FIG9 = tomllib.loads((ROOT / "harness" / "experiments" / "fig9.toml").read_text())["model"]
@@ -37,7 +37,7 @@ SIGMA_RANGE = (5e-3, 4000.0)
 
 
 def exact_orbit(p: dict, sigma: float, Gamma: float, z0, M: int):
-    """mapcheck's own shooting on the exact flow (tests/edge_support.py)."""
+    """mapcheck's own shooting on the exact flow (tests/support/edges.py)."""
     flow = ExactFlow(p["nu"], p["Omega"], p["r"], Gamma, "compliant", THETA)
     return flow, flow.orbit(sigma, M, z0)
 
@@ -208,7 +208,7 @@ def test_the_period_2_closing_is_the_same_with_cvode(m2, sim, fig9) -> None:
 def test_noise_turns_are_dropped_and_real_ones_kept() -> None:
     """CVODE's tolerance makes p2 wiggle by ~1e-4 where a curve runs parallel to the sigma axis
     (measured on period 2's graze near its asymptote at Gamma ~ 1100); those are not turns."""
-    from harness.dynamics.curves import significant_turns
+    from harness.dynamics.curves.curve import significant_turns
 
     t = lambda p2, side: {"p2": p2, "side": side, "sigma": 1.0}  # noqa: E731
     wiggles = [t(1100.444, "max"), t(1100.431, "min"), t(1100.619, "max"), t(1100.496, "min"), t(1100.73, "max")]

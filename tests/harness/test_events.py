@@ -7,7 +7,7 @@ import pytest
 
 from harness import FmuModel, FmuSimulator, HarnessInputError
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import FMU_PATH, harness_params, on_orbit
+from tests.support.fmu import FMU_PATH, harness_params, on_orbit
 
 FMU3_PATH = FMU_PATH.with_name("ImpactOscillator_fmi3.fmu")
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112)

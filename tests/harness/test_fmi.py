@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from harness import FmuModel, FmuSimulator, HarnessInputError, MappingSimulator, strobe
-from harness.dynamics.sampling import sample_periods
+from harness.dynamics.maps.sampling import sample_periods
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import harness_params as _params
+from tests.support.fmu import harness_params as _params
 
 FMU = Path(__file__).resolve().parents[2] / "build" / "fmu" / "ImpactOscillator.fmu"
 

@@ -20,7 +20,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import FMU2Slave
 
-from tests.fmu_support import FMU3_PATH, FMU_PATH, LoggedSlave, ROOT
+from tests.support.fmu import FMU3_PATH, FMU_PATH, LoggedSlave, ROOT
 
 REFUSAL = "solver = 1 (closed form) needs the linear contact law"
 
@@ -74,10 +74,10 @@ def test_plain_fmpy_refusal_after_collected_loggers(capsys: pytest.CaptureFixtur
 
 @pytest.mark.skipif(not FMU3_PATH.exists(), reason="FMI 3.0 FMU not built")
 def test_refused_init_reproducer_in_a_subprocess() -> None:
-    """The reproducer (tests/refused_init_repro.py: FMI 2.0 and 3.0, CS and ME, logging on and
+    """The reproducer (tests/support/refused_init_process.py: FMI 2.0 and 3.0, CS and ME, logging on and
     off, another instance alive) with glibc's heap checks and freed memory overwritten."""
     env = dict(os.environ, MALLOC_PERTURB_="165", MALLOC_CHECK_="3", PYTHONPATH=str(ROOT))
-    res = subprocess.run([sys.executable, "-m", "tests.refused_init_repro", "4"], cwd=ROOT,
+    res = subprocess.run([sys.executable, "-m", "tests.support.refused_init_process", "4"], cwd=ROOT,
                          env=env, capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, f"rc {res.returncode}\n{res.stdout[-2000:]}\n{res.stderr[-2000:]}"
     assert res.stdout.count("needs the linear contact law") == 4 * 4  # rounds x interfaces
@@ -87,7 +87,7 @@ def test_refused_init_reproducer_in_a_subprocess() -> None:
 def test_no_other_code_hands_fmpy_a_logger_of_its_own() -> None:
     """Only harness/fmu/fmi2_logging.py calls fmpy's addLoggerProxy (and the reproducer, for its
     "old" mode): any other ctypes logger given to the proxy would dangle again."""
-    allowed = {ROOT / "harness" / "fmu" / "fmi2_logging.py", ROOT / "tests" / "refused_init_repro.py"}
+    allowed = {ROOT / "harness" / "fmu" / "fmi2_logging.py", ROOT / "tests" / "support" / "refused_init_process.py"}
     offenders = [str(p.relative_to(ROOT))
                  for d in ("harness", "tests", "examples", "bench", "mapcheck", "scripts")
                  for p in sorted((ROOT / d).rglob("*.py"))

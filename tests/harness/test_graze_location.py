@@ -16,10 +16,10 @@ import math
 import numpy as np
 import pytest
 
-from harness.dynamics.attractors import find_attractors
-from harness.dynamics.continuation import continue_orbit
-from harness.dynamics.graze_location import entry_velocity
-from harness.dynamics.periodic_map import PeriodMap, wall_free_offset
+from harness.dynamics.attractors.scans import find_attractors
+from harness.dynamics.continuation.continue_orbit import continue_orbit
+from harness.dynamics.continuation.graze_location import entry_velocity
+from harness.dynamics.maps.periodic_map import PeriodMap, wall_free_offset
 from mapcheck.impact_orbit import flip_velocities, fold_velocity, one_impact_orbit
 from tests.mapcheck.test_impact_orbit import coco, section_state
 
@@ -160,7 +160,7 @@ def test_a_flip_curve_runs_to_the_end_of_a_range_next_to_the_fmus_domain(sim, co
     end the corrector's steps reach r > 1, which the FMU refuses; that is a failed step, not the end
     of the curve (it was: chart over r reported the edge "not continued").  The curve reaches the
     range's end, every point in the FMU's domain, each a flip of the closed-form orbit at its r."""
-    from harness.dynamics.event_curves import continue_event
+    from harness.dynamics.curves.event_curves import continue_event
 
     p, br = coco_branches[0.8]
     (flip,) = [e for e in br.events if e.kind == "flip"]

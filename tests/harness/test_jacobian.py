@@ -14,7 +14,7 @@ import pytest
 
 from harness import HarnessInputError, jacobian_vs_x, map_jacobian
 from mapcheck.linear import propagator
-from tests.fmu_support import harness_params as _params
+from tests.support.fmu import harness_params as _params
 
 FMU = Path(__file__).resolve().parents[2] / "build" / "fmu" / "ImpactOscillator.fmu"
 

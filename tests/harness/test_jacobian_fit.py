@@ -17,8 +17,8 @@ import pytest
 from scipy import stats
 
 from harness import read_netcdf
-from harness.dynamics.singularity_fit import HARD_BETA, SOFT_BETA, fit_singularity, loglog_fit
-from tests.cli_support import run_main
+from harness.dynamics.maps.singularity_fit import HARD_BETA, SOFT_BETA, fit_singularity, loglog_fit
+from tests.support.cli import run_main
 
 FIG6 = ["--set", "nu=0.196", "--set", "Omega=7.368", "--set", "sigma=0"]
 

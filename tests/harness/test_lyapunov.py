@@ -15,15 +15,15 @@ import math
 import numpy as np
 import pytest
 
-from harness.dynamics.classify import CHAOTIC, NOT_CONVERGED, PERIODIC, QUASI_PERIODIC, UNCLASSIFIED, classify_dynamics
-from harness.dynamics.lyapunov import lyapunov_exponents, lyapunov_from_jacobians, qr_logs
-from harness.dynamics.shooting import StroboscopicMap
+from harness.dynamics.maps.classify import CHAOTIC, NOT_CONVERGED, PERIODIC, QUASI_PERIODIC, UNCLASSIFIED, classify_dynamics
+from harness.dynamics.maps.lyapunov import lyapunov_exponents, lyapunov_from_jacobians, qr_logs
+from harness.dynamics.maps.shooting import StroboscopicMap
 from harness.fmu.simulator import MappingSimulator
 from mapcheck.exact import ExactOscillator
 from mapcheck.linear import propagator
 from mapcheck.orbits import solve_periodic_orbit
-from tests.cli_support import run_main as _run_main
-from tests.fmu_support import harness_params as _params
+from tests.support.cli import run_main as _run_main
+from tests.support.fmu import harness_params as _params
 
 HENON_A, HENON_B = 1.4, 0.3
 
@@ -204,7 +204,7 @@ def test_sweep_writes_exponents_and_dynamics(tmp_path, capsys, periodic_lambda) 
     """``sweep --lyapunov N``: NetCDF variables lyapunov, lyapunov_err (exponent = 1, 2) and
     dynamics with CF flag attributes; periodic at sigma = 0.5, chaotic at 0.03."""
     from harness import read_netcdf
-    from harness.dynamics.classify import DYNAMICS_NAMES
+    from harness.dynamics.maps.classify import DYNAMICS_NAMES
 
     out = tmp_path / "ly.nc"
     code, stdout, err = _run_main(["sweep", "--values", "0.03,0.5", "--mode", "fresh", "--theta", "0.5",

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from harness import strobe
-from harness.dynamics.sampling import sample_periods
+from harness.dynamics.maps.sampling import sample_periods
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import harness_params as _params
+from tests.support.fmu import harness_params as _params
 
 FMU = Path(__file__).resolve().parents[2] / "build" / "fmu" / "ImpactOscillator.fmu"
 WALL_NAMES = {0: "none", 1: "compliant", 2: "rigid"}

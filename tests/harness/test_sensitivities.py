@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 
 from harness import HarnessInputError, jacobian_vs_x, map_jacobian
-from harness.dynamics.shooting import StroboscopicMap, good_orbit
+from harness.dynamics.maps.shooting import StroboscopicMap, good_orbit
 from harness.fmu.simulator import FmuSimulator, MappingSimulator
 from mapcheck.linear import propagator
 from mapcheck.orbits import solve_periodic_orbit
-from tests.fmu_support import harness_params as _params
+from tests.support.fmu import harness_params as _params
 
 # -- fallback and feature detection (every FMU) ------------------------------------------
 def test_auto_method_follows_the_fmu(model, sim) -> None:

@@ -1,6 +1,6 @@
 """Window edges by Newton shooting on the real FMU are measured, never echoed from the guide.
 
-The guide of :func:`harness.dynamics.shooting.map_guided_windows` is the map's window; shooting
+The guide of :func:`harness.dynamics.maps.shooting.map_guided_windows` is the map's window; shooting
 starts inside it and brackets each edge itself.  Before the fix, the march from the window's
 centre with step width/6 landed exactly on the map's edges, and with xtol 1e-4 the bisection
 never moved off them: the "ODE" window was the map's, to 16 digits.
@@ -13,7 +13,7 @@ import math
 
 import pytest
 
-from harness.dynamics.shooting import StroboscopicMap, map_guided_windows
+from harness.dynamics.maps.shooting import StroboscopicMap, map_guided_windows
 from mapcheck.coeffs import coefficients
 from mapcheck.linear import invert_alpha_gamma
 

@@ -12,12 +12,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from harness.dynamics.shooting import StroboscopicMap, map_guided_windows
+from harness.dynamics.maps.shooting import StroboscopicMap, map_guided_windows
 from mapcheck.coeffs import coefficients
 from mapcheck.exact import ExactOscillator
 from mapcheck.linear import invert_alpha_gamma
 from mapcheck.orbits import solve_periodic_orbit, window_edge
-from tests.edge_support import ExactFlow, continue_orbit
+from tests.support.edges import ExactFlow, continue_orbit
 
 pytestmark = pytest.mark.slow  # Newton shooting on the FMU and on the closed form
 

@@ -3,7 +3,7 @@ range reaching below it, where the edges of the coexisting windows lie.
 
 Truth: the exponential and its derivative (the log axis must be the one the curves always used,
 number for number); mapcheck's closed-form flow with its own Newton shooting and multipliers
-(tests/edge_support.py) for a flip curve continued at negative sigma; the wall-free orbit (4),
+(tests/support/edges.py) for a flip curve continued at negative sigma; the wall-free orbit (4),
 whose amplitude 1 + sigma touches the wall at sigma = 0 whatever the other parameters.
 """
 from __future__ import annotations
@@ -13,10 +13,10 @@ import math
 import numpy as np
 import pytest
 
-from harness.dynamics.event_curves import continue_event
-from harness.dynamics.graze_curves import continue_graze
-from harness.dynamics.sigma_axis import LINEAR, LOG, sigma_axis
-from tests.edge_support import ExactFlow
+from harness.dynamics.curves.event_curves import continue_event
+from harness.dynamics.curves.graze_curves import continue_graze
+from harness.dynamics.curves.sigma_axis import LINEAR, LOG, sigma_axis
+from tests.support.edges import ExactFlow
 
 #: a rigid wall with r close to 1 (docs/examples/windows-rigid): below grazing a period-2 orbit with
 #: one impact coexists with the wall-free orbit up to its flip at sigma = -0.2211

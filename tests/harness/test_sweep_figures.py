@@ -14,11 +14,11 @@ import pytest
 from matplotlib.colors import to_rgba
 
 from harness import SamplingSpec, SweepSpec, read_netcdf, run_sweep
-from harness.dynamics.classify import (CHAOTIC, DYNAMICS_NAMES, NOT_CONVERGED, PERIODIC, QUASI_PERIODIC, SIGMAS,
+from harness.dynamics.maps.classify import (CHAOTIC, DYNAMICS_NAMES, NOT_CONVERGED, PERIODIC, QUASI_PERIODIC, SIGMAS,
                                        UNCLASSIFIED)
 from harness.io import sweep_plots
 from harness.io.class_map import NON_PERIODIC_COLOURS, flag_names, orbit_classes, wrap_title
-from tests.cli_support import run_main
+from tests.support.cli import run_main
 
 
 def _capture(monkeypatch) -> dict:

@@ -9,7 +9,7 @@ import numpy as np
 
 from harness import SamplingSpec, SweepSpec, run_sweep
 from harness.runs.checkpoint import differences
-from tests.cli_support import run_main
+from tests.support.cli import run_main
 
 
 def test_discarded_checkpoint_names_what_differs(model, tmp_path: Path, capsys) -> None:

@@ -17,7 +17,7 @@ from examples.afm import masters as M
 from examples.afm.monolithic import Controller, Oscillator, shifted_oscillator, simulate
 from fmpy import read_model_description
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import FMU3_PATH, FMU_PATH, ROOT
+from tests.support.fmu import FMU3_PATH, FMU_PATH, ROOT
 
 CTRL_FMU = ROOT / "build" / "afm" / "AmplitudeController.fmu"
 H = 0.01

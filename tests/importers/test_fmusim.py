@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tests.fmu_support import FMU3_PATH, FMU_PATH, ROOT
-from tests.importer_support import (CS_TOL, Case, PeriodCheck, compare_per_period,
+from tests.support.fmu import FMU3_PATH, FMU_PATH, ROOT
+from tests.support.importers import (CS_TOL, Case, PeriodCheck, compare_per_period,
                                     fmusim_holds_cs, run_fmusim, write_input_csv)
 
 PERIODS = 10

@@ -19,8 +19,8 @@ from fmpy import read_model_description
 
 from examples.afm import masters as M
 from examples.afm.monolithic import Controller, Oscillator, simulate
-from tests.fmu_support import FMU_PATH, ROOT
-from tests.importer_support import (CS_TOL, Case, PeriodCheck, compare_per_period,
+from tests.support.fmu import FMU_PATH, ROOT
+from tests.support.importers import (CS_TOL, Case, PeriodCheck, compare_per_period,
                                     merge_holds)
 from tests.importers.test_fmusim import CASES
 

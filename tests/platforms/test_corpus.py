@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from tests.fmu_support import FMU3_PATH, FMU_PATH
+from tests.support.fmu import FMU3_PATH, FMU_PATH
 from tests.fuzz.model import _parse
-from tests.platform_support import (CROSS, NATIVE, PLATFORMS, TOKEN, WINESERVER, env,
+from tests.support.platforms import (CROSS, NATIVE, PLATFORMS, TOKEN, WINESERVER, env,
                                     require_cross_build, to_hex, unpack)
 
 pytestmark = pytest.mark.slow  # replays the fuzz corpus on every platform

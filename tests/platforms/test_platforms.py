@@ -21,8 +21,8 @@ from fmpy.validation import validate_fmu
 
 from harness.fmu.fmi import check_archive
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import FMU3_PATH, FMU_PATH
-from tests.platform_support import (NATIVE, PLATFORMS, WINESERVER, env, host_input, imports,
+from tests.support.fmu import FMU3_PATH, FMU_PATH
+from tests.support.platforms import (NATIVE, PLATFORMS, WINESERVER, env, host_input, imports,
                                     require_cross_build, run_host, unpack)
 
 pytestmark = pytest.mark.slow  # the Windows and aarch64 binaries under wine and qemu-user

@@ -17,8 +17,8 @@ import pytest
 from fmpy import read_model_description
 from fmpy.build import build_platform_binary
 
-from tests.fmu_support import FMU3_PATH, FMU_PATH
-from tests.platform_support import NATIVE, host_input, require_cross_build, run_host, unpack
+from tests.support.fmu import FMU3_PATH, FMU_PATH
+from tests.support.platforms import NATIVE, host_input, require_cross_build, run_host, unpack
 
 pytestmark = pytest.mark.slow  # rebuilds the FMUs from their shipped sources
 

@@ -1,7 +1,7 @@
 """The pythonfmu twin's column of the state-machine conformance suite.
 
 The twin (build/fmu/ImpactOscillatorPy.fmu, FMI 2.0 Co-Simulation) is judged against the same
-standard table as the C FMU (tests/fmi_standard.py, "fmi2-cs"): every (state, function) pair,
+standard table as the C FMU (tests/support/fmi_standard.py, "fmi2-cs"): every (state, function) pair,
 each on a fresh instance. The twin runs only inside a Python process (pythonfmu's binary needs
 the host's libpython), and a wrong call once crashed its host, so each state's cases run in a
 child process; a crash there is a failure of that state, with the cases done before it.
@@ -25,7 +25,7 @@ from pathlib import Path
 
 import pytest
 
-from tests import fmi_standard as std
+from tests.support import fmi_standard as std
 
 ROOT = Path(__file__).resolve().parents[2]
 TWIN = ROOT / "build" / "fmu" / "ImpactOscillatorPy.fmu"
@@ -63,7 +63,7 @@ def _binding(unzipped: Path):  # noqa: ANN202 (tests.fuzz.bindings.Fmi2)
 
 def run_state(state: str, unzipped: Path) -> list[dict]:
     """All cases of one state, in this process: one dict per function."""
-    from tests.fmi_probes import Instance, calls, drive
+    from tests.support.fmi_probes import Instance, calls, drive
     from tests.fuzz.bindings import ERROR, FATAL
 
     out = []

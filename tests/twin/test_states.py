@@ -7,7 +7,7 @@ wrong (unknown value reference, a fixed parameter or an output set after initial
 checks the twin's answer: fmi2Error (never fmi2Fatal), the reason through the importer's logger
 although the importer switched logging off, the instance in Error afterwards (fmi2DoStep is
 refused there too, without a crash), and fmi2Reset brings it back to a run equal to a fresh one.
-The complete (state, function) table is the conformance suite's (tests/fmi_standard.py).
+The complete (state, function) table is the conformance suite's (tests/support/fmi_standard.py).
 """
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 
-from tests.fmu_support import ROOT, LoggedSlave
+from tests.support.fmu import ROOT, LoggedSlave
 
 TWIN_FMU = ROOT / "build" / "fmu" / "ImpactOscillatorPy.fmu"
 FMI2_ERROR = 3
@@ -33,7 +33,7 @@ def twin_fmu() -> Path:
 
 
 def into(s: LoggedSlave, state: str) -> None:
-    """Drive a fresh instance into ``state`` (names of tests/fmi_standard.py)."""
+    """Drive a fresh instance into ``state`` (names of tests/support/fmi_standard.py)."""
     f = s.slave
     if state == "Instantiated":
         return

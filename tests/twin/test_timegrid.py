@@ -28,7 +28,7 @@ import pytest
 
 from mapcheck.exact import ExactOscillator
 from tests.fmu.test_timegrid import BUDGET, GRIDS, Driver, exact_on, fixed, summed
-from tests.fmu_support import FMU_PATH
+from tests.support.fmu import FMU_PATH
 
 TWIN_FMU = Path(__file__).resolve().parents[2] / "build" / "fmu" / "ImpactOscillatorPy.fmu"
 

@@ -35,7 +35,7 @@ from fmpy.validation import validate_fmu
 from harness.fmu.fmi import FmuModel
 from harness.fmu.simulator import FmuSimulator
 from mapcheck.exact import ExactOscillator
-from tests.fmu_support import WALLS, LoggedSlave
+from tests.support.fmu import WALLS, LoggedSlave
 
 ROOT = Path(__file__).resolve().parents[2]
 TWIN_SRC = ROOT / "fmu_src" / "pytwin"
