@@ -116,11 +116,6 @@ def _jsonable(value: Any) -> Any:
     return str(value)
 
 
-def settings_of(ds: xr.Dataset) -> dict[str, Any]:
-    """The settings a Dataset was made with (inverse of :func:`provenance`'s JSON record)."""
-    return json.loads(ds.attrs["settings_json"])
-
-
 def write_netcdf(ds: xr.Dataset, path: str | os.PathLike, argument: str = "--out") -> Path:
     """Write ``ds`` to ``path`` (directories created), atomically.
 

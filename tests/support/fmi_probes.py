@@ -201,6 +201,13 @@ def _fmi3_calls(x: Instance, p: P) -> dict[str, Callable[[], int | None]]:
         "fmi3DoStep": lambda: L.fmi3DoStep(p, D(0.0), D(STEP), True,
                                            *[C.byref(v) for v in b[:3]], C.byref(d1)),
     }
+    return {**c, **_fmi3_variable_calls(L, p)}
+
+
+def _fmi3_variable_calls(L: C.CDLL, p: P) -> dict[str, Callable[[], int | None]]:
+    """The FMI 3.0 clock functions and the getters and setters of every type, bound to ``p``:
+    empty arrays (the FMU has no clocks), one real variable of each direction for Float64."""
+    c: dict[str, Callable[[], int | None]] = {}
     # clock functions (the FMU has no clocks: zero-length arrays), by their number of arrays
     for name, arrays in (("GetClock", 1), ("SetClock", 1), ("GetIntervalDecimal", 2),
                          ("GetIntervalFraction", 3), ("GetShiftDecimal", 1),
