@@ -124,8 +124,8 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike, argument: str = "--out
     """
     from .outputs import atomic_write
 
-    # a unique temporary name in the target's directory, removed on failure
-    # (OUT + ".tmp" left "/tmp.tmp" behind for --out /tmp)
+    # a unique temporary name in the target's directory, removed on failure (a fixed OUT + ".tmp"
+    # would land beside a directory given as --out, e.g. /tmp.tmp for --out /tmp)
     with atomic_write(path, argument) as tmp:
         ds.to_netcdf(tmp, engine="netcdf4")
     return Path(path)
