@@ -109,3 +109,17 @@ def test_every_subpackage_says_what_it_may_import() -> None:
     for init in ROOT.glob("*/__init__.py"):
         doc = ast.get_docstring(ast.parse(init.read_text())) or ""
         assert "Layer:" in doc, f"{init.relative_to(ROOT)} has no 'Layer:' paragraph"
+
+
+def test_only_the_fmu_layer_knows_fmpy() -> None:
+    """docs/architecture.md: ``fmu`` is the only part that imports fmpy; everything above talks
+    to a Simulator."""
+    bad = []
+    for path in MODULES:
+        if part_of(module_name(path)) == "fmu":
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else [])
+            bad += [f"{path.relative_to(ROOT)}:{node.lineno}" for n in names if n.split(".")[0] == "fmpy"]
+    assert not bad, "fmpy imported outside harness/fmu: " + ", ".join(bad)

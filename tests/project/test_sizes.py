@@ -7,26 +7,12 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
+from tests.support.repository import ROOT, python_files
+
 MAX_LINES = 420
 #: Longest function (or method) allowed, in lines from its def to the end of its body, docstring
 #: included (:func:`function_lengths`).
 MAX_FUNCTION_LINES = 80
-#: Folders at the top of the repository that hold no source of the project: the environment,
-#: build outputs, results and caches (.gitignore).
-NOT_SOURCE = {"build", "results", "node_modules", "__pycache__"}
-
-
-def python_files(root: Path = ROOT) -> list[Path]:
-    """Every .py file of the repository: all folders but hidden ones (.venv, .git), build
-    outputs, results and caches."""
-    found = []
-    for path in root.rglob("*.py"):
-        rel = path.relative_to(root).parts
-        if any(p.startswith(".") or p in NOT_SOURCE or p.endswith(".egg-info") for p in rel[:-1]):
-            continue
-        found.append(path)
-    return sorted(found)
 
 
 def function_lengths(path: Path) -> list[tuple[str, int, int]]:
