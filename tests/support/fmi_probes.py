@@ -9,13 +9,17 @@ callbacks and instantiation are the fuzzer's (tests/fuzz/bindings.py).
 from __future__ import annotations
 
 import ctypes as C
+import xml.etree.ElementTree as ET
 from typing import Callable
 
 from tests.fuzz.bindings import ERROR, OK, Fmi2, Fmi3, _Fmi2EventInfo, _Fmi3Intermediate
 from tests.fuzz.model import ROOT, describe
 
 D, SZ, P = C.c_double, C.c_size_t, C.c_void_p
-VR_U, VR_IMPACTS, VR_IN_CONTACT, VR_F_EXT = 13, 15, 16, 23
+#: Value references by name, from the FMU's modelDescription.xml (generated from fmu_src/variables.py).
+_VRS = {sv.get("name"): int(sv.get("valueReference"))
+        for sv in ET.parse(ROOT / "fmu_src" / "modelDescription.xml").getroot().iter("ScalarVariable")}
+VR_U, VR_IMPACTS, VR_IN_CONTACT, VR_F_EXT = (_VRS[n] for n in ("u", "impacts", "in_contact", "F_ext"))
 STEP = 0.01  # a valid communication step from the start time 0
 
 
