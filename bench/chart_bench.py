@@ -1,4 +1,4 @@
-"""Benchmark of ``impact-harness chart`` (issue 18): the soft-to-hard chart of Figure 9's family
+"""Benchmark of ``impact-harness chart``: the soft-to-hard chart of Figure 9's family
 (windows M = 1..5 over (sigma, Gamma), Gamma = 10 .. 1e6 on a log axis) in closed-form mode, and
 the same per-value cost in CVODE mode, measured in one run.  Writes the chart into
 docs/img/soft_to_hard.png (with chart.json beside it in OUT) and its section of BENCHMARKS.md.
@@ -63,7 +63,7 @@ def main() -> int:
 
     cv_closes = ", ".join(f"M = {M}: {fmt(c)} (closed form {fmt(cf['closes'][M])})" for M, c in cv["closes"].items())
     text = f"""<!-- chart:begin -->
-## Soft-to-hard chart (issue 18): `impact-harness chart`
+## Soft-to-hard chart: `impact-harness chart`
 
 Figure 9's family (harness/experiments/fig9.toml), windows M = 1..5 over (sigma, Gamma), Gamma = 10 .. 1e6
 (log), sigma scanned over [{cf['parameters']['sigma_grid'][0]:g}, {cf['parameters']['sigma_grid'][1]:g}]

@@ -1,4 +1,4 @@
-"""Issue 18 benchmark: a continuation branch of 200 points at Figure 9's parameters.
+"""Benchmark: a continuation branch of 200 points at Figure 9's parameters.
 
     .venv/bin/python bench/continuation_bench.py          # measures, rewrites BENCHMARKS.md's section
     .venv/bin/python bench/continuation_bench.py --quick  # smoke test: 20 points, prints only
@@ -7,8 +7,8 @@ The one-impact period-1 orbit of Figure 9 (compliant wall, Gamma = 10, r = 0.9) 
 from sigma = 1 downwards for 200 pseudo-arclength steps (largest step 0.004: through the flip at
 0.8121, which is located to 1e-8, down to sigma ~ 0.2), with exact derivatives from the FMU's
 sensitivity outputs, once with the closed-form solver (solver = 1) and once with CVODE
-(solver = 0), in one process pinned to one core; CPU time (best of the repeats).  The issue's
-goal: under 10 s in closed-form mode.
+(solver = 0), in one process pinned to one core; CPU time (best of the repeats).  The goal:
+under 10 s in closed-form mode.
 """
 from __future__ import annotations
 
@@ -78,7 +78,7 @@ def main() -> None:
     cf = res["closed form"]["cpu_s"]
     text = "\n".join([
         "<!-- continuation:begin -->",
-        "## Continuation: a 200-point branch at Figure 9 (issue 18)",
+        "## Continuation: a 200-point branch at Figure 9",
         "",
         f"`bench/continuation_bench.py`, {_dt.date.today().isoformat()}, {platform.processor() or platform.machine()}, "
         f"{pinned}; CPU time, best of {repeat}. The one-impact period-1 orbit continued from sigma = 1 down "

@@ -104,7 +104,7 @@ def measure(quick: bool) -> list[dict]:
 
 
 def section(rows: list[dict]) -> str:
-    L = [BEGIN, "## Co-simulation: cost per communication step against h (issue 14)", "",
+    L = [BEGIN, "## Co-simulation: cost per communication step against h", "",
          "`bench/cosim_bench.py`: the FMU alone (FMI 2.0 CS, Figure 9, sigma = 0.5, compliant "
          "wall), one doStep per communication point; best of 3 runs; "
          f"load average {os.getloadavg()[0]:.1f} at the end (shared 2-core machine). fmpy: "

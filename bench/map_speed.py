@@ -1,4 +1,4 @@
-"""Benchmark: map iterations per second on one core (issue 3, item 6: >= 1e7/s).
+"""Benchmark: map iterations per second on one core (the goal: >= 1e7/s).
 
 Run:  python bench/map_speed.py [N_ORBITS] [N_ITER]
 

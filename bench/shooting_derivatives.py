@@ -1,5 +1,5 @@
 """Figure 9's window edges by Newton shooting on the FMU: the FMU's exact derivatives against
-central differences (issue 11), and the Lyapunov exponents of a periodic and a chaotic orbit
+central differences, and the Lyapunov exponents of a periodic and a chaotic orbit
 both ways.  Prints the edges, the edge kinds, the one-period FMU runs each needed, the largest
 edge difference; ``--write`` puts the numbers into BENCHMARKS.md between
 ``<!-- senspy:begin -->`` and ``<!-- senspy:end -->`` (bench/run.py keeps such sections).
@@ -85,7 +85,7 @@ def main() -> None:
 
 def write_section(out: dict, lyap: dict, worst: float, xtol, quick: bool) -> None:
     """The senspy section of BENCHMARKS.md (replaced if present, appended otherwise)."""
-    L = ["<!-- senspy:begin -->", "## Exact derivatives in the harness: shooting and Lyapunov exponents (issue 11)", "",
+    L = ["<!-- senspy:begin -->", "## Exact derivatives in the harness: shooting and Lyapunov exponents", "",
          f"`python bench/shooting_derivatives.py{' --quick' if quick else ''} --write`, one run on "
          f"{platform.node() or 'this machine'} ({time.strftime('%Y-%m-%d')}); Figure 9 (alpha, gamma) = (0.99, 0.01), "
          "r = 0.9, Gamma = 10, CVODE.", "",

@@ -1,5 +1,5 @@
-"""Edge accuracy and wall time of ``impact-harness windows --quick`` (issue 26, "one location for
-every edge"), before and after its edges came from the continuation, against references located
+"""Edge accuracy and wall time of ``impact-harness windows --quick`` (one location for every edge),
+before and after its edges came from the continuation, against references located
 independently on the exact flow.  Writes the ``windows-edges`` section of BENCHMARKS.md.
 
     .venv/bin/python bench/windows_edges_bench.py --before DIR [--repeat 2] [--no-write]
@@ -171,7 +171,7 @@ def main() -> None:
               f"{after[c][0]:.1f} s ({after[c][1]['parameters']['fmu_periods_shooting']}) |" for c in CASES]
     text = "\n".join([
         "<!-- windows-edges:begin -->",
-        "## Window edges: `windows --quick` before and after the continuation locates them (issue 26)",
+        "## Window edges: `windows --quick` before and after the continuation locates them",
         "",
         f"Measured by `bench/windows_edges_bench.py` (before: fed8c60, march and bisection to 1e-3 x sigma; "
         f"after: the continuation's located events), closed-form solver, default workers (2), least of {a.repeat} "

@@ -7,6 +7,8 @@ Modules, by concern:
 * :mod:`mapcheck.coeffs`   -- ``coefficients(nu, Omega, r, wall)``: (36), (39), (48); A and A~(sigma)
 * :mod:`mapcheck.maps`     -- the maps: L (26)-(30), (31)/(32), (33)-(35), (37)/(38), (1)/(2), (54)-(56)
 * :mod:`mapcheck.exact`    -- closed-form solution of the ODE and the exact pre-impact map
+* :mod:`mapcheck.segments` -- one linear regime in closed form and its first wall crossing
+* :mod:`mapcheck.exact_flow` -- the exact flow strobed: periodic orbits, multipliers, largest u
 * :mod:`mapcheck.windows`  -- ``window_1d(M)`` (64); maximal period-M orbits and their windows
 * :mod:`mapcheck.bifurcation` -- vectorized iteration over sigma/rho grids (fresh, up, down)
 * :mod:`mapcheck.duration` -- impact duration: exact (41) and (42), (45), (50)

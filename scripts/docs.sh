@@ -10,7 +10,7 @@ cd "$root"
 [[ ${IMPACT_DOCS_NO_SETUP:-0} == 1 ]] || bash scripts/setup.sh
 out="${DOCS_OUT:-build/docs}"
 rm -rf "$out"
-# the FMU's state table, rendered from fmu_src/fmu_core.c (issue 19)
+# the FMU's state table, rendered from the table in fmu_src/fmu_states.c
 .venv/bin/python scripts/state_table_doc.py
 # every module by name: pdoc follows __all__ at the top of a package, which lists the re-exports,
 # not the submodules (but a submodule named like a re-export is added by pdoc); a subpackage without __all__ brings its own submodules, so those are not

@@ -67,7 +67,7 @@ GUARD = "tests/fmu/test_grazing_guard.py"
 DERIV = "tests/fmu/test_directional_derivatives.py"
 BASINS = "tests/harness/test_basins_kernel.py"
 MEASURES = "tests/analysis/test_basin_measures.py"
-# mutants that survived the first run (issue 22): the independent-truth tests that now kill them run first
+# mutants that only the independent-truth tests kill: those tests run first for them
 ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28",
                                 "M52")}
 
@@ -105,7 +105,7 @@ MUTANTS: tuple[Mutant, ...] = (
        "a sticking mass left by a wall that jumps away takes the wall's new velocity"),
     _m("M52", "fmu_src/model.c", "m->mode = MODE_FREE; /* the wall went away: y[1] is kept */",
        "y[1] = 0.0; m->mode = MODE_FREE; /* the wall went away: y[1] is kept */", FMU_PORTS,
-       "a sticking mass left by a wall that jumps away is left at rest (the rule before issue 22)"),
+       "a sticking mass left by a wall that jumps away is left at rest"),
     _m("M12", "fmu_src/model.c", "if (y[1] - dw > 0.0) model_event_update(m, tau, y, 0); /* an impact */",
        "if (y[1] > 0.0) model_event_update(m, tau, y, 0); /* an impact */", FMU_PORTS,
        "wall jumping into the mass: impact decided on the absolute velocity"),

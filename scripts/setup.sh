@@ -92,7 +92,7 @@ fi
 # fmusim (Reference FMUs v0.0.39) is not packaged: its source lives outside the repository, in
 # $IMPACT_SHARED/tools (default ../shared/tools), and is built here into build/tools/fmusim,
 # again only when the source is newer than the binary. Without the source the fmusim tests skip
-# naming the missing path; with the source and a failed build they fail (tests/importer_fmusim.py).
+# naming the missing path; with the source and a failed build they fail (tests/importers/test_fmusim.py).
 fmusim_src="${IMPACT_SHARED:-$root/../shared}/tools/fmusim-v0.0.39"
 fmusim_bin=build/tools/fmusim
 if [[ -f $fmusim_src/build.sh ]]; then

@@ -1,4 +1,4 @@
-"""Renders docs/fmi-state-machine.md from the state table in fmu_src/fmu_states.c (issue 19).
+"""Renders docs/fmi-state-machine.md from the state table in fmu_src/fmu_states.c.
 
 ``python scripts/state_table_doc.py`` rewrites the file; ``--check`` exits 1 if it differs from
 what the C table gives (tests/fmu/test_fmi_state_doc.py runs that check, scripts/docs.sh the

@@ -6,7 +6,7 @@ import json, sys
 import numpy as np
 ROOT = __import__("pathlib").Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT))
-from tests.support.edges import ExactFlow
+from mapcheck.exact_flow import ExactFlow
 
 def minimal(z, rtol=1e-6):
     M = len(z)

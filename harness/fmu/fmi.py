@@ -37,7 +37,7 @@ REQUIRED_VARIABLES = (*STATE_OUTPUTS, IMPACT_COUNTER, *INITIAL_STATE)
 #: Symbolic values accepted for the Integer parameter ``wall``.
 WALL_NAMES = {"none": 0, "compliant": 1, "rigid": 2}
 
-#: The FMU's derivatives of its last ``doStep`` (issue 11): a Boolean parameter switches the
+#: The FMU's derivatives of its last ``doStep``: a Boolean parameter switches the
 #: variational equations on, six outputs give d(u, v)_end/d(u, v)_start (J_uv = du/dv_start)
 #: and d(u, v)_end/d sigma.  An FMU that has all of them gets exact map Jacobians; one
 #: without falls back to finite differences (feature detection by name, no version check).

@@ -137,7 +137,7 @@ class FmuSimulator(_DerivativeChain):
         self._impact_offset = 0
         self.time = math.nan
         self.restarts = 0  # re-initializations to carry the state across a non-tunable change
-        #: the FMU reports the derivatives of its map (issue 11's interface)
+        #: the FMU reports the derivatives of its map (its ``J_uu`` ... ``S_v`` outputs, SENSITIVITY_OUTPUTS)
         self.derivatives_available: bool = model.has_sensitivities
         self._track = False
         self._get_sens = (self._slave.getter([v[n] for n in SENSITIVITY_OUTPUTS])

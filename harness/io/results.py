@@ -116,11 +116,6 @@ def _jsonable(value: Any) -> Any:
     return str(value)
 
 
-def settings_of(ds: xr.Dataset) -> dict[str, Any]:
-    """The settings a Dataset was made with (inverse of :func:`provenance`'s JSON record)."""
-    return json.loads(ds.attrs["settings_json"])
-
-
 def write_netcdf(ds: xr.Dataset, path: str | os.PathLike, argument: str = "--out") -> Path:
     """Write ``ds`` to ``path`` (directories created), atomically.
 
@@ -129,8 +124,8 @@ def write_netcdf(ds: xr.Dataset, path: str | os.PathLike, argument: str = "--out
     """
     from .outputs import atomic_write
 
-    # a unique temporary name in the target's directory, removed on failure
-    # (OUT + ".tmp" left "/tmp.tmp" behind for --out /tmp)
+    # a unique temporary name in the target's directory, removed on failure (a fixed OUT + ".tmp"
+    # would land beside a directory given as --out, e.g. /tmp.tmp for --out /tmp)
     with atomic_write(path, argument) as tmp:
         ds.to_netcdf(tmp, engine="netcdf4")
     return Path(path)

@@ -82,11 +82,6 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
     return result, _report(ctx, result)
 
 
-def _max_relative(ode: dict, other: dict) -> float:
-    """Largest |other - ode| / ode over every edge both have (relative to the ODE's edge)."""
-    return _worst_edge(ode, other)[0]
-
-
 def _worst_edge(ode: dict, other: dict) -> tuple[float, int | None, str | None]:
     """(largest |other - ode| / ode, its period M, "lower" or "upper")."""
     worst: tuple[float, int | None, str | None] = (0.0, None, None)

@@ -47,7 +47,6 @@ R_OF = {"fig6": 1.0, "fig7": 0.9}
 #: not flag.  The FMU's own derivatives (variational equations with saltation matrices)
 #: have no step: the scan goes down to x = 1e-9, four decades further into the singularity.
 X_RANGES = {"exact": (1e-9, 1e-1), "fd": (1e-5, 1e-1)}
-X_RANGE = X_RANGES["fd"]
 #: Points per decade of x (quick, full).
 X_PER_DECADE = {True: 3, False: 8}
 #: x of the exact-vs-differences cross-check (where both are reliable).

@@ -90,12 +90,6 @@ def task_rows(task: SweepTask) -> list[tuple[str, float]]:
     return [("up" if i < half else "down", v) for i, v in enumerate(task.values)]
 
 
-def sweep_fingerprint(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, float],
-                      sampling: SamplingSpec, fmu_sha256: str) -> str:
-    """Identity of a sweep for checkpoints: same fingerprint, same results."""
-    return fingerprint(sweep_identity(spec, params, state0, sampling, fmu_sha256))
-
-
 def sweep_identity(spec: SweepSpec, params: Mapping[str, Any], state0: tuple[float, float],
                    sampling: SamplingSpec, fmu_sha256: str) -> dict[str, Any]:
     """What a sweep's results depend on (the checkpoint's manifest keeps it, to say what changed)."""

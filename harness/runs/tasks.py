@@ -173,7 +173,7 @@ def _run_points(task: SweepTask, sim: Any, params: dict[str, Any], state0: tuple
 
 
 #: ``KEY:POINT:ACTION[:FILE]``: tests make an interruption land at a known point of a known
-#: task instead of after a sleep (issue 13.6).  Before point POINT of task KEY starts:
+#: task instead of after a sleep (a sleep races the run).  Before point POINT of task KEY starts:
 #: ``interrupt`` sends SIGINT to the process running the sweep (the pool's parent, or this
 #: process), ``kill`` SIGKILLs this process once (FILE is created first and, if it already
 #: exists, nothing happens), ``block`` creates FILE.reached and waits until FILE exists.

@@ -46,9 +46,8 @@ def test_chart_edges_at_gamma_10_match_the_exact_flow(chart) -> None:
             assert cv["lower"][0] >= lo * (1 - 5e-3), M
             continue
         assert cv["lower"][0] == pytest.approx(lo, rel=5e-3), M
-        if True:
-            assert cv["upper"][0] == pytest.approx(hi, rel=5e-3), M
-            assert cv["kind_upper"][0] == "graze"
+        assert cv["upper"][0] == pytest.approx(hi, rel=5e-3), M
+        assert cv["kind_upper"][0] == "graze"
         assert cv["kind_lower"][0] == "flip"
         n = len(cv["value"])
         assert all(len(cv[k]) == n for k in ("lower", "upper", "kind_lower", "kind_upper", "beta"))

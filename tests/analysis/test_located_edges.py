@@ -1,5 +1,5 @@
 """The per-value scans' edges located by the continuation (:mod:`harness.analysis.windows.located_edges`),
-on the two failure modes of Figure 9's chart (issue 26) and on COCO's impact example.
+on two failure modes of per-value scans on Figure 9's chart and on COCO's impact example.
 
 Figure 9's family (nu = 4.605, Omega = 0.3059, r = 0.9) at Gamma = 48.9, the chart's fifth value:
 the march and bisection lost period 1 on both sides of its seed at sigma = 17.3 (edges 17.04 and
@@ -7,7 +7,7 @@ the march and bisection lost period 1 on both sides of its seed at sigma = 17.3 
 Newton falling onto the unstable period-1 orbit (2 impacts per 2 periods).  Truth: the exact flow
 (:mod:`mapcheck.exact`, sharing nothing with the FMU): each edge must be an edge of the exact flow
 of its kind 1e-8 beyond the located interval, and the orbit must be a stable orbit of the exact
-flow where the old edges were.
+flow where the per-value scans put the edges.
 
 COCO's example (Recipes for Continuation, Ex. 15.2, omega = 1.32, docs/continuation.md): the
 period-1 impacting orbit's fold from the closed-form orbit of :mod:`mapcheck.impact_orbit`.
@@ -57,7 +57,7 @@ def test_fig9_gamma_48_9_windows_are_located_not_lost(fig9) -> None:
     assert p2["located"][1] == "continuation (gap = 0)" or p2["located"][1].startswith("continuation (contact change")
     assert (p1["lower"].kind, p1["upper"].kind, p1["upper"].sigma) == ("flip", "range", None)
     assert (p2["lower"].kind, p2["upper"].kind) == ("flip", "graze")
-    # the old answers, far off: period 1 [17.04, 18.62], period 2 up to 0.526
+    # far from the per-value scans' answers: period 1 [17.04, 18.62], period 2 up to 0.526
     assert p1["lower"].sigma < 1.0 and 0.25 < p2["lower"].sigma < 0.35 and p2["upper"].sigma > 0.8
 
 

@@ -5,8 +5,8 @@ paper's), charted over Gamma from 300.  Its period-2 window is bounded by a flip
 above; at Gamma ~ 383 the grazing orbit loses stability where the graze curve meets the flip curve,
 which has turned back in Gamma (at ~490) and comes down as the upper edge: past that
 codimension-two point the window is bounded by the flip curve alone and closes at its tip.  The
-first candidate (the graze edge's loss of stability, which the chart used to report) is not the
-closing.
+first candidate (the graze edge's loss of stability, where the graze curve alone would end) is
+not the closing.
 
 Independent truth: mapcheck's closed-form flow and its own Newton shooting
 (:class:`tests.support.edges.ExactFlow`), sharing nothing with the FMU: just above the hand-over
@@ -72,7 +72,7 @@ def test_a_graze_meeting_a_flip_hands_the_boundary_over_and_the_window_closes_la
     # the new edges were found from the orbit shot above the hand-over and continued from there
     (after,) = handover["handovers"]
     assert after["p2"] == pytest.approx(G_h * 1.001) and after["window"]["lower"]["kind"] == "flip"
-    # the exact flow: the window is there just above the hand-over (the old answer), and midway
+    # the exact flow: the window is there just above the hand-over, and midway
     # to the closing, between the new edges
     for G in (G_h * 1.01, 0.5 * (G_h + cl["closes"])):
         e = edge_crossings(after["curves"], G)
@@ -97,8 +97,8 @@ def test_the_closing_is_where_the_exact_flows_window_ends(handover) -> None:
     assert not exact_stable_sigmas(G_above, np.geomspace(lo, hi, 15), seeds)
 
 
-#: Figure 9's closings measured independently (issue 26: closed-form shooting on the exact flow
-#: and COCO, outside this tool); the chart's agree within 0.07 %.
+#: Figure 9's closings measured independently (closed-form shooting on the exact flow and
+#: COCO, outside this tool); the chart's agree within 0.07 %.
 FIG9_CLOSINGS = {"2": 1651.9, "3": 1575.3}
 
 

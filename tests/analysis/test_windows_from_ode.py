@@ -57,7 +57,7 @@ def exact_period(sigma: float, wall: str, Gamma: float = 10.0, n_transient: int 
 
 
 def test_rigid_period_one_window_is_measured_not_none(rigid) -> None:
-    """The stable one-impact period-1 orbit the issue saw from sigma ~ 1.64 up is reported, with
+    """The stable one-impact period-1 orbit seen from sigma ~ 1.64 up is reported, with
     a flip lower edge and multipliers inside the unit circle; the exact flow confirms the edge."""
     res, report = rigid
     lo, hi = res["windows"]["ode"]["1"]
@@ -92,8 +92,8 @@ def test_rigid_report_says_why_maps_do_not_apply(rigid) -> None:
 
 
 def test_soft_wall_period_two_window_beyond_the_maps_range(soft) -> None:
-    """Gamma = 100: the one-impact period-2 orbit continues to sigma ~ 0.15 (the old scan range
-    from the map cut it at 0.023); its upper edge is a flip, and the up scan agrees."""
+    """Gamma = 100: the one-impact period-2 orbit continues to sigma ~ 0.15 (a scan range taken
+    from the map would cut it at 0.023); its upper edge is a flip, and the up scan agrees."""
     res, report = soft
     lo, hi = res["windows"]["ode"]["2"]
     assert hi is not None and 0.1 < hi < 0.2

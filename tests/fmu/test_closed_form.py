@@ -101,8 +101,8 @@ def test_sticking_on_the_rigid_wall_matches_the_oracle(fmu2):
 @pytest.mark.parametrize("contact", [1, 2])
 def test_nonlinear_contact_laws_are_refused(fmu2, contact, capsys):
     """Refused at fmi2ExitInitializationMode through plain fmpy, whose default logger prints the
-    message. (This crashed when another test's logger had been handed to fmpy's logger proxy
-    and collected; see harness/fmu/fmi2_logging.py and tests/harness/test_fmi2_logging.py.)"""
+    message, whatever loggers other tests handed to fmpy's logger proxy and let be collected
+    (harness/fmu/fmi2_logging.py, tests/harness/test_fmi2_logging.py)."""
     with pytest.raises(FMICallException):
         fmu2.start(0.0, **dict(FIG9, wall=1), contact=contact, solver=1)
     fmu2.started = True

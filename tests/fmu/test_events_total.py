@@ -130,7 +130,8 @@ def test_compliant_wall_with_r0_runs_past_the_reported_failure(fmu, sigma, Gamma
 @pytest.mark.parametrize("r", [0.44, 0.46, 0.48, 0.5, 0.6, 0.68])
 def test_rigid_chatter_sticks_and_releases(fmu, r):
     """nu 0.196, Omega 7.368, sigma 10, u0 -0.03, v0 0: the impacts accumulate in the first
-    period and the mass sticks; the FMU used to stop with a state 2.9e-24 inside the wall."""
+    period and the mass sticks; no state may end up inside the wall (a crossing
+    missed by 1e-24 would leave it 2.9e-24 inside)."""
     lin, sigma = UNDERDAMPED, 10.0
     osc = ExactOscillator(lin["nu"], lin["Omega"], sigma, r=r, wall="rigid")
     kinds = [k for _, k in osc.crossings(-0.03, 0.0, 0.0, 1.0)]
@@ -173,7 +174,7 @@ def test_zero_velocity_start_on_the_wall(fmu):
 
 @pytest.mark.parametrize("u_wall,F_ext", [(0.3, 0.0), (-0.4, 20.0)])
 def test_a_moved_rigid_wall_is_never_penetrated(fmu, u_wall, F_ext):
-    """The wall at u_wall (an input) with the chatter of the issue, stepped on a dense grid: no
+    """The wall at u_wall (an input) with a chattering orbit, stepped on a dense grid: no
     state beyond the wall at any communication point, and the closed form (the ports map onto
     the port-free problem by an exact scaling) at every one."""
     lin, sigma, r = UNDERDAMPED, 10.0, 0.5

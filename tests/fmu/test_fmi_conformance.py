@@ -103,7 +103,7 @@ def test_state_machine(interface: str, state: str, function: str) -> None:
 
 @pytest.mark.parametrize("interface", ("fmi2-cs", "fmi3-cs"))
 def test_null_instance_is_an_error_for_every_function(interface: str) -> None:
-    """fmi2EnterEventMode(NULL) and fmi3EnterEventMode(NULL) once crashed; every function
+    """Every function, fmi2EnterEventMode and fmi3EnterEventMode included,
     answers Error (FreeInstance: returns) for a NULL instance."""
     x = Instance(interface)
     try:

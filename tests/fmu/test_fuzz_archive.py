@@ -1,6 +1,6 @@
-"""A damaged FMU archive is one line of bad input, never a traceback (found by
-bench/issue13_inputs.py: a byte flipped inside the deflate stream of the binary raised
-``zlib.error``, which the archive check did not catch).
+"""A damaged FMU archive is one line of bad input, never a traceback: a byte flipped inside the
+deflate stream of the binary makes zipfile raise ``zlib.error``, which the archive check turns
+into bad input like every other damage (tests/fuzz/extreme_inputs.py runs the CLI on such an archive).
 
 Every single-byte flip at 40 places spread over the archive (the compressed binary, the
 local headers, the central directory) either leaves a readable archive or raises

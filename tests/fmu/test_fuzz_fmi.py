@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 
 from tests.fuzz import runner
-from tests.fuzz.executor import corrupt
+from tests.fuzz.fmu_states import corrupt
 from tests.fuzz.model import ROOT, describe
 from tests.fuzz.sequences import Generator
 

@@ -100,8 +100,8 @@ def test_model_exchange_applies_the_same_rule(reference, path):
                for t in PERIODS]
     got = np.c_[res["u"][rows_at], res["v"][rows_at]]
     err = np.max(np.abs(got - states))
-    # fmpy's CVODE at rtol 1e-10 with event location: well inside 1e-6 (was 2e-2 when the ME
-    # update moved the mass onto the stepped wall)
+    # fmpy's CVODE at rtol 1e-10 with event location: well inside 1e-6 (an ME update that moved the
+    # mass onto the stepped wall would be off by 2e-2)
     assert err <= 1e-6, err
     assert list(res["impacts"][rows_at]) == list(counts)
 

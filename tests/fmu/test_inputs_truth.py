@@ -207,7 +207,7 @@ def test_a_wall_jumping_away_from_a_sticking_mass_leaves_it_with_its_velocity(fm
     the mass flies on with its velocity, the wall's before the jump (dw1), until the net force
     brings it back to the wall (an impact, r = 0: it sticks again or leaves with the wall).  The
     reference applies exactly that (velocity continuity) and then its own flight and jump laws;
-    at rest (the former rule) or at the wall's new velocity dw2 is off by |dw1 - dw2| or dw1 in
+    at rest or at the wall's new velocity dw2 is off by |dw1 - dw2| or dw1 in
     velocity at once."""
     lin, sigma, w0, y0, dw1, h = UNDERDAMPED, 10.0, 0.02, (-0.03, 0.0), 0.05, 0.0125
     _start(fmu, "rigid", solver, sigma, 0.0, 10.0, 0.0, w0, y0, **lin)

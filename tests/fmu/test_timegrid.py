@@ -1,11 +1,10 @@
 """Results independent of the importer's time grid, FMI 2.0 and 3.0 Co-Simulation.
 
 Importers compute communication points differently: fmusim as t0 + k h, others by summing
-t += h, some with variable steps; the points land a few ulps off "round" times. The FMU used to
-set every communication point as CVODE's stop time; a point a few ulps past an internal step end
-then gave a ~1e-14 "sliver" step that spoiled the variable-step Adams history, and u was off
-by up to 5e-5 after 100 periods on the grid t0 + k 0.01 (1e-10 on t += 0.01). CVODE now steps
-on its own sequence and the state at a communication point is read from its interpolant, so the
+t += h, some with variable steps; the points land a few ulps off "round" times. Setting every
+communication point as CVODE's stop time would make a point a few ulps past an internal step end
+give a ~1e-14 "sliver" step that spoils the variable-step Adams history (u off by up to 5e-5
+after 100 periods on the grid t0 + k 0.01, 1e-10 on t += 0.01). So CVODE steps on its own sequence and the state at a communication point is read from its interpolant, so the
 grid cannot change the integration.
 
 Two kinds of checks, for every wall model:

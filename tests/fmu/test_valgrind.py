@@ -4,9 +4,9 @@ The driver (tests/fuzz/valgrind_driver.c) takes every life-cycle path of FMI 2.0
 Co-Simulation and Model Exchange once, including FMU states and a corrupted one; any invalid
 read/write, use of uninitialised memory or definite/indirect leak fails the test. It also takes
 the refused initialisation (closed form with a nonlinear contact law) on all four interfaces and
-every way on from the Error state. The last two tests run the Python reproducer of the segfault
-that refusal once caused (a dangling logger in fmpy's proxy, harness/fmu/fmi2_logging.py) under
-memcheck, and check that memcheck sees the old callbacks' fault.
+every way on from the Error state. The last two tests run the refusal through fmpy's logger proxy
+under memcheck (tests/support/refused_init_process.py): with a collected per-instance logger
+(a dangling callback, what harness/fmu/fmi2_logging.py avoids) memcheck must see the fault.
 """
 from __future__ import annotations
 
@@ -93,8 +93,8 @@ def test_refused_init_through_fmpy_is_memcheck_clean() -> None:
 
 
 def test_memcheck_sees_the_dangling_logger() -> None:
-    """The same run with a ctypes logger per instance handed to fmpy's proxy (the project's
-    callbacks before harness/fmu/fmi2_logging.py): the refusal's message is sent through the freed
+    """The same run with a ctypes logger per instance handed to fmpy's proxy (the pattern
+    harness/fmu/fmi2_logging.py avoids): the refusal's message is sent through the freed
     callback, which memcheck reports (under valgrind it does not crash: the freed block is
     still readable)."""
     _, ours = _memcheck_repro("old")

@@ -22,80 +22,19 @@ an action (``refused-valid``: a valid call, e.g. a tiny step or valid physics, m
 from __future__ import annotations
 
 import math
-import struct
 import time
 from typing import Any
 
 from tests.fuzz.bindings import DISCARD, ERROR, FATAL, OK, WARNING, Fmi2, Fmi3
+from tests.fuzz.fmu_states import StateActions
+from tests.fuzz.oracle import PASSED, Violation, same_values
 from tests.fuzz.sequences import interface_is_me
 from tests.fuzz.standard_model import RecordingLibrary, StateModel
 
-PASSED = (OK, WARNING)
+__all__ = ["Executor", "Violation"]
 
 
-class Violation(Exception):
-    """An oracle violation: `kind` names the rule, the message says what was seen."""
-
-    def __init__(self, kind: str, message: str) -> None:
-        super().__init__(f"{kind}: {message}")
-        self.kind = kind
-
-
-def _same(a: list, b: list) -> bool:
-    return len(a) == len(b) and all(
-        x == y or (isinstance(x, float) and isinstance(y, float) and math.isnan(x) and math.isnan(y))
-        for x, y in zip(a, b))
-
-
-def corrupt(data: bytes, how: str, pos: float, bit: int, offset: int | None = None) -> bytes:
-    """A serialised FMU state damaged in one way, deterministically.
-
-    Parameters
-    ----------
-    data : bytes
-        The serialised state.
-    how : str
-        One of sequences.CORRUPTIONS, or "none".
-    pos : float
-        Where, as a fraction of the length (ignored where `offset` is given).
-    bit : int
-        Which bit to flip (bitflip), or a small variation for the other kinds.
-    offset : int, optional
-        Where, as a byte offset.
-
-    Returns
-    -------
-    bytes
-        The damaged copy.
-    """
-    if not data or how == "none":
-        return data
-    b = bytearray(data)
-    i = min(len(b) - 1, int(pos * len(b)) if offset is None else offset)
-    i8 = min(max(0, len(b) - 8), i - i % 8)
-    if how == "bitflip":
-        b[i] ^= 1 << bit
-    elif how in ("nan", "inf"):
-        b[i8:i8 + 8] = struct.pack("<d", math.nan if how == "nan" else -math.inf)[: len(b) - i8]
-    elif how == "zero_word":
-        i4 = i - i % 4
-        b[i4:i4 + 4] = bytes(min(4, len(b) - i4))
-    elif how == "truncate":
-        del b[max(1, i):]
-    elif how == "extend":
-        b += bytes(8 * (bit + 1))
-    elif how == "zeros":
-        b = bytearray(len(b))
-    elif how == "random_body":
-        for k in range(8, len(b)):
-            b[k] = (b[k] * 131 + k * 7 + bit) & 0xFF
-    elif how == "swap_halves":
-        h = len(b) // 2
-        b = b[h:] + b[:h]
-    return bytes(b)
-
-
-class Executor:
+class Executor(StateActions):
     """One instance of one interface, driven action by action."""
 
     def __init__(self, lib: Fmi2 | Fmi3, interface: str) -> None:
@@ -314,7 +253,7 @@ class Executor:
             self.snapshot()
         elif before is not None and self.model.getters_allowed():
             st2, after = self.lib.get(kind, vrs)
-            if self._check("get", st2) in PASSED and not _same(before, after):
+            if self._check("get", st2) in PASSED and not same_values(before, after):
                 raise Violation("not-atomic", f"refused set {kind} {vrs}={values} changed the "
                                 f"value {before} -> {after}")
 
@@ -376,81 +315,6 @@ class Executor:
                 st, g2 = self._me_get("ind")
             g = g2
         self.snapshot()
-
-    def _set_state(self, state: int | None, fn: str) -> int:
-        before = self.snapshot_quiet()
-        st = self._check(fn, self.lib.set_state(state))
-        if st in PASSED:
-            self.snapshot()
-        elif before is not None:
-            after = self.snapshot_quiet()
-            if after is not None and not _same(before, after):
-                raise Violation("not-atomic", f"refused {fn} changed the variables")
-        return st
-
-    def _roundtrip(self, slot: int) -> None:
-        state = self.slots[slot]
-        if state is None:
-            return
-        st, data = self.lib.serialize(state)
-        if self._check("serialize", st) not in PASSED:
-            return
-        st, p = self.lib.deserialize(data, None)
-        if self._check("deserialize", st) not in PASSED:
-            raise Violation("roundtrip", f"own serialised state refused: {self.last_message()}")
-        try:
-            st = self._set_state(p, "set_state(roundtrip)")
-            expected = self.slot_values[slot]
-            if st in PASSED and expected is not None:
-                got = self.snapshot()
-                if got is not None and not _same(expected, got):
-                    diff = [(i, e, g) for i, (e, g) in enumerate(zip(expected, got)) if e != g]
-                    raise Violation("roundtrip", f"restored values differ: {diff[:4]}")
-        finally:
-            self._check("free_state", self.lib.free_state(p)[0])
-
-    def _deser(self, a: dict[str, Any]) -> None:
-        src = a["src"]
-        if src == "foreign":
-            data = self.blobs.get("foreign")
-        else:
-            state = self.slots[int(src[4:])]
-            if state is None:
-                return
-            st, data = self.lib.serialize(state)
-            if self._check("serialize", st) not in PASSED:
-                return
-        if not data:
-            return
-        data = corrupt(data, a["corrupt"], a.get("pos", 0.0), a.get("bit", 0), a.get("offset"))
-        st, p = self.lib.deserialize(data, self.slots[a["slot"]])
-        if self._check("deserialize", st) in PASSED:
-            self.slots[a["slot"]] = p
-            self.slot_values[a["slot"]] = None
-            if a["set"]:
-                self._set_state(p, f"set_state(deserialized {src}, {a['corrupt']})")
-
-    def _foreign_state(self, h: float) -> bytes:
-        """A serialised state of the other interface type (ME <-> CS) of the same binary."""
-        other = type(self.lib)(self.lib.desc)
-        self.calls += 1
-        if not other.instantiate(not self.me):
-            return b""
-        try:
-            for fn, st in (("setup", other.setup(0.0, None)), ("enter_init", other.enter_init(0.0, None)),
-                           ("exit_init", other.exit_init())):
-                self._check(f"foreign {fn}", st)
-            if not self.me and h:  # the other one is ME: move its state a little
-                other.set_time(h)
-            elif h:
-                other.do_step(0.0, h)
-            st, p = other.get_state(None)
-            data = other.serialize(p)[1] if st == OK else b""
-            other.free_state(p)
-            self.calls += 4
-            return data
-        finally:
-            other.free()
 
     # -- the end-of-sequence probe ----------------------------------------------------------
     def probe(self) -> None:

@@ -85,7 +85,7 @@ def test_config_not_utf8_and_config_a_directory(tmp_path: Path, capsys) -> None:
 
 
 def test_out_is_a_directory_leaves_nothing_beside_it(tmp_path: Path, capsys) -> None:
-    """`--out DIR` used to write DIR.tmp next to it and then fail to rename it over DIR."""
+    """`--out DIR` is refused without writing DIR.tmp (or anything) next to DIR."""
     target = tmp_path / "dir"
     target.mkdir()
     code, _, err = _run_main(["strobe", *SHORT, "--out", str(target)], capsys)
@@ -144,7 +144,7 @@ def test_rejected_sweep_leaves_no_checkpoint_and_no_note_next_time(tmp_path: Pat
     base = ["sweep", "--param", "contact", "--mode", "fresh", "--solver", "closed-form", "--transient", "2",
             "--samples", "2", "--workers", "1", "--out", str(out), "--no-plot", "--no-progress"]
     # the FMU refuses the closed-form solver with the Hertz law (contact = 1) after contact = 0 finished
-    # (a start inside a rigid wall is no longer a refusal of the run: an invalid point, test_harness_basins)
+    # (a start inside a rigid wall is not a refusal of the run but an invalid point, tests/harness/test_basins.py)
     code, _, err = _run_main([*base, "--values", "0,1"], capsys)
     assert code == 2 and "closed" in _one_line(err).lower() and "Hertz" in _one_line(err), err
     assert not (tmp_path / "s.nc.partial").exists() and not out.exists()

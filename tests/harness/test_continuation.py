@@ -250,8 +250,8 @@ def test_fold_flip_ns_on_maps_with_known_bifurcations() -> None:
 
 def test_newton_steps_into_a_rigid_wall_are_failed_steps_not_errors(sim, model) -> None:
     """A Newton iterate inside a rigid wall is not a state (the FMU refuses it at initialization).
-    It used to end find_attractors with an error (nu = 0.5, Omega = 1, r = 0.5, rigid: u0 = 0.077
-    inside the wall); now it is a failed evaluation and the search goes on."""
+    It is a failed evaluation and the search goes on, not an error that ends find_attractors
+    (nu = 0.5, Omega = 1, r = 0.5, rigid: u0 = 0.077 inside the wall)."""
     from harness.dynamics.maps.periodic_map import PeriodMap, refine_orbit
 
     p = {**model.defaults(), "nu": 0.5, "Omega": 1.0, "r": 0.5, "wall": 2, "solver": 1}
@@ -270,7 +270,7 @@ def test_newton_steps_into_a_rigid_wall_are_failed_steps_not_errors(sim, model) 
 def test_an_impact_added_to_a_chatter_is_located_not_lost(sim, model) -> None:
     """On a rigid wall a flight between two impacts of one period can reach the wall again (an
     impact added to the chatter); the gap of the free periods does not see it and the corrector
-    just fails there.  It used to end the branch as 'orbit lost'; the flow beyond now says the
+    just fails there.  The branch does not end as 'orbit lost': the flow beyond says the
     contacts changed, and the event is located.  Truth: the exact flow on both sides."""
     p = {**model.defaults(), "nu": 1.0, "Omega": 10.0, "r": 0.3, "wall": 2, "solver": 1}
     a = _seed(sim, p, 2.0, 1)

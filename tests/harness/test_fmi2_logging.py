@@ -1,11 +1,11 @@
 """FMI 2.0 log messages through fmpy's logger proxy (harness/fmu/fmi2_logging.py).
 
 fmpy's proxy forwards every proxied FMI 2.0 instance's messages to ONE process-global logger,
-the one given last. The project used to give it a ctypes callback per instance: messages of
-other instances then went to that instance's log, and once it was collected, to freed memory
-(the segfault of the refused closed-form initialisation, which depended on which test files ran
-before it). These tests run the real FMU through plain fmpy; the subprocess one is the
-reproducer that crashed (exit status -11 with the old callbacks, every run, measured).
+the one given last. A ctypes callback per instance would send other instances' messages to that
+instance's log, and once it was collected, to freed memory (a segfault at the refused
+closed-form initialisation, depending on which test files ran before it). These tests run the
+real FMU through plain fmpy; the subprocess one runs that pattern (a per-instance callback gives
+exit status -11 there, every run, measured).
 """
 from __future__ import annotations
 
@@ -60,7 +60,7 @@ def test_each_instance_logs_to_its_own_logger(capsys: pytest.CaptureFixture) -> 
 
 def test_plain_fmpy_refusal_after_collected_loggers(capsys: pytest.CaptureFixture) -> None:
     """A logged instance closed and collected, then a plain fmpy instance reports an error: it
-    used to call the collected callback (segfault)."""
+    must not call a collected callback (segfault)."""
     for k in range(3):
         s = LoggedSlave(name=f"short{k}")
         s.start(0.0)

@@ -1,9 +1,9 @@
 """Window edges by Newton shooting on the real FMU are measured, never echoed from the guide.
 
 The guide of :func:`harness.dynamics.maps.shooting.map_guided_windows` is the map's window; shooting
-starts inside it and brackets each edge itself.  Before the fix, the march from the window's
-centre with step width/6 landed exactly on the map's edges, and with xtol 1e-4 the bisection
-never moved off them: the "ODE" window was the map's, to 16 digits.
+starts inside it and brackets each edge itself.  A march from the window's centre with step
+width/6 lands exactly on the map's edges, and with xtol 1e-4 a bisection that started there would
+never move off them: the "ODE" window would be the map's, to 16 digits.
 Independent truth: the same shooting at a 100x finer tolerance must fall inside the coarse
 brackets (and those brackets must come from the shooting, not from the guide).
 """
@@ -38,7 +38,7 @@ def _check_measured(res: dict, M: int, guide: tuple[float, float], xtol: float) 
         assert bad is not None and 0 < abs(bad - good) <= xtol
         assert edge == pytest.approx(0.5 * (good + bad), abs=1e-15)
         assert width == pytest.approx(abs(bad - good))
-        # ... and not the guide's number (the old march landed on it exactly)
+        # ... and not the guide's number (a march of width/6 lands on it exactly)
         assert abs(edge - g) > 1e-12 * g
         assert good != g and bad != g
 

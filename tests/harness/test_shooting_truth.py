@@ -4,7 +4,7 @@ solution, with ``mapcheck.orbits.window_edge``'s own march, bisection and finite
 Newton: no harness code), and the edge kinds checked by the multipliers on each side of each
 edge.
 
-Case: the period-4 window of the issue-17 reproducer, (alpha, gamma) = (0.5, 0.05), r = 0.8,
+Case: a period-4 window, (alpha, gamma) = (0.5, 0.05), r = 0.8,
 compliant wall Gamma = 10 (the map's A~ window is the guide the harness starts from).
 """
 from __future__ import annotations
@@ -25,7 +25,7 @@ GUIDE_M4 = (0.0007036372600123284, 0.004341898116748781)
 R, GAMMA, M = 0.8, 10.0, 4
 # Newton on the closed form: a stable maximal orbit converges in <= 6 iterations from its
 # neighbour's point (quadratically: the map is smooth away from grazing), an unstable one beside a
-# flip in as many; past a graze Newton finds nothing, and each such try used to run to the default
+# flip in as many; past a graze Newton finds nothing, and each such try would run to the default
 # 40 iterations (3/4 of this file's time): 12 tell the same.
 NEWTON = dict(tol=1e-11, rel_h=1e-6, scale=np.array([1e-2, 1e-1]), max_iter=12)
 

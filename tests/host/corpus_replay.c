@@ -5,7 +5,7 @@
  * refused sets and state restores change nothing, a serialised state restores the same values,
  * Model Exchange and Co-Simulation calls refused on the other interface, "must_pass" actions
  * pass, "expect_error" sequences see a refusal, and after every sequence reset + initialisation
- * + one step work. tests/platform_corpus.py writes the corpus as text (doubles as hex bits):
+ * + one step work. tests/platforms/test_corpus.py writes the corpus as text (doubles as hex bits):
  *
  *   corpus_replay FMI2_BINARY FMI3_BINARY GUID < corpus.txt
  *

@@ -14,7 +14,7 @@ from examples.afm import run  # noqa: E402
 
 def test_example_runs_in_one_command(tmp_path: Path) -> None:
     """The example writes its plots, numbers and report; every master is within the FMU's
-    budget of the monolithic reference (1e-8 in u, 1e-7 in v; the issue asks for 1e-6); the sweep shows the loop holding the free amplitude above
+    budget of the monolithic reference (1e-8 in u, 1e-7 in v; the goal is 1e-6); the sweep shows the loop holding the free amplitude above
     grazing and losing it (the amplitude jumps away from 3) once the set-point asks for a
     contact with the stiff sample."""
     assert run.main(["--quick", "--out", str(tmp_path)]) == 0

@@ -162,7 +162,7 @@ def test_open_loop_controller_measures_in_each_master(master: str, tmp_path: Pat
 def test_closed_loop_matches_monolithic_in_each_master(master: str, tmp_path: Path) -> None:
     """The AFM loop (the controller moves the wall through the oscillator's u_wall input)
     over 12 periods, while the loop is still moving the wall: at every communication point
-    within the FMU's own budget of the monolithic reference (the issue asks for 1e-6)."""
+    within the FMU's own budget of the monolithic reference (the goal is 1e-6)."""
     err, ref = _run(master, True, 12.0, tmp_path)
     assert np.ptp(ref.u_wall) > 0.1, "the loop was meant to move the wall"
     # measured 4.5e-11 in u, 5.5e-10 in v in every master: held to the bounds of the open loop

@@ -9,13 +9,17 @@ callbacks and instantiation are the fuzzer's (tests/fuzz/bindings.py).
 from __future__ import annotations
 
 import ctypes as C
+import xml.etree.ElementTree as ET
 from typing import Callable
 
 from tests.fuzz.bindings import ERROR, OK, Fmi2, Fmi3, _Fmi2EventInfo, _Fmi3Intermediate
 from tests.fuzz.model import ROOT, describe
 
 D, SZ, P = C.c_double, C.c_size_t, C.c_void_p
-VR_U, VR_IMPACTS, VR_IN_CONTACT, VR_F_EXT = 13, 15, 16, 23
+#: Value references by name, from the FMU's modelDescription.xml (generated from fmu_src/variables.py).
+_VRS = {sv.get("name"): int(sv.get("valueReference"))
+        for sv in ET.parse(ROOT / "fmu_src" / "modelDescription.xml").getroot().iter("ScalarVariable")}
+VR_U, VR_IMPACTS, VR_IN_CONTACT, VR_F_EXT = (_VRS[n] for n in ("u", "impacts", "in_contact", "F_ext"))
 STEP = 0.01  # a valid communication step from the start time 0
 
 
@@ -201,6 +205,13 @@ def _fmi3_calls(x: Instance, p: P) -> dict[str, Callable[[], int | None]]:
         "fmi3DoStep": lambda: L.fmi3DoStep(p, D(0.0), D(STEP), True,
                                            *[C.byref(v) for v in b[:3]], C.byref(d1)),
     }
+    return {**c, **_fmi3_variable_calls(L, p)}
+
+
+def _fmi3_variable_calls(L: C.CDLL, p: P) -> dict[str, Callable[[], int | None]]:
+    """The FMI 3.0 clock functions and the getters and setters of every type, bound to ``p``:
+    empty arrays (the FMU has no clocks), one real variable of each direction for Float64."""
+    c: dict[str, Callable[[], int | None]] = {}
     # clock functions (the FMU has no clocks: zero-length arrays), by their number of arrays
     for name, arrays in (("GetClock", 1), ("SetClock", 1), ("GetIntervalDecimal", 2),
                          ("GetIntervalFraction", 3), ("GetShiftDecimal", 1),

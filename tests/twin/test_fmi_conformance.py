@@ -3,7 +3,7 @@
 The twin (build/fmu/ImpactOscillatorPy.fmu, FMI 2.0 Co-Simulation) is judged against the same
 standard table as the C FMU (tests/support/fmi_standard.py, "fmi2-cs"): every (state, function) pair,
 each on a fresh instance. The twin runs only inside a Python process (pythonfmu's binary needs
-the host's libpython), and a wrong call once crashed its host, so each state's cases run in a
+the host's libpython), and a wrong call can crash its host, so each state's cases run in a
 child process; a crash there is a failure of that state, with the cases done before it.
 
 Criteria (the twin's messages are its own, so the state is judged from outside):

@@ -1,11 +1,11 @@
 """The pythonfmu twin's results do not depend on the importer's time grid (twin).
 
-The twin (build/fmu/ImpactOscillatorPy.fmu, FMI 2.0 CS; CVODE through scikit-sundae) used to
-set every communication point as CVODE's stop time, as the C FMU did.  On fmusim's grid
-t0 + k 0.01 a point a few ulps past an internal step end then gave a ~1e-14 "sliver" step that
-spoiled the Adams history: after 100 periods (Figure 9, sigma = 0.5) u was off the closed form
-by 4.6e-5 (compliant wall) and 1.4e-6 (rigid), against 4e-11 on the summed grid t += 0.01.
-The twin now calls CVODE in normal mode without a stop time (CVODE steps past the point and
+The twin (build/fmu/ImpactOscillatorPy.fmu, FMI 2.0 CS; CVODE through scikit-sundae) does not
+set communication points as CVODE's stop time: on fmusim's grid t0 + k 0.01 a point a few ulps
+past an internal step end would give a ~1e-14 "sliver" step that spoils the Adams history (after
+100 periods, Figure 9, sigma = 0.5: u off the closed form by 4.6e-5 with a compliant wall and
+1.4e-6 with a rigid one, against 4e-11 on the summed grid t += 0.01).
+The twin calls CVODE in normal mode without a stop time (CVODE steps past the point and
 returns its interpolant there, CVodeGetDky), as the C FMU does in one-step mode with
 CVodeGetDky (fmu_src/solver_cvode.c; impact_twin_model.CvodeDriver._cvode_step).
 

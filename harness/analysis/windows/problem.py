@@ -6,7 +6,7 @@ line that asks it again (:func:`command_line`).
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -225,10 +225,6 @@ def _map_range(problem: WindowProblem) -> tuple[np.ndarray, tuple[float, float]]
             if los:
                 lo, hi = min(lo, 0.7 * min(los)), max(hi, 2.5 * s_1)
     return table_grid, (lo, hi)
-
-
-def problem_dict(problem: WindowProblem) -> dict[str, Any]:
-    return asdict(problem)
 
 
 def command_line(problem: WindowProblem, quick: bool, out: Any, solver: str = DEFAULT_SOLVER,

@@ -16,11 +16,6 @@ VARIANT_KEYS = ("theory_64", "map", "map_A_tilde")
 SCAN_TOL = 1e-4
 
 
-def _span(values: list) -> str:
-    v = [x for x in values if x is not None]
-    return "none measured" if not v else f"{min(v):+.4g} to {max(v):+.4g}"
-
-
 def _fmt_tol(xtol: Any) -> str:
     if isinstance(xtol, dict):
         return ", ".join(f"M = {M}: {t:.2g}" for M, t in xtol.items()) or "no window bisected"

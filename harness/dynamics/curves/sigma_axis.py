@@ -4,8 +4,8 @@ Far above grazing the edges of the windows spread over decades of sigma, so the 
 followed in s = ln sigma (steps of one size in every decade).  Below grazing sigma reaches 0 and
 negative values (sigma > -1 always: the wall-free orbit's amplitude is 1 + sigma), where ln sigma
 does not exist; there s = sigma.  :func:`sigma_axis` picks the log axis whenever the searched range
-is positive, so that every positive-range computation is the same, number for number, as before
-the linear axis existed.
+is positive, so that every positive-range computation is the same, number for number, as on a
+log axis alone.
 """
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 
 The map F takes the state at t0 = n + theta to the state one period later.  When the FMU
 reports the derivatives of its map (the variational equations with saltation matrices at
-the wall events, issue 11: outputs ``J_uu`` ... ``S_v``, detected by name) one run gives J
+the wall events: outputs ``J_uu`` ... ``S_v``, detected by name) one run gives J
 exactly, down to any distance from grazing (``method="exact"``).  Otherwise, or with
 ``method="fd"`` (the cross-check), J is measured by restarting the simulator from perturbed
 states.  Saving and restoring the FMU state is not needed either: (u, v)

@@ -128,11 +128,3 @@ def with_attractors(ds: xr.Dataset, labels: np.ndarray, attractors: list[Attract
     return ds
 
 
-def attractors_of(ds: xr.Dataset) -> list[Attractor]:
-    """The attractors stored in a basin Dataset (as written by :func:`run_basins`)."""
-    out = []
-    for i in range(ds.sizes.get("attractor_index", 0)):
-        p = int(ds["attractor_period"].values[i])
-        out.append(Attractor(i, p, int(ds["attractor_impacts"].values[i]),
-                             ds["attractor_points"].values[i, :p], int(ds["attractor_starts"].values[i])))
-    return out

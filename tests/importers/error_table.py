@@ -1,21 +1,19 @@
 """The table of docs/importers.md: per-period error against the closed form, importer x FMU
-variant, measured by running the importer tests' own runs (tests/test_importer_*.py).
+variant, measured by running the importer tests' own runs (tests/importers/test_fmusim.py,
+tests/importers/test_libcosim.py).
 
-Usage: .venv/bin/python scripts/importer_errors.py   (needs build/tools/fmusim, libcosimpy)
+Usage: .venv/bin/python -m tests.importers.error_table   (needs build/tools/fmusim, libcosimpy)
 Prints a Markdown table: the largest per-period error in u and v over the tests' four
 parameter cases (over-/underdamped, compliant/rigid wall), and impacts counted / exact.
 """
 from __future__ import annotations
 
-import sys
 import tempfile
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from tests import test_importer_fmusim as F  # noqa: E402
-from tests import test_importer_libcosim as L  # noqa: E402
-from tests.support.importers import compare_per_period, run_fmusim, write_input_csv  # noqa: E402
+from tests.importers import test_fmusim as F
+from tests.importers import test_libcosim as L
+from tests.support.importers import compare_per_period, run_fmusim, write_input_csv
 
 
 def _row(label: str, checks: list) -> str:

@@ -1,12 +1,14 @@
-"""Every input in issue 13's "Why", and the answer the FMU and the CLI give it now.
+"""Extreme inputs -- out-of-range parameters, huge and tiny steps, corrupted and foreign FMU
+states, runs over the limits, damaged archives, signals -- and the answer the FMU and the CLI give
+each: refused with a message, run, or (never) crashed, hung or sanitizer-reported.
 
-    .venv/bin/python bench/issue13_inputs.py [--out results/issue13_inputs.md] [--skip-cli]
+    .venv/bin/python -m tests.fuzz.extreme_inputs [--out results/extreme_inputs.md] [--skip-cli]
 
-FMU rows run as call sequences of the fuzzer (tests/fuzz/) in a child process, once on the
+FMU rows run as call sequences of the fuzzer (this package) in a child process, once on the
 release binaries (build/fmu: the answer and its time) and once on the ASan + UBSan build
 (build/asan: whether the sanitizers stay silent), each under a time limit. "oracle" is the
 fuzzer's verdict (tests/fuzz/executor.py): ok, or the rule broken (nonfinite: a non-finite value
-with status OK; bricked: reset no longer works; refused-valid: a valid call failed;
+with status OK; bricked: reset does not work after the sequence; refused-valid: a valid call failed;
 accepted-extreme: no call refused the input; timeout; ubsan/asan: a sanitizer report).
 CLI rows run `python -m harness ...` with a 4 GiB address-space limit and a time limit, and report
 the exit status, the first line of stderr, whether a traceback was printed and the peak RSS.
@@ -17,7 +19,6 @@ from __future__ import annotations
 import argparse
 import os
 import resource
-import shutil
 import signal
 import subprocess
 import sys
@@ -27,12 +28,11 @@ import zipfile
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from tests.fuzz import runner
+from tests.fuzz.model import ROOT, describe
 
-from tests.fuzz import runner  # noqa: E402
-
-VR = dict(nu=0, Omega=1, sigma=2, r=3, Gamma=4, wall=5, u0=6, v0=7)
+#: Value references by variable name, read from the release build's modelDescription.xml.
+VR = {v.name: v.vr for v in describe(runner.RELEASE, 2).variables}
 INIT = [{"op": "setup", "start": 0.0, "tol": None}, {"op": "enter_init", "start": 0.0, "tol": None}]
 EXIT = {"op": "exit_init"}
 
@@ -50,7 +50,7 @@ def step(h: float, repeat: int = 1, must_pass: bool = False, t: Any = "now") -> 
 
 
 def fmu_rows() -> list[tuple[str, dict[str, Any], float]]:
-    """(input as the issue states it, sequence, time limit in seconds)."""
+    """(the input in words, sequence, time limit in seconds)."""
     rows: list[tuple[str, dict[str, Any], float]] = []
     for sigma, gamma in ((0.2, None), (0.5, None), (1.0, None), (0.2, 1e12)):
         acts = INIT + [real("r", 0.0), real("sigma", sigma)] + ([real("Gamma", gamma)] if gamma else [])
@@ -242,7 +242,7 @@ def main() -> int:
     args = ap.parse_args()
     release = runner.RELEASE
     asan = None if args.skip_asan else runner.build_sanitized()
-    lines = ["| input (issue 13, Why) | answer now (release FMU) | s | oracle | ASan+UBSan |",
+    lines = ["| input | answer (release FMU) | s | oracle | ASan+UBSan |",
              "|---|---|---|---|---|"]
     for text, seq, limit in fmu_rows():
         res = runner.replay(release, seq, timeout=limit)
@@ -284,8 +284,8 @@ def main() -> int:
     if args.benchmarks:
         from bench.sections import write_section
 
-        write_section(ROOT / "BENCHMARKS.md", "<!-- fuzz:begin -->\n## Issue 13: every input of its "
-                      "\"Why\" and the answer it gets now\n\n`.venv/bin/python bench/issue13_inputs.py "
+        write_section(ROOT / "BENCHMARKS.md", "<!-- fuzz:begin -->\n## Extreme inputs and the answer "
+                      "each gets\n\n`.venv/bin/python -m tests.fuzz.extreme_inputs "
                       "--benchmarks` (one run; FMU rows: release build for the answer and its seconds, "
                       "ASan + UBSan build for the sanitizer column; \"oracle\" is the fuzzer's verdict, "
                       "tests/fuzz/executor.py).\n\n" + text + "\n<!-- fuzz:end -->")
