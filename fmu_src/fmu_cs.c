@@ -104,6 +104,8 @@ int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_a
     if (early_return) *early_return = 0;
     if (check_step(c, fn, t, h) != CORE_OK) return CORE_ERROR;
     apply_input_jump(c);
+    /* a wall velocity without an input derivative: the wall moves linearly over the step */
+    if (model_begin_wall_ramp(&c->m, c->st.clk.tau)) c->st.clk.restart = 1;
     if (c->m.sensitivities) { /* derivatives w.r.t. the state at t */
         sens_reset(&c->m);
         c->st.clk.restart = 1; /* CVODE carries J, S in its own history: restart it with J = I */

@@ -23,6 +23,7 @@ static int known_column(unsigned vr) {
     case VR_V: return PK_V;
     case VR_F_EXT: return PK_F_EXT;
     case VR_U_WALL: return PK_U_WALL;
+    case VR_V_WALL: return PK_V_WALL;
     default: return -1;
     }
 }
@@ -76,7 +77,7 @@ static int check_refs(CoreInstance *c, const char *fn, const unsigned unknowns[]
     for (size_t j = 0; j < nk; ++j)
         if (known_column(knowns[j]) < 0)
             return core_fail(c, fn, "value reference %u (%s) is not a known: the knowns are the "
-                             "states u, v and the inputs F_ext, u_wall", knowns[j],
+                             "states u, v and the inputs F_ext, u_wall, v_wall", knowns[j],
                              core_variable_name(knowns[j]));
     double P[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS], row[MODEL_N_KNOWNS];
     memset(P, 0, sizeof P);

@@ -19,7 +19,7 @@
 #include "fmu_vars.h"
 
 #define SNAPSHOT_MAGIC 0x494d504fu /* "IMPO" */
-#define SNAPSHOT_VERSION 3u /* 3: ModelData carries sensitivities, solver, J, S (issue 11) */
+#define SNAPSHOT_VERSION 4u /* ModelData's layout: bumped whenever a field is added */
 
 typedef struct {
     uint32_t magic, version, iface, size;

@@ -42,6 +42,7 @@ static double get_F_ext(const CoreInstance *c) {
 static double get_u_wall(const CoreInstance *c) {
     return model_wall_position(&c->m, core_local_tau(c));
 }
+static double get_v_wall(const CoreInstance *c) { return c->m.v_wall; }
 
 /* Valid ranges: chosen so that every derived quantity (F_g, kappa, the forcing, the wall
  * force) stays finite with many orders of magnitude to spare; README "Valid ranges". */
@@ -180,9 +181,20 @@ int core_set_input_derivatives(CoreInstance *c, const char *fn, const unsigned v
     if (n > 0 && (!vr || !order || !value)) return core_fail(c, fn, "NULL argument");
     int status = CORE_OK;
     for (size_t i = 0; i < n; ++i) {
-        if (vr[i] != VR_F_EXT && vr[i] != VR_U_WALL)
+        if (vr[i] != VR_F_EXT && vr[i] != VR_U_WALL && vr[i] != VR_V_WALL)
             return core_fail(c, fn, "value reference %u is not a Real input", vr[i]);
         if (order[i] < 1) return core_fail(c, fn, "order %d: must be >= 1", order[i]);
+        if (!isfinite(value[i]))
+            return core_fail(c, fn, "derivative of order %d of %s = %g rejected: not finite",
+                             order[i], core_variable_name(vr[i]), value[i]);
+        if (vr[i] == VR_V_WALL) { /* the wall moves at constant velocity over a step */
+            if (value[i] != 0.0) {
+                core_log(c, CORE_WARNING, "logStatusWarning", "%s: derivative of order %d of "
+                         "v_wall ignored (the wall is unaccelerated over a step)", fn, order[i]);
+                status = CORE_WARNING;
+            }
+            continue;
+        }
         const double bound = vr[i] == VR_F_EXT ? MODEL_MAX_DF_EXT : MODEL_MAX_DU_WALL;
         if (!isfinite(value[i]) || !(fabs(value[i]) <= bound))
             return core_fail(c, fn, "d%s/dt = %g rejected: must be finite with |.| <= %g",

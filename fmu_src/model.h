@@ -56,9 +56,11 @@ typedef struct {
     int mode;
     int impacts;
     /* Inputs (ports): F_ext and u_wall are the values at local time in_tau; dF_ext and du_wall
-     * their time derivatives (FMI 2.0 Co-Simulation input derivatives, 0 = held over the step):
-     * F(tau) = F_ext + dF_ext (tau - in_tau), w(tau) = u_wall + du_wall (tau - in_tau). */
+     * their ramps' slopes over a Co-Simulation step (FMI 2.0 input derivatives, or v_wall: 0 =
+     * held over the step): F(tau) = F_ext + dF_ext (tau - in_tau), w(tau) = u_wall + du_wall
+     * (tau - in_tau). v_wall: the input wall velocity (model_wall_velocity). */
     double F_ext, u_wall, dF_ext, du_wall, in_tau;
+    double v_wall;
     /* The last wall entry: velocity relative to the wall before the jump, and absolute time. */
     double v_impact, t_impact;
     /* Integer origin of local time (absolute t = origin + tau), kept equal to the stepper's
@@ -138,7 +140,8 @@ MeEventResult model_me_event_update(ModelData *m, double tau, double y[2]);
  * wall (0 for d <= 0 with the Hertz laws). */
 double model_contact_force(const ModelData *m, double d, double dv);
 
-/* Ports. The wall position w(tau), its velocity, and the external force at local time tau. */
+/* Ports. The wall position w(tau), its velocity w' (the ramp's slope while one runs, else the
+ * input v_wall), and the external force at local time tau. */
 double model_wall_position(const ModelData *m, double tau);
 double model_wall_velocity(const ModelData *m);
 double model_external_force(const ModelData *m, double tau);
@@ -157,7 +160,9 @@ int model_input_jump(ModelData *m, double tau, double y[2]);
  * unknowns (rows) the right-hand side, the wall's force and the wall indicator. Each entry is the
  * partial derivative at the instance's contact mode and state now: the piecewise right-hand side
  * of that mode, differentiated (the mode itself changes only at events, so it has no partial). */
-typedef enum { PK_U = 0, PK_V = 1, PK_F_EXT = 2, PK_U_WALL = 3, MODEL_N_KNOWNS = 4 } PartialKnown;
+typedef enum {
+    PK_U = 0, PK_V = 1, PK_F_EXT = 2, PK_U_WALL = 3, PK_V_WALL = 4, MODEL_N_KNOWNS = 5
+} PartialKnown;
 typedef enum {
     PU_DER_U = 0, PU_DER_V = 1, PU_F_CONTACT = 2, PU_WALL_INDICATOR = 3, MODEL_N_UNKNOWNS = 4
 } PartialUnknown;
@@ -180,6 +185,10 @@ const char *model_check_restored(const ModelData *m, int is_me, double max_state
 void model_rebase_inputs(ModelData *m, double tau);
 /* 1 while an input is ramped (a nonzero input derivative). */
 int model_has_ramps(const ModelData *m);
+/* Co-Simulation, at a step's start (local time tau): a wall with velocity v_wall and no input
+ * derivative of u_wall moves over the step as u_wall + v_wall (tau' - tau), the ramp an input
+ * derivative v_wall would give. Returns 1 if a ramp began (the right-hand side changed). */
+int model_begin_wall_ramp(ModelData *m, double tau);
 /* After a step: the ramps end at tau (the inputs hold their values there until set again);
  * returns 1 if there were any (the right-hand side changed). */
 int model_end_ramps(ModelData *m, double tau);

@@ -275,7 +275,7 @@ static void set_model_state(const Cvode *s, ModelData *m, const double *y) {
          * change (even the master writing the wall's current value) read as a wall that went
          * away, released the mass at rest and counted a new impact on every other step. */
         m->u = model_wall_position(m, s->k->tau);
-        m->v = m->du_wall;
+        m->v = model_wall_velocity(m);
     }
 }
 
