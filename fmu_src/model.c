@@ -247,6 +247,77 @@ void model_partials(const ModelData *m, double tau, double P[MODEL_N_UNKNOWNS][M
     P[PU_F_CONTACT][PK_V_WALL] = -Fdv * vw;
 }
 
+/* The forcing's partials w.r.t. nu, Omega and sigma at local time tau, and F_g's and phi's
+ * (rows of d[3][3]: F_g, phi, forcing; columns nu, Omega, sigma). (5): F_g e^{i phi} = a + i b,
+ * a = Omega^2 - 4 pi^2, b = 2 pi nu. */
+static void forcing_partials(const ModelData *m, double tau, double d[3][3]) {
+    const double a = m->Omega2 - 4.0 * M_PI * M_PI, b = 2.0 * M_PI * m->nu, F2 = m->F_g * m->F_g;
+    const double da_dOmega = 2.0 * m->Omega, db_dnu = 2.0 * M_PI;
+    d[0][0] = b * db_dnu / m->F_g;         /* dF_g/dnu */
+    d[0][1] = a * da_dOmega / m->F_g;      /* dF_g/dOmega */
+    d[1][0] = a * db_dnu / F2;             /* dphi/dnu: phi = atan2(b, a) */
+    d[1][1] = -b * da_dOmega / F2;         /* dphi/dOmega */
+    d[0][2] = d[1][2] = 0.0;
+    const double th = 2.0 * M_PI * tau + m->phi, amp = 1.0 + m->sigma;
+    for (int j = 0; j < 2; ++j)
+        d[2][j] = amp * (d[0][j] * cos(th) - m->F_g * sin(th) * d[1][j]);
+    d[2][2] = m->F_g * cos(th);
+}
+
+void model_initial_partials(const ModelData *m, double tau0,
+                            double P[MODEL_N_INIT_UNKNOWNS][MODEL_N_INIT_KNOWNS]) {
+    memset(P, 0, sizeof(double) * MODEL_N_INIT_UNKNOWNS * MODEL_N_INIT_KNOWNS);
+    double f[3][3];
+    forcing_partials(m, tau0, f);
+    P[IU_F_G][IK_NU] = f[0][0];
+    P[IU_F_G][IK_OMEGA] = f[0][1];
+    P[IU_PHI][IK_NU] = f[1][0];
+    P[IU_PHI][IK_OMEGA] = f[1][1];
+    /* kappa = sqrt(Gamma) Omega (infinite slope in Gamma at Gamma = 0) */
+    P[IU_KAPPA][IK_GAMMA] = 0.5 * m->Omega / sqrt(m->Gamma);
+    P[IU_KAPPA][IK_OMEGA] = sqrt(m->Gamma);
+    P[IU_U][IK_U0] = 1.0;
+    P[IU_V][IK_V0] = 1.0;
+    /* der(u) = v0, or w' sticking, which needs v0 = w': v0 either way */
+    P[IU_DER_U][IK_V0] = 1.0;
+    /* w' is v_wall unless an input derivative of u_wall gives the ramp */
+    const double vw = m->du_wall == 0.0 ? 1.0 : 0.0;
+    const double w = model_wall_position(m, tau0), dw = model_wall_velocity(m);
+    if (m->mode == MODE_STICK) { /* der(v) = 0; F_contact: the holding force (model_wall_force) */
+        P[IU_F_CONTACT][IK_NU] = f[2][0] - dw;
+        P[IU_F_CONTACT][IK_OMEGA] = f[2][1] - 2.0 * m->Omega * (w + 1.0);
+        P[IU_F_CONTACT][IK_SIGMA] = f[2][2];
+        P[IU_F_CONTACT][IK_F_EXT] = 1.0;
+        P[IU_F_CONTACT][IK_U_WALL] = -m->Omega2;
+        P[IU_F_CONTACT][IK_V_WALL] = -m->nu * vw;
+        return;
+    }
+    /* der(v) = forcing - nu v0 - Omega^2 (u0 + 1) [- F_c] + F_ext */
+    double *dv = P[IU_DER_V];
+    dv[IK_NU] = f[2][0] - m->v;
+    dv[IK_OMEGA] = f[2][1] - 2.0 * m->Omega * (m->u + 1.0);
+    dv[IK_SIGMA] = f[2][2];
+    dv[IK_U0] = -m->Omega2;
+    dv[IK_V0] = -m->nu;
+    dv[IK_F_EXT] = 1.0;
+    if (m->mode != MODE_CONTACT) return;
+    /* F_c = kappa^2 g(d, d'), d = u0 - w, d' = v0 - w', kappa^2 = Gamma Omega^2 */
+    const double d = m->u - w, ddv = m->v - dw;
+    double Fd, Fdv;
+    contact_force_partials(m, d, ddv, &Fd, &Fdv);
+    const double g = m->kappa2 != 0.0 ? model_contact_force(m, d, ddv) / m->kappa2 : 0.0;
+    double *fc = P[IU_F_CONTACT];
+    fc[IK_U0] = Fd;
+    fc[IK_V0] = Fdv;
+    fc[IK_U_WALL] = -Fd;
+    fc[IK_V_WALL] = -Fdv * vw;
+    fc[IK_GAMMA] = m->Omega2 * g;
+    fc[IK_OMEGA] = 2.0 * m->Omega * m->Gamma * g;
+    if (m->contact == CONTACT_HUNT_CROSSLEY && d > 0.0)
+        fc[IK_ALPHA_HC] = m->kappa2 * d * sqrt(d) * ddv;
+    for (int j = 0; j < MODEL_N_INIT_KNOWNS; ++j) dv[j] -= fc[j];
+}
+
 void model_event_indicators(const ModelData *m, double tau, const double y[2],
                             double g[MODEL_N_EVENTS]) {
     if (m->wall == WALL_NONE) {

@@ -168,6 +168,23 @@ typedef enum {
 } PartialUnknown;
 void model_partials(const ModelData *m, double tau, double P[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS]);
 
+/* -- the initial unknowns' partial derivatives (Initialization Mode) -- The knowns (columns) are
+ * the Real parameters and inputs the InitialUnknowns depend on, the unknowns (rows) the Real
+ * initial unknowns that depend on any (the others' rows are 0). m holds the state the start
+ * values give at the start time tau0 (model_initialize_state): each entry is the partial of the
+ * value read in Initialization Mode, with the contact mode that start decides (a start exactly on
+ * a mode's boundary, e.g. at rest on the rigid wall, takes that mode's partials). */
+typedef enum {
+    IK_NU = 0, IK_OMEGA, IK_SIGMA, IK_GAMMA, IK_U0, IK_V0, IK_ALPHA_HC, IK_F_EXT, IK_U_WALL,
+    IK_V_WALL, MODEL_N_INIT_KNOWNS
+} InitKnown;
+typedef enum {
+    IU_F_G = 0, IU_PHI, IU_KAPPA, IU_U, IU_V, IU_DER_U, IU_DER_V, IU_F_CONTACT,
+    MODEL_N_INIT_UNKNOWNS
+} InitUnknown;
+void model_initial_partials(const ModelData *m, double tau0,
+                            double P[MODEL_N_INIT_UNKNOWNS][MODEL_N_INIT_KNOWNS]);
+
 /* -- what the FMI core asks of the model (fmu_vars.c, fmu_snapshot.c, fmu_cs.c, fmu_core.c) -- */
 /* Bounds on the input derivatives (slopes per unit time). */
 #define MODEL_MAX_DF_EXT 1e12
