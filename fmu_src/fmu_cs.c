@@ -1,5 +1,5 @@
 /*
- * The Co-Simulation stepping loop: core_do_step (fmu_core.h), called by fmi2DoStep (fmi2_cs.c) and
+ * The Co-Simulation stepping loop: core_do_step (fmu_core.h), called by fmi2DoStep (fmi2.c) and
  * fmi3DoStep (fmi3.c, with early return and intermediate update). It moves the model only through
  * the stepper (stepper.h) and asks the model about inputs that jumped, ramps and outputs.
  */
@@ -71,12 +71,12 @@ static int advance_by_events(CoreInstance *c, const char *fn, double t_end, int 
             /* FMI 3.0 Intermediate Update Mode: the table allows no call in it (no variable is
              * declared intermediateUpdate); a refused call leaves the instance in Terminated
              * and this doStep fails with it. */
-            c->state = CS_INTERMEDIATE;
+            c->state = ST_INTERMEDIATE;
             requested = intermediate(c, te);
-            if (c->state != CS_INTERMEDIATE)
+            if (c->state != ST_INTERMEDIATE)
                 return core_fail(c, fn, "a call inside intermediateUpdate at t = %.17g failed "
                                  "(see above): the step is abandoned", te);
-            c->state = CS_STEP;
+            c->state = ST_STEP;
         }
         if (stop_at_event || (c->early_return_allowed && requested)) {
             /* With event mode the jump waits for the discrete-state update; without, it is

@@ -1,7 +1,7 @@
 /*
  * Exact partial derivatives through the FMI API: core_directional_derivative (fmi2 and
  * fmi3GetDirectionalDerivative) and core_adjoint_derivative (fmi3GetAdjointDerivative), called by
- * the glue (fmi2_cs.c, fmi3.c) in every interface. The partials themselves are the model's
+ * the glue (fmi2.c, fmi3.c) in every interface. The partials themselves are the model's
  * (model_partials: the right-hand side of the contact mode now, differentiated); this unit maps
  * value references to its rows and columns and forms J s (directional) or s^T J (adjoint).
  *
@@ -136,7 +136,7 @@ static void initial_partials(const CoreInstance *c, Partials *p) {
 }
 
 static void partials_of(const CoreInstance *c, Partials *p) {
-    p->init = c->state == CS_INIT;
+    p->init = c->state == ST_INIT;
     if (p->init) initial_partials(c, p);
     else partials_now(c, p->P, p->Pout);
 }
@@ -159,7 +159,7 @@ static int row_of(const CoreInstance *c, const Partials *p, unsigned vr, double 
 static int check_refs(CoreInstance *c, const char *fn, const unsigned unknowns[], size_t nu,
                       const unsigned knowns[], size_t nk, const double seed[], int adjoint) {
     if ((nu && !unknowns) || (nk && !knowns)) return core_fail(c, fn, "NULL argument");
-    const int init = c->state == CS_INIT;
+    const int init = c->state == ST_INIT;
     for (size_t j = 0; j < nk; ++j)
         if ((init ? init_known_column(knowns[j]) : known_column(knowns[j])) < 0)
             return core_fail(c, fn, "value reference %u (%s) is not a known%s", knowns[j],

@@ -2,7 +2,7 @@
  * The FMU's variables: the table of value references (VARS, one row per variable: name, type,
  * kind, where it is stored in ModelData or which getter computes it, and its valid range), and the
  * FMI calls on them: core_get, core_set, core_set_input_derivatives (fmu_core.h), called by the
- * glue (fmi2_cs.c, fmi3.c). The snapshot unit (fmu_snapshot.c) checks restored values against
+ * glue (fmi2.c, fmi3.c). The snapshot unit (fmu_snapshot.c) checks restored values against
  * the same ranges (fmu_vars.h). What a computed value is physically is the model's (model.h).
  */
 #include "fmu_vars.h"
@@ -132,7 +132,7 @@ int core_set(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[]
         if (!d || d->type != t || !vars_settable(d))
             return core_fail(c, fn, "value reference %u is not a settable %s variable", vr[i],
                              TYPE_NAMES[t]);
-        const int early = (c->state & (CS_INSTANTIATED | CS_INIT)) != 0;
+        const int early = (c->state & (ST_INSTANTIATED | ST_INIT)) != 0;
         if (!early && !(d->kind == K_INPUT ||
                         (d->kind == K_TUNABLE && (c->state & c->tunable_states))))
             return core_fail(c, fn, "%s (value reference %u) cannot be set now: only sigma is "
@@ -161,14 +161,14 @@ int core_set(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[]
             /* a jump: in Co-Simulation between steps; in Model Exchange only in Event Mode (the
              * standards let an importer change inputs discontinuously only there; in
              * Continuous-Time Mode an input is a continuous signal) */
-            if (in[i] != before && !early && (!c->is_me || c->state == CS_EVENT)) {
+            if (in[i] != before && !early && (!c->is_me || c->state == ST_EVENT)) {
                 c->inputs_changed = 1;
                 if (!c->is_me) c->st.clk.restart = 1; /* the right-hand side changed here */
             }
         } else {
             memcpy(&c->m, &trial, sizeof trial);
             /* a new sigma changes the right-hand side from now on: CVODE restarts here */
-            if (c->state & CS_RUN) c->st.clk.restart = 1;
+            if (c->state & ST_RUN) c->st.clk.restart = 1;
         }
     }
     return CORE_OK;
@@ -211,7 +211,7 @@ int core_set_input_derivatives(CoreInstance *c, const char *fn, const unsigned v
         double *slot = vr[i] == VR_F_EXT ? &c->m.dF_ext : &c->m.du_wall;
         if (*slot != value[i]) {
             *slot = value[i];
-            if (c->state == CS_STEP) {
+            if (c->state == ST_STEP) {
                 c->inputs_changed = 1;
                 c->st.clk.restart = 1;
             }

@@ -13,7 +13,7 @@
  * asks of it (the checks of a parameter set or a restored state, the input ramps, the computed
  * outputs: the last block below). The steppers (stepper.h: solver_cvode.c, closed_form.c)
  * integrate it and sens.c carries its derivatives; the FMI core (fmu_core.h) calls the model
- * for everything physical and holds no physics itself; fmi2_cs.c and fmi3.c are type glue.
+ * for everything physical and holds no physics itself; fmi2.c and fmi3.c are type glue.
  * The value references (the variable table's side) are in fmu_vars.h.
  * Time inside the model is *local*: tau = t - origin with an integer origin, so the forcing
  * phase cos(2 pi tau + phi) keeps full precision after 10^6 periods.
@@ -67,7 +67,7 @@ typedef struct {
      * clock's (stepper.h). */
     double origin;
     /* Bounds on the work of one doStep, per unit of time advanced (at least one unit; issue
-     * 13.3); the solver also caps a doStep at SOLVER_MAX_STEPS_PER_CALL steps (solver.h). */
+     * 13.3); the solver also caps a doStep at SOLVER_MAX_STEPS_PER_CALL steps (solver_cvode.h). */
     double max_events_per_time, max_steps_per_time;
     /* Sensitivities (sens.h) and the solver (stepper.h), issue 11: parameters, and the
      * derivatives of the state w.r.t. the state at the start of the current doStep (sJ) and
