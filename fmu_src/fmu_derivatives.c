@@ -54,13 +54,12 @@ static int unknown_row(const CoreInstance *c, unsigned vr,
     }
 }
 
-/* The partials now: P for the right-hand side and the indicator (what their getters read), Pout
+/* The partials of a running instance now (Initialization Mode: initial_partials): P for the
+ * right-hand side and the indicator (what their getters read), Pout
  * for F_contact, which in Co-Simulation feeds through from an input that jumped (its getter
  * reports the state the input-jump rule gives: model_contact_output_now). */
 static void partials_now(const CoreInstance *c, double P[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS],
                          double Pout[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS]) {
-    CoreInstance buf;
-    c = core_view(c, &buf); /* Initialization Mode: at the state the start values give */
     const double tau = core_local_tau(c);
     model_partials(&c->m, tau, P);
     memcpy(Pout, P, sizeof(double) * MODEL_N_UNKNOWNS * MODEL_N_KNOWNS);
