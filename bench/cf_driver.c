@@ -7,7 +7,7 @@
  * Built by bench/sens_bench.py (and the tests):
  *   cc -O2 -I fmu_src bench/cf_driver.c fmu_src/closed_form.c fmu_src/stepper.c fmu_src/sens.c
  *      fmu_src/model.c -lm
- * With -DWITH_CVODE (and fmu_src/steppers.c, fmu_src/solver_cvode.c and SUNDIALS linked) it
+ * With -DWITH_CVODE (and fmu_src/stepper_methods.c, fmu_src/solver_cvode.c and SUNDIALS linked) it
  * runs the stepper the FMU chooses for `solver`: CVODE with solver=0 given, else the closed form.
  * Usage:
  *   cf_driver T0 PERIODS REPEAT SENS OUT.bin [NAME=VALUE]...

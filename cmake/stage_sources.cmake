@@ -17,7 +17,7 @@ file(MAKE_DIRECTORY ${src})
 
 # --- the model ------------------------------------------------------------------------------
 if(FMI EQUAL 2)
-  set(interface_c fmi2_cs.c)
+  set(interface_c fmi2.c)
 else()
   set(interface_c fmi3.c)
 endif()

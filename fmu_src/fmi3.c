@@ -11,7 +11,7 @@
  * callback is given, it is called at every wall event (before the jump) and may request an early
  * return there when earlyReturnAllowed.
  *
- * Model Exchange: as the FMI 2.0 ME interface (fmi2_cs.c): 2 states, 1 event indicator (the
+ * Model Exchange: as the FMI 2.0 ME interface (fmi2.c): 2 states, 1 event indicator (the
  * wall), the jumps in fmi3UpdateDiscreteStates; the grazing guard is the importer's business.
  *
  * Everything but the type translation lives in the shared core (fmu_core.h).

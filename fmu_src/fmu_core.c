@@ -2,7 +2,7 @@
  * The FMI core's instance (fmu_core.h): its life cycle (core_instantiate, core_setup,
  * core_enter_init, core_exit_init, core_terminate, core_reset, core_free), logging, and
  * core_allowed, the state check every entry point makes first (the table itself is
- * fmu_states.c). Called by the glue (fmi2_cs.c, fmi3.c); the other concerns are fmu_vars.c,
+ * fmu_states.c). Called by the glue (fmi2.c, fmi3.c); the other concerns are fmu_vars.c,
  * fmu_snapshot.c, fmu_cs.c and fmu_me.c.
  */
 #include "fmu_core.h"
@@ -44,7 +44,7 @@ int core_set_logging(CoreInstance *c, const char *fn, int on, size_t n,
     return CORE_OK;
 }
 
-int core_error_state(const CoreInstance *c) { return c->fmi3 ? CS_TERMINATED : CS_ERROR; }
+int core_error_state(const CoreInstance *c) { return c->fmi3 ? ST_TERMINATED : ST_ERROR; }
 
 static void take_start_state(CoreInstance *v);
 
@@ -61,7 +61,7 @@ int core_fail(CoreInstance *c, const char *fn, const char *fmt, ...) {
      * in Terminated (fmi3SetFMUState, fmi3Reset, fmi3FreeInstance). Failing in Initialization
      * Mode, the getters go on answering what they answered there (core_view): that state is
      * made the instance's own. */
-    if (c->state == CS_INIT) take_start_state(c);
+    if (c->state == ST_INIT) take_start_state(c);
     c->state = core_error_state(c);
     return CORE_ERROR;
 }
@@ -85,7 +85,7 @@ static void take_start_state(CoreInstance *v) {
 }
 
 const CoreInstance *core_view(const CoreInstance *c, CoreInstance *buf) {
-    if (c->state != CS_INIT) return c;
+    if (c->state != ST_INIT) return c;
     memcpy(buf, c, sizeof *buf);
     take_start_state(buf);
     return buf;
@@ -121,7 +121,7 @@ CoreInstance *core_instantiate(const char *name, CoreInterface iface, void *env,
     c->fmi3 = iface == IF_FMI3_CS || iface == IF_FMI3_ME;
     /* FMI 3.0: Step and Event Mode; FMI 2.0 Co-Simulation: stepComplete; FMI 2.0 Model Exchange:
      * Event Mode only (Continuous-Time Mode takes continuous inputs alone). */
-    c->tunable_states = c->fmi3 ? (CS_STEP | CS_EVENT) : (c->is_me ? CS_EVENT : CS_STEP);
+    c->tunable_states = c->fmi3 ? (ST_STEP | ST_EVENT) : (c->is_me ? ST_EVENT : ST_STEP);
     c->name = calloc_fn ? calloc_fn(1, strlen(name) + 1) : calloc(1, strlen(name) + 1);
     if (c->name) strcpy(c->name, name);
     model_set_defaults(&c->m);
@@ -130,7 +130,7 @@ CoreInstance *core_instantiate(const char *name, CoreInterface iface, void *env,
         core_free(c);
         return NULL;
     }
-    c->state = CS_INSTANTIATED;
+    c->state = ST_INSTANTIATED;
     return c;
 }
 
@@ -166,7 +166,7 @@ int core_setup(CoreInstance *c, const char *fn, int tol_defined, double tol, dou
 
 int core_enter_init(CoreInstance *c, const char *fn) {
     if (!core_allowed(c, fn)) return CORE_ERROR;
-    c->state = CS_INIT;
+    c->state = ST_INIT;
     return CORE_OK;
 }
 
@@ -187,13 +187,13 @@ int core_exit_init(CoreInstance *c, const char *fn) {
     c->inputs_changed = 0;
     c->me_time = c->start_time;
     c->me_wall = model_wall_position(&c->m, c->st.clk.tau);
-    c->state = (c->is_me || c->event_mode_used) ? CS_EVENT : CS_STEP;
+    c->state = (c->is_me || c->event_mode_used) ? ST_EVENT : ST_STEP;
     return CORE_OK;
 }
 
 int core_terminate(CoreInstance *c, const char *fn) {
     if (!core_allowed(c, fn)) return CORE_ERROR;
-    c->state = CS_TERMINATED;
+    c->state = ST_TERMINATED;
     return CORE_OK;
 }
 
@@ -206,6 +206,6 @@ int core_reset(CoreInstance *c, const char *fn) {
     c->me_time = 0.0;
     stepper_start(&c->st, 0.0); /* time 0, origin 0 = the model's; a restart, nothing pending */
     c->inputs_changed = 0;
-    c->state = CS_INSTANTIATED;
+    c->state = ST_INSTANTIATED;
     return CORE_OK;
 }

@@ -1,5 +1,5 @@
 /*
- * The FMI core shared by the FMI 2.0 (fmi2_cs.c) and FMI 3.0 (fmi3.c) glue, Co-Simulation and
+ * The FMI core shared by the FMI 2.0 (fmi2.c) and FMI 3.0 (fmi3.c) glue, Co-Simulation and
  * Model Exchange alike (the counterpart of the Reference FMUs' cosimulation.c). One instance type
  * and one API, implemented by one unit per concern:
  *   fmu_states.c    the state machine (STATE_TABLE; shared with the twin's C front)

@@ -1,5 +1,5 @@
 /*
- * The Co-Simulation stepping loop: core_do_step (fmu_core.h), called by fmi2DoStep (fmi2_cs.c) and
+ * The Co-Simulation stepping loop: core_do_step (fmu_core.h), called by fmi2DoStep (fmi2.c) and
  * fmi3DoStep (fmi3.c, with early return and intermediate update). It moves the model only through
  * the stepper (stepper.h) and asks the model about inputs that jumped, ramps and outputs.
  */
@@ -71,12 +71,12 @@ static int advance_by_events(CoreInstance *c, const char *fn, double t_end, int 
             /* FMI 3.0 Intermediate Update Mode: the table allows no call in it (no variable is
              * declared intermediateUpdate); a refused call leaves the instance in Terminated
              * and this doStep fails with it. */
-            c->state = CS_INTERMEDIATE;
+            c->state = ST_INTERMEDIATE;
             requested = intermediate(c, te);
-            if (c->state != CS_INTERMEDIATE)
+            if (c->state != ST_INTERMEDIATE)
                 return core_fail(c, fn, "a call inside intermediateUpdate at t = %.17g failed "
                                  "(see above): the step is abandoned", te);
-            c->state = CS_STEP;
+            c->state = ST_STEP;
         }
         if (stop_at_event || (c->early_return_allowed && requested)) {
             /* With event mode the jump waits for the discrete-state update; without, it is
@@ -104,6 +104,8 @@ int core_do_step(CoreInstance *c, const char *fn, double t, double h, int stop_a
     if (early_return) *early_return = 0;
     if (check_step(c, fn, t, h) != CORE_OK) return CORE_ERROR;
     apply_input_jump(c);
+    /* a wall velocity without an input derivative: the wall moves linearly over the step */
+    if (model_begin_wall_ramp(&c->m, c->st.clk.tau)) c->st.clk.restart = 1;
     if (c->m.sensitivities) { /* derivatives w.r.t. the state at t */
         sens_reset(&c->m);
         c->st.clk.restart = 1; /* CVODE carries J, S in its own history: restart it with J = I */

@@ -2,7 +2,7 @@
  * Model Exchange, and the event mode of FMI 3.0 Co-Simulation: core_enter_event_mode,
  * core_update_discrete, core_enter_continuous_mode, core_enter_step_mode, core_set_time,
  * core_set_states, core_get_states, core_get_derivatives, core_get_event_indicators,
- * core_get_nominals, core_completed_step (fmu_core.h), called by the glue (fmi2_cs.c, fmi3.c).
+ * core_get_nominals, core_completed_step (fmu_core.h), called by the glue (fmi2.c, fmi3.c).
  * In Model Exchange the importer integrates; the model gives derivatives, the event indicator
  * and the jumps (model.h). In Co-Simulation event mode the jump is the stepper's pending one.
  */
@@ -21,7 +21,7 @@ static int finite_within(double x, double bound) { return isfinite(x) && fabs(x)
 
 int core_enter_event_mode(CoreInstance *c, const char *fn) {
     if (!core_allowed(c, fn)) return CORE_ERROR; /* NULL instance first, then the table */
-    c->state = CS_EVENT;
+    c->state = ST_EVENT;
     return CORE_OK;
 }
 
@@ -77,7 +77,7 @@ int core_update_discrete(CoreInstance *c, const char *fn, int *values_changed) {
 
 int core_enter_continuous_mode(CoreInstance *c, const char *fn) {
     ME_ONLY(c, fn);
-    c->state = CS_CONT;
+    c->state = ST_CONT;
     return CORE_OK;
 }
 
@@ -85,7 +85,7 @@ int core_enter_step_mode(CoreInstance *c, const char *fn) {
     if (!core_allowed(c, fn)) return CORE_ERROR;
     if (c->is_me) return core_fail(c, fn, "a Model Exchange instance");
     stepper_apply_pending(&c->st, &c->m); /* an importer that skipped the discrete update */
-    c->state = CS_STEP;
+    c->state = ST_STEP;
     return CORE_OK;
 }
 

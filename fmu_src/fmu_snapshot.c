@@ -1,6 +1,6 @@
 /*
  * FMU state snapshots: core_get_state, core_set_state, core_free_state, core_serialized_size,
- * core_serialize, core_deserialize (fmu_core.h), called by the glue (fmi2_cs.c, fmi3.c).
+ * core_serialize, core_deserialize (fmu_core.h), called by the glue (fmi2.c, fmi3.c).
  *
  * The in-memory FMU state and its serialised form are the same bytes: a header (magic, format
  * version, interface tag, size), the instance's data, and a 64-bit FNV-1a checksum over all of
@@ -19,7 +19,7 @@
 #include "fmu_vars.h"
 
 #define SNAPSHOT_MAGIC 0x494d504fu /* "IMPO" */
-#define SNAPSHOT_VERSION 3u /* 3: ModelData carries sensitivities, solver, J, S (issue 11) */
+#define SNAPSHOT_VERSION 4u /* ModelData's layout: bumped whenever a field is added */
 
 typedef struct {
     uint32_t magic, version, iface, size;
@@ -85,10 +85,10 @@ static const char *check_header(const CoreInstance *c, const Snapshot *s, char *
                  core_interface_name(c->iface));
         return buf;
     }
-    int savable = CS_INSTANTIATED | CS_INIT | CS_TERMINATED;
-    if (!c->fmi3) savable |= CS_ERROR; /* fmi2GetFMUstate is allowed in Error */
-    savable |= c->is_me ? (CS_EVENT | CS_CONT) : CS_STEP;
-    if (!c->is_me && c->event_mode_used) savable |= CS_EVENT;
+    int savable = ST_INSTANTIATED | ST_INIT | ST_TERMINATED;
+    if (!c->fmi3) savable |= ST_ERROR; /* fmi2GetFMUstate is allowed in Error */
+    savable |= c->is_me ? (ST_EVENT | ST_CONT) : ST_STEP;
+    if (!c->is_me && c->event_mode_used) savable |= ST_EVENT;
     const int st = s->state;
     if (!(st & savable) || (st & (st - 1))) {
         snprintf(buf, n, "FMI state word %d is not a state this instance can be restored to", st);
@@ -156,7 +156,7 @@ static const char *check_clock(const CoreInstance *c, const Snapshot *s) {
         !(s->tau >= 0.0) || !finite_within(s->tau, 2 * CORE_MAX_TIME))
         return "solver time (origin, local time) not finite, out of range or not integral";
     /* the model's time origin follows the solver's while a Co-Simulation runs (model.h) */
-    if (!c->is_me && (s->state & (CS_STEP | CS_EVENT | CS_TERMINATED)) && s->m.origin != s->origin)
+    if (!c->is_me && (s->state & (ST_STEP | ST_EVENT | ST_TERMINATED)) && s->m.origin != s->origin)
         return "the model's and the solver's time origins differ";
     if (s->pending != 0 && (s->pending != 1 || c->is_me)) return "bad pending-event flag";
     if (s->inputs_changed != 0 && s->inputs_changed != 1) return "bad input flag";

@@ -30,13 +30,13 @@ typedef struct {
     int cs, me, cs_event;
 } StateRow;
 
-#define I CS_INSTANTIATED
-#define N CS_INIT
-#define S CS_STEP
-#define E CS_EVENT
-#define C CS_CONT
-#define T CS_TERMINATED
-#define X CS_ERROR
+#define I ST_INSTANTIATED
+#define N ST_INIT
+#define S ST_STEP
+#define E ST_EVENT
+#define C ST_CONT
+#define T ST_TERMINATED
+#define X ST_ERROR
 /* STATE_TABLE_BEGIN */
 static const StateRow STATE_TABLE[] = {
     {"fmi2SetDebugLogging", I|N|S|T|X, I|N|E|C|T|X, 0},
@@ -174,14 +174,14 @@ int core_allowed_states(CoreInterface iface, int event_mode, const char *fn) {
 
 const char *core_state_name(int state) {
     switch (state) {
-    case CS_INSTANTIATED: return "Instantiated";
-    case CS_INIT: return "Initialization Mode";
-    case CS_STEP: return "Step Mode";
-    case CS_EVENT: return "Event Mode";
-    case CS_CONT: return "Continuous-Time Mode";
-    case CS_TERMINATED: return "Terminated";
-    case CS_ERROR: return "Error";
-    case CS_INTERMEDIATE: return "Intermediate Update Mode";
+    case ST_INSTANTIATED: return "Instantiated";
+    case ST_INIT: return "Initialization Mode";
+    case ST_STEP: return "Step Mode";
+    case ST_EVENT: return "Event Mode";
+    case ST_CONT: return "Continuous-Time Mode";
+    case ST_TERMINATED: return "Terminated";
+    case ST_ERROR: return "Error";
+    case ST_INTERMEDIATE: return "Intermediate Update Mode";
     default: return "an unknown state";
     }
 }

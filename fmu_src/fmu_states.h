@@ -13,18 +13,18 @@
 
 /* Instance states (bit flags, so that a set of allowed states is one mask). */
 enum {
-    CS_INSTANTIATED = 1 << 0,
-    CS_INIT = 1 << 1,
-    CS_STEP = 1 << 2,
-    CS_EVENT = 1 << 3,
-    CS_CONT = 1 << 4,
-    CS_TERMINATED = 1 << 5,
-    CS_ERROR = 1 << 6,
-    CS_INTERMEDIATE = 1 << 7, /* FMI 3.0 Co-Simulation: inside the intermediateUpdate callback */
-    CS_FATAL = 1 << 8,        /* never entered: no call of this FMU answers Fatal */
+    ST_INSTANTIATED = 1 << 0,
+    ST_INIT = 1 << 1,
+    ST_STEP = 1 << 2,
+    ST_EVENT = 1 << 3,
+    ST_CONT = 1 << 4,
+    ST_TERMINATED = 1 << 5,
+    ST_ERROR = 1 << 6,
+    ST_INTERMEDIATE = 1 << 7, /* FMI 3.0 Co-Simulation: inside the intermediateUpdate callback */
+    ST_FATAL = 1 << 8,        /* never entered: no call of this FMU answers Fatal */
 };
-#define CS_ANY 0x1ff
-#define CS_RUN (CS_STEP | CS_EVENT | CS_CONT) /* initialised, not terminated */
+#define ST_ANY 0x1ff
+#define ST_RUN (ST_STEP | ST_EVENT | ST_CONT) /* initialised, not terminated */
 
 /* Which interface an instance (and its snapshots) belongs to. */
 typedef enum { IF_FMI2_CS = 1, IF_FMI2_ME = 2, IF_FMI3_CS = 3, IF_FMI3_ME = 4 } CoreInterface;

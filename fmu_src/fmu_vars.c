@@ -2,7 +2,7 @@
  * The FMU's variables: the table of value references (VARS, one row per variable: name, type,
  * kind, where it is stored in ModelData or which getter computes it, and its valid range), and the
  * FMI calls on them: core_get, core_set, core_set_input_derivatives (fmu_core.h), called by the
- * glue (fmi2_cs.c, fmi3.c). The snapshot unit (fmu_snapshot.c) checks restored values against
+ * glue (fmi2.c, fmi3.c). The snapshot unit (fmu_snapshot.c) checks restored values against
  * the same ranges (fmu_vars.h). What a computed value is physically is the model's (model.h).
  */
 #include "fmu_vars.h"
@@ -42,6 +42,7 @@ static double get_F_ext(const CoreInstance *c) {
 static double get_u_wall(const CoreInstance *c) {
     return model_wall_position(&c->m, core_local_tau(c));
 }
+static double get_v_wall(const CoreInstance *c) { return c->m.v_wall; }
 
 /* Valid ranges: chosen so that every derived quantity (F_g, kappa, the forcing, the wall
  * force) stays finite with many orders of magnitude to spare; README "Valid ranges". */
@@ -131,7 +132,7 @@ int core_set(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[]
         if (!d || d->type != t || !vars_settable(d))
             return core_fail(c, fn, "value reference %u is not a settable %s variable", vr[i],
                              TYPE_NAMES[t]);
-        const int early = (c->state & (CS_INSTANTIATED | CS_INIT)) != 0;
+        const int early = (c->state & (ST_INSTANTIATED | ST_INIT)) != 0;
         if (!early && !(d->kind == K_INPUT ||
                         (d->kind == K_TUNABLE && (c->state & c->tunable_states))))
             return core_fail(c, fn, "%s (value reference %u) cannot be set now: only sigma is "
@@ -160,14 +161,14 @@ int core_set(CoreInstance *c, const char *fn, CoreVarType t, const unsigned vr[]
             /* a jump: in Co-Simulation between steps; in Model Exchange only in Event Mode (the
              * standards let an importer change inputs discontinuously only there; in
              * Continuous-Time Mode an input is a continuous signal) */
-            if (in[i] != before && !early && (!c->is_me || c->state == CS_EVENT)) {
+            if (in[i] != before && !early && (!c->is_me || c->state == ST_EVENT)) {
                 c->inputs_changed = 1;
                 if (!c->is_me) c->st.clk.restart = 1; /* the right-hand side changed here */
             }
         } else {
             memcpy(&c->m, &trial, sizeof trial);
             /* a new sigma changes the right-hand side from now on: CVODE restarts here */
-            if (c->state & CS_RUN) c->st.clk.restart = 1;
+            if (c->state & ST_RUN) c->st.clk.restart = 1;
         }
     }
     return CORE_OK;
@@ -180,9 +181,20 @@ int core_set_input_derivatives(CoreInstance *c, const char *fn, const unsigned v
     if (n > 0 && (!vr || !order || !value)) return core_fail(c, fn, "NULL argument");
     int status = CORE_OK;
     for (size_t i = 0; i < n; ++i) {
-        if (vr[i] != VR_F_EXT && vr[i] != VR_U_WALL)
+        if (vr[i] != VR_F_EXT && vr[i] != VR_U_WALL && vr[i] != VR_V_WALL)
             return core_fail(c, fn, "value reference %u is not a Real input", vr[i]);
         if (order[i] < 1) return core_fail(c, fn, "order %d: must be >= 1", order[i]);
+        if (!isfinite(value[i]))
+            return core_fail(c, fn, "derivative of order %d of %s = %g rejected: not finite",
+                             order[i], core_variable_name(vr[i]), value[i]);
+        if (vr[i] == VR_V_WALL) { /* the wall moves at constant velocity over a step */
+            if (value[i] != 0.0) {
+                core_log(c, CORE_WARNING, "logStatusWarning", "%s: derivative of order %d of "
+                         "v_wall ignored (the wall is unaccelerated over a step)", fn, order[i]);
+                status = CORE_WARNING;
+            }
+            continue;
+        }
         const double bound = vr[i] == VR_F_EXT ? MODEL_MAX_DF_EXT : MODEL_MAX_DU_WALL;
         if (!isfinite(value[i]) || !(fabs(value[i]) <= bound))
             return core_fail(c, fn, "d%s/dt = %g rejected: must be finite with |.| <= %g",
@@ -199,7 +211,7 @@ int core_set_input_derivatives(CoreInstance *c, const char *fn, const unsigned v
         double *slot = vr[i] == VR_F_EXT ? &c->m.dF_ext : &c->m.du_wall;
         if (*slot != value[i]) {
             *slot = value[i];
-            if (c->state == CS_STEP) {
+            if (c->state == ST_STEP) {
                 c->inputs_changed = 1;
                 c->st.clk.restart = 1;
             }

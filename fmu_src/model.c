@@ -66,7 +66,7 @@ const char *model_check_consistency(const ModelData *m, char *buf, size_t n) {
         return buf;
     }
     const double w = m->u_wall;
-    if (m->wall == WALL_RIGID && (m->u0 > w || (m->u0 == w && m->v0 > m->du_wall))) {
+    if (m->wall == WALL_RIGID && (m->u0 > w || (m->u0 == w && m->v0 > model_wall_velocity(m)))) {
         snprintf(buf, n, "u0 = %g, v0 = %g starts inside the rigid wall at u_wall = %g (need "
                  "u0 < u_wall, or u0 = u_wall moving away from it)", m->u0, m->v0, w);
         return buf;
@@ -99,7 +99,12 @@ double model_wall_position(const ModelData *m, double tau) {
     return m->du_wall == 0.0 ? m->u_wall : m->u_wall + m->du_wall * (tau - m->in_tau);
 }
 
-double model_wall_velocity(const ModelData *m) { return m->du_wall; }
+/* The wall's velocity: the ramp's slope while one runs (an FMI 2.0 input derivative, or v_wall
+ * over a Co-Simulation step), else the input v_wall. With neither (0 and 0) it is 0.0, the value
+ * every formula had before the wall could move. */
+double model_wall_velocity(const ModelData *m) {
+    return m->du_wall != 0.0 ? m->du_wall : m->v_wall;
+}
 
 double model_external_force(const ModelData *m, double tau) {
     return m->dF_ext == 0.0 ? m->F_ext : m->F_ext + m->dF_ext * (tau - m->in_tau);
@@ -120,12 +125,12 @@ static double beside_wall(double w, double side) {
 double model_wall_force(const ModelData *m, double tau) {
     /* On the wall (u = w, v = w', w'' = 0): the spring pulls back with Omega^2 (w + 1), the drive
      * and F_ext push, the damper acts on v = w'. With w = w' = F_ext = 0: forcing - Omega^2. */
-    return forcing(m, tau) + model_external_force(m, tau) - m->nu * m->du_wall -
+    return forcing(m, tau) + model_external_force(m, tau) - m->nu * model_wall_velocity(m) -
            m->Omega2 * (model_wall_position(m, tau) + 1.0);
 }
 
 void model_initialize_state(ModelData *m, double tau0) {
-    const double w = model_wall_position(m, tau0), dw = m->du_wall;
+    const double w = model_wall_position(m, tau0), dw = model_wall_velocity(m);
     m->u = m->u0;
     m->v = m->v0;
     m->impacts = 0;
@@ -150,7 +155,8 @@ double model_contact_force(const ModelData *m, double d, double dv) {
 double model_contact_output(const ModelData *m, double tau) {
     switch (m->mode) {
     case MODE_CONTACT:
-        return model_contact_force(m, m->u - model_wall_position(m, tau), m->v - m->du_wall);
+        return model_contact_force(m, m->u - model_wall_position(m, tau),
+                                   m->v - model_wall_velocity(m));
     case MODE_STICK: return model_wall_force(m, tau); /* what holds the mass on the wall */
     default: return 0.0;
     }
@@ -158,13 +164,14 @@ double model_contact_output(const ModelData *m, double tau) {
 
 void model_derivatives(const ModelData *m, double tau, const double y[2], double dy[2]) {
     if (m->mode == MODE_STICK) {
-        dy[0] = m->du_wall; /* carried by the wall */
+        dy[0] = model_wall_velocity(m); /* carried by the wall */
         dy[1] = 0.0;
         return;
     }
     double k = m->Omega2 * (y[0] + 1.0);
     if (m->mode == MODE_CONTACT) /* the wall */
-        k += model_contact_force(m, y[0] - model_wall_position(m, tau), y[1] - m->du_wall);
+        k += model_contact_force(m, y[0] - model_wall_position(m, tau),
+                                 y[1] - model_wall_velocity(m));
     dy[0] = y[1];
     dy[1] = forcing(m, tau) - m->nu * y[1] - k + model_external_force(m, tau);
 }
@@ -179,7 +186,7 @@ void model_jacobian(const ModelData *m, double tau, const double y[2], double J[
     J[1][0] = -m->Omega2;
     J[1][1] = -m->nu;
     if (m->mode != MODE_CONTACT) return;
-    const double d = y[0] - model_wall_position(m, tau), dv = y[1] - m->du_wall;
+    const double d = y[0] - model_wall_position(m, tau), dv = y[1] - model_wall_velocity(m);
     if (m->contact == CONTACT_LINEAR) {
         J[1][0] -= m->kappa2;
     } else if (d > 0.0) {
@@ -206,11 +213,15 @@ static void contact_force_partials(const ModelData *m, double d, double dv, doub
 
 void model_partials(const ModelData *m, double tau, double P[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS]) {
     memset(P, 0, sizeof(double) * MODEL_N_UNKNOWNS * MODEL_N_KNOWNS);
+    /* w' is v_wall unless an input derivative of u_wall gives the ramp (model_wall_velocity) */
+    const double vw = m->du_wall == 0.0 ? 1.0 : 0.0;
     if (m->mode == MODE_STICK) {
         /* carried by the wall: der(u) = w', der(v) = 0 whatever (u, v); the holding force (and the
          * indicator, the same force) is forcing + F_ext - nu w' - Omega^2 (w + 1) */
+        P[PU_DER_U][PK_V_WALL] = vw;
         P[PU_F_CONTACT][PK_F_EXT] = P[PU_WALL_INDICATOR][PK_F_EXT] = 1.0;
         P[PU_F_CONTACT][PK_U_WALL] = P[PU_WALL_INDICATOR][PK_U_WALL] = -m->Omega2;
+        P[PU_F_CONTACT][PK_V_WALL] = P[PU_WALL_INDICATOR][PK_V_WALL] = -m->nu * vw;
         return;
     }
     /* der(u) = v; der(v) = forcing - nu v - Omega^2 (u + 1) [- F(u - w, v - w')] + F_ext */
@@ -224,13 +235,87 @@ void model_partials(const ModelData *m, double tau, double P[MODEL_N_UNKNOWNS][M
     }
     if (m->mode != MODE_CONTACT) return;
     double Fd, Fdv;
-    contact_force_partials(m, m->u - model_wall_position(m, tau), m->v - m->du_wall, &Fd, &Fdv);
+    contact_force_partials(m, m->u - model_wall_position(m, tau), m->v - model_wall_velocity(m),
+                           &Fd, &Fdv);
     P[PU_DER_V][PK_U] -= Fd;
     P[PU_DER_V][PK_V] -= Fdv;
     P[PU_DER_V][PK_U_WALL] = Fd;
+    P[PU_DER_V][PK_V_WALL] = Fdv * vw;
     P[PU_F_CONTACT][PK_U] = Fd;
     P[PU_F_CONTACT][PK_V] = Fdv;
     P[PU_F_CONTACT][PK_U_WALL] = -Fd;
+    P[PU_F_CONTACT][PK_V_WALL] = -Fdv * vw;
+}
+
+/* The forcing's partials w.r.t. nu, Omega and sigma at local time tau, and F_g's and phi's
+ * (rows of d[3][3]: F_g, phi, forcing; columns nu, Omega, sigma). (5): F_g e^{i phi} = a + i b,
+ * a = Omega^2 - 4 pi^2, b = 2 pi nu. */
+static void forcing_partials(const ModelData *m, double tau, double d[3][3]) {
+    const double a = m->Omega2 - 4.0 * M_PI * M_PI, b = 2.0 * M_PI * m->nu, F2 = m->F_g * m->F_g;
+    const double da_dOmega = 2.0 * m->Omega, db_dnu = 2.0 * M_PI;
+    d[0][0] = b * db_dnu / m->F_g;         /* dF_g/dnu */
+    d[0][1] = a * da_dOmega / m->F_g;      /* dF_g/dOmega */
+    d[1][0] = a * db_dnu / F2;             /* dphi/dnu: phi = atan2(b, a) */
+    d[1][1] = -b * da_dOmega / F2;         /* dphi/dOmega */
+    d[0][2] = d[1][2] = 0.0;
+    const double th = 2.0 * M_PI * tau + m->phi, amp = 1.0 + m->sigma;
+    for (int j = 0; j < 2; ++j)
+        d[2][j] = amp * (d[0][j] * cos(th) - m->F_g * sin(th) * d[1][j]);
+    d[2][2] = m->F_g * cos(th);
+}
+
+void model_initial_partials(const ModelData *m, double tau0,
+                            double P[MODEL_N_INIT_UNKNOWNS][MODEL_N_INIT_KNOWNS]) {
+    memset(P, 0, sizeof(double) * MODEL_N_INIT_UNKNOWNS * MODEL_N_INIT_KNOWNS);
+    double f[3][3];
+    forcing_partials(m, tau0, f);
+    P[IU_F_G][IK_NU] = f[0][0];
+    P[IU_F_G][IK_OMEGA] = f[0][1];
+    P[IU_PHI][IK_NU] = f[1][0];
+    P[IU_PHI][IK_OMEGA] = f[1][1];
+    /* kappa = sqrt(Gamma) Omega (infinite slope in Gamma at Gamma = 0) */
+    P[IU_KAPPA][IK_GAMMA] = 0.5 * m->Omega / sqrt(m->Gamma);
+    P[IU_KAPPA][IK_OMEGA] = sqrt(m->Gamma);
+    P[IU_U][IK_U0] = 1.0;
+    P[IU_V][IK_V0] = 1.0;
+    /* der(u) = v0, or w' sticking, which needs v0 = w': v0 either way */
+    P[IU_DER_U][IK_V0] = 1.0;
+    /* w' is v_wall unless an input derivative of u_wall gives the ramp */
+    const double vw = m->du_wall == 0.0 ? 1.0 : 0.0;
+    const double w = model_wall_position(m, tau0), dw = model_wall_velocity(m);
+    if (m->mode == MODE_STICK) { /* der(v) = 0; F_contact: the holding force (model_wall_force) */
+        P[IU_F_CONTACT][IK_NU] = f[2][0] - dw;
+        P[IU_F_CONTACT][IK_OMEGA] = f[2][1] - 2.0 * m->Omega * (w + 1.0);
+        P[IU_F_CONTACT][IK_SIGMA] = f[2][2];
+        P[IU_F_CONTACT][IK_F_EXT] = 1.0;
+        P[IU_F_CONTACT][IK_U_WALL] = -m->Omega2;
+        P[IU_F_CONTACT][IK_V_WALL] = -m->nu * vw;
+        return;
+    }
+    /* der(v) = forcing - nu v0 - Omega^2 (u0 + 1) [- F_c] + F_ext */
+    double *dv = P[IU_DER_V];
+    dv[IK_NU] = f[2][0] - m->v;
+    dv[IK_OMEGA] = f[2][1] - 2.0 * m->Omega * (m->u + 1.0);
+    dv[IK_SIGMA] = f[2][2];
+    dv[IK_U0] = -m->Omega2;
+    dv[IK_V0] = -m->nu;
+    dv[IK_F_EXT] = 1.0;
+    if (m->mode != MODE_CONTACT) return;
+    /* F_c = kappa^2 g(d, d'), d = u0 - w, d' = v0 - w', kappa^2 = Gamma Omega^2 */
+    const double d = m->u - w, ddv = m->v - dw;
+    double Fd, Fdv;
+    contact_force_partials(m, d, ddv, &Fd, &Fdv);
+    const double g = m->kappa2 != 0.0 ? model_contact_force(m, d, ddv) / m->kappa2 : 0.0;
+    double *fc = P[IU_F_CONTACT];
+    fc[IK_U0] = Fd;
+    fc[IK_V0] = Fdv;
+    fc[IK_U_WALL] = -Fd;
+    fc[IK_V_WALL] = -Fdv * vw;
+    fc[IK_GAMMA] = m->Omega2 * g;
+    fc[IK_OMEGA] = 2.0 * m->Omega * m->Gamma * g;
+    if (m->contact == CONTACT_HUNT_CROSSLEY && d > 0.0)
+        fc[IK_ALPHA_HC] = m->kappa2 * d * sqrt(d) * ddv;
+    for (int j = 0; j < MODEL_N_INIT_KNOWNS; ++j) dv[j] -= fc[j];
 }
 
 void model_event_indicators(const ModelData *m, double tau, const double y[2],
@@ -247,7 +332,7 @@ void model_event_indicators(const ModelData *m, double tau, const double y[2],
     g[0] = y[0] - model_wall_position(m, tau); /* the wall u = w */
     /* The grazing guard: a contact that enters and leaves within one solver step leaves u < w
      * at both step ends, but its turning point (relative velocity 0) is still bracketed. */
-    g[1] = y[1] - m->du_wall;
+    g[1] = y[1] - model_wall_velocity(m);
 }
 
 void model_root_directions(const ModelData *m, int dir[MODEL_N_EVENTS]) {
@@ -301,7 +386,7 @@ static void rigid_impact(ModelData *m, double tau, double y[2], double w, double
 
 EventResult model_event_update(ModelData *m, double tau, double y[2], int which) {
     if (which == 1) return EVENT_NONE; /* a turning point on the right side: nothing happens */
-    const double w = model_wall_position(m, tau), dw = m->du_wall;
+    const double w = model_wall_position(m, tau), dw = model_wall_velocity(m);
 
     switch (m->mode) {
     case MODE_FREE:
@@ -354,7 +439,7 @@ EventResult model_event_update(ModelData *m, double tau, double y[2], int which)
  * Never a silent penetration of the rigid wall, never a crossing the solver cannot locate. */
 int model_input_jump(ModelData *m, double tau, double y[2]) {
     if (m->wall == WALL_NONE) return 0;
-    const double w = model_wall_position(m, tau), dw = m->du_wall;
+    const double w = model_wall_position(m, tau), dw = model_wall_velocity(m);
     const double y0 = y[0], y1 = y[1];
     const int mode = m->mode;
     if (m->wall == WALL_COMPLIANT) {
@@ -408,12 +493,12 @@ static MeEventResult me_unstick(ModelData *m, double d) {
 MeEventResult model_me_event_update(ModelData *m, double tau, double y[2]) {
     if (m->wall == WALL_NONE) return ME_EVENT_NONE;
     const double tol = model_me_event_tolerance(m, tau);
-    const double d = y[0] - model_wall_position(m, tau), dv = y[1] - m->du_wall;
+    const double d = y[0] - model_wall_position(m, tau), dv = y[1] - model_wall_velocity(m);
     if (m->mode == MODE_STICK) {
         if (fabs(d) > tol || fabs(dv) > tol) return me_unstick(m, d);
         if (!model_release_now(m, tau)) return ME_EVENT_NONE; /* still held */
         y[0] = model_wall_position(m, tau); /* the holding force has gone: released */
-        y[1] = m->du_wall;
+        y[1] = model_wall_velocity(m);
         return ME_EVENT_JUMP;
     }
     /* the importer stops on the far side of g0 = u - w = 0 (or on it) */
@@ -457,6 +542,13 @@ void model_rebase_inputs(ModelData *m, double tau) {
 }
 
 int model_has_ramps(const ModelData *m) { return m->dF_ext != 0.0 || m->du_wall != 0.0; }
+
+int model_begin_wall_ramp(ModelData *m, double tau) {
+    if (m->du_wall != 0.0 || m->v_wall == 0.0) return 0; /* an input derivative, or no motion */
+    model_rebase_inputs(m, tau);
+    m->du_wall = m->v_wall;
+    return 1;
+}
 
 int model_end_ramps(ModelData *m, double tau) {
     if (m->dF_ext == 0.0 && m->du_wall == 0.0) return 0;

@@ -13,7 +13,7 @@
  * asks of it (the checks of a parameter set or a restored state, the input ramps, the computed
  * outputs: the last block below). The steppers (stepper.h: solver_cvode.c, closed_form.c)
  * integrate it and sens.c carries its derivatives; the FMI core (fmu_core.h) calls the model
- * for everything physical and holds no physics itself; fmi2_cs.c and fmi3.c are type glue.
+ * for everything physical and holds no physics itself; fmi2.c and fmi3.c are type glue.
  * The value references (the variable table's side) are in fmu_vars.h.
  * Time inside the model is *local*: tau = t - origin with an integer origin, so the forcing
  * phase cos(2 pi tau + phi) keeps full precision after 10^6 periods.
@@ -56,16 +56,18 @@ typedef struct {
     int mode;
     int impacts;
     /* Inputs (ports): F_ext and u_wall are the values at local time in_tau; dF_ext and du_wall
-     * their time derivatives (FMI 2.0 Co-Simulation input derivatives, 0 = held over the step):
-     * F(tau) = F_ext + dF_ext (tau - in_tau), w(tau) = u_wall + du_wall (tau - in_tau). */
+     * their ramps' slopes over a Co-Simulation step (FMI 2.0 input derivatives, or v_wall: 0 =
+     * held over the step): F(tau) = F_ext + dF_ext (tau - in_tau), w(tau) = u_wall + du_wall
+     * (tau - in_tau). v_wall: the input wall velocity (model_wall_velocity). */
     double F_ext, u_wall, dF_ext, du_wall, in_tau;
+    double v_wall;
     /* The last wall entry: velocity relative to the wall before the jump, and absolute time. */
     double v_impact, t_impact;
     /* Integer origin of local time (absolute t = origin + tau), kept equal to the stepper's
      * clock's (stepper.h). */
     double origin;
     /* Bounds on the work of one doStep, per unit of time advanced (at least one unit; issue
-     * 13.3); the solver also caps a doStep at SOLVER_MAX_STEPS_PER_CALL steps (solver.h). */
+     * 13.3); the solver also caps a doStep at SOLVER_MAX_STEPS_PER_CALL steps (solver_cvode.h). */
     double max_events_per_time, max_steps_per_time;
     /* Sensitivities (sens.h) and the solver (stepper.h), issue 11: parameters, and the
      * derivatives of the state w.r.t. the state at the start of the current doStep (sJ) and
@@ -138,7 +140,8 @@ MeEventResult model_me_event_update(ModelData *m, double tau, double y[2]);
  * wall (0 for d <= 0 with the Hertz laws). */
 double model_contact_force(const ModelData *m, double d, double dv);
 
-/* Ports. The wall position w(tau), its velocity, and the external force at local time tau. */
+/* Ports. The wall position w(tau), its velocity w' (the ramp's slope while one runs, else the
+ * input v_wall), and the external force at local time tau. */
 double model_wall_position(const ModelData *m, double tau);
 double model_wall_velocity(const ModelData *m);
 double model_external_force(const ModelData *m, double tau);
@@ -157,11 +160,30 @@ int model_input_jump(ModelData *m, double tau, double y[2]);
  * unknowns (rows) the right-hand side, the wall's force and the wall indicator. Each entry is the
  * partial derivative at the instance's contact mode and state now: the piecewise right-hand side
  * of that mode, differentiated (the mode itself changes only at events, so it has no partial). */
-typedef enum { PK_U = 0, PK_V = 1, PK_F_EXT = 2, PK_U_WALL = 3, MODEL_N_KNOWNS = 4 } PartialKnown;
+typedef enum {
+    PK_U = 0, PK_V = 1, PK_F_EXT = 2, PK_U_WALL = 3, PK_V_WALL = 4, MODEL_N_KNOWNS = 5
+} PartialKnown;
 typedef enum {
     PU_DER_U = 0, PU_DER_V = 1, PU_F_CONTACT = 2, PU_WALL_INDICATOR = 3, MODEL_N_UNKNOWNS = 4
 } PartialUnknown;
 void model_partials(const ModelData *m, double tau, double P[MODEL_N_UNKNOWNS][MODEL_N_KNOWNS]);
+
+/* -- the initial unknowns' partial derivatives (Initialization Mode) -- The knowns (columns) are
+ * the Real parameters and inputs the InitialUnknowns depend on, the unknowns (rows) the Real
+ * initial unknowns that depend on any (the others' rows are 0). m holds the state the start
+ * values give at the start time tau0 (model_initialize_state): each entry is the partial of the
+ * value read in Initialization Mode, with the contact mode that start decides (a start exactly on
+ * a mode's boundary, e.g. at rest on the rigid wall, takes that mode's partials). */
+typedef enum {
+    IK_NU = 0, IK_OMEGA, IK_SIGMA, IK_GAMMA, IK_U0, IK_V0, IK_ALPHA_HC, IK_F_EXT, IK_U_WALL,
+    IK_V_WALL, MODEL_N_INIT_KNOWNS
+} InitKnown;
+typedef enum {
+    IU_F_G = 0, IU_PHI, IU_KAPPA, IU_U, IU_V, IU_DER_U, IU_DER_V, IU_F_CONTACT,
+    MODEL_N_INIT_UNKNOWNS
+} InitUnknown;
+void model_initial_partials(const ModelData *m, double tau0,
+                            double P[MODEL_N_INIT_UNKNOWNS][MODEL_N_INIT_KNOWNS]);
 
 /* -- what the FMI core asks of the model (fmu_vars.c, fmu_snapshot.c, fmu_cs.c, fmu_core.c) -- */
 /* Bounds on the input derivatives (slopes per unit time). */
@@ -180,6 +202,10 @@ const char *model_check_restored(const ModelData *m, int is_me, double max_state
 void model_rebase_inputs(ModelData *m, double tau);
 /* 1 while an input is ramped (a nonzero input derivative). */
 int model_has_ramps(const ModelData *m);
+/* Co-Simulation, at a step's start (local time tau): a wall with velocity v_wall and no input
+ * derivative of u_wall moves over the step as u_wall + v_wall (tau' - tau), the ramp an input
+ * derivative v_wall would give. Returns 1 if a ramp began (the right-hand side changed). */
+int model_begin_wall_ramp(ModelData *m, double tau);
 /* After a step: the ramps end at tau (the inputs hold their values there until set again);
  * returns 1 if there were any (the right-hand side changed). */
 int model_end_ramps(ModelData *m, double tau);

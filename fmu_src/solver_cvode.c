@@ -1,5 +1,5 @@
 /*
- * CVODE driver for the impact oscillator (SUNDIALS 6): the stepper STEPPER_CVODE (solver.h,
+ * CVODE driver for the impact oscillator (SUNDIALS 6): the stepper STEPPER_CVODE (solver_cvode.h,
  * stepper.h), called by the FMI core through stepper.c when solver = 0.
  *
  * Between events the model is smooth (the contact mode is a discrete state, so the right-hand
@@ -21,7 +21,7 @@
  * arithmetic: a point a few ulps past a step end gave a ~1e-14 "sliver" step, after which the
  * variable-step Adams history (step ratios ~1e-12) lost up to 1e-4 in u.
  */
-#include "solver.h"
+#include "solver_cvode.h"
 
 #include "sens.h"
 
@@ -275,7 +275,7 @@ static void set_model_state(const Cvode *s, ModelData *m, const double *y) {
          * change (even the master writing the wall's current value) read as a wall that went
          * away, released the mass at rest and counted a new impact on every other step. */
         m->u = model_wall_position(m, s->k->tau);
-        m->v = m->du_wall;
+        m->v = model_wall_velocity(m);
     }
 }
 

@@ -1,6 +1,6 @@
 /*
  * The stepper interface (stepper.h): the calls the FMI core makes, and the clock's operations the
- * methods share (solver_cvode.c, closed_form.c). The table of methods is steppers.c.
+ * methods share (solver_cvode.c, closed_form.c). The table of methods is stepper_methods.c.
  */
 #include "stepper.h"
 

@@ -5,11 +5,11 @@
  * A Stepper is a clock (StepClock: the time origin and local time, the restart flag, the pending
  * jump, the event counters and the step budget of one doStep), the method's operations
  * (StepperOps: create / start / advance_to / apply_pending / free) and the method's own memory.
- * Each method is one file: solver_cvode.c (STEPPER_CVODE, solver.h) and closed_form.c
- * (STEPPER_CLOSED_FORM, closed_form.h). steppers.c picks the method for the model's `solver`
+ * Each method is one file: solver_cvode.c (STEPPER_CVODE, solver_cvode.h) and closed_form.c
+ * (STEPPER_CLOSED_FORM, closed_form.h). stepper_methods.c picks the method for the model's `solver`
  * parameter (stepper_select); stepper.c holds the calls the core makes and the clock's shared
  * operations (re-origin, budget, the jump of a pending event). A third method is a file with its
- * StepperOps and one row in steppers.c's table; the core does not change.
+ * StepperOps and one row in stepper_methods.c's table; the core does not change.
  */
 #ifndef IMPACT_STEPPER_H
 #define IMPACT_STEPPER_H
@@ -68,7 +68,7 @@ struct Stepper {
 
 /* -- what the core calls ------------------------------------------------------------------- */
 /* Makes st run the method of m->solver, creating it (and freeing another) when it changes; the
- * clock is kept. Returns 0, or -1 with st->clk.msg set (steppers.c). */
+ * clock is kept. Returns 0, or -1 with st->clk.msg set (stepper_methods.c). */
 int stepper_select(Stepper *st, ModelData *m);
 void stepper_free(Stepper *st);
 void stepper_start(Stepper *st, double t);

@@ -44,6 +44,7 @@ typedef enum {
     VR_J_VV = 35, /* J_vv: Real output */
     VR_S_U = 36, /* S_u: Real output */
     VR_S_V = 37, /* S_v: Real output */
+    VR_V_WALL = 38, /* v_wall: Real input */
     VR_COUNT
 } ValueReference;
 

@@ -157,13 +157,16 @@ _WORK_BOUND = ("bound on {what} one communication step, per unit of time advance
 
 #: What decides the contact mode at the start (model_initialize_state): in_contact's dependence.
 #: (der(u) is v0, or 0 sticking, which needs v0 = 0: it depends on v0 alone.)
-_MODE_DECIDERS = ("nu", "Omega", "sigma", "wall", "u0", "v0", "F_ext", "u_wall")
+_MODE_DECIDERS = ("nu", "Omega", "sigma", "wall", "u0", "v0", "F_ext", "u_wall", "v_wall")
 #: ... and of the contact law's force: F_contact and der(v) at the start.
 _CONTACT_DEPS = ("nu", "Omega", "sigma", "Gamma", "wall", "u0", "v0", "contact", "alpha_hc",
-                 "F_ext", "u_wall")
-#: der(v) and F_contact on (u, v, F_ext, u_wall): the Hertz laws make u, v, u_wall's factors
-#: change with the state; F_ext's is 1 or 0 (sticking) per contact mode.
-_RHS_KINDS = ("dependent", "dependent", "discrete", "dependent")
+                 "F_ext", "u_wall", "v_wall")
+#: der(v) and F_contact on (u, v, F_ext, u_wall, v_wall): the Hertz laws make u, v, u_wall's
+#: factors change with the state, and v_wall's (Hunt-Crossley's damping of the velocity relative
+#: to the wall; the holding force's -nu v_wall while sticking); F_ext's is 1 or 0 (sticking) per
+#: contact mode.
+_RHS_DEPS = ("u", "v", "F_ext", "u_wall", "v_wall")
+_RHS_KINDS = ("dependent", "dependent", "discrete", "dependent", "dependent")
 
 #: Every variable, in value-reference order.
 VARIABLES: tuple[Variable, ...] = (
@@ -256,19 +259,20 @@ VARIABLES: tuple[Variable, ...] = (
                doc_meaning="Hunt-Crossley damping factor"),
     Variable("der(u)", 19, "DER_U", "Real", "local", "continuous", "calculated",
              "du/dt (Model Exchange)", getter="get_der_u", derivative_of="u",
-             dependencies=("v",), dependencies_kind=("discrete",),
-             initial_dependencies=("v0",),  # v0, or 0 sticking, which needs v0 = 0
+             dependencies=("v", "v_wall"), dependencies_kind=("discrete", "discrete"),
+             # v0, or v_wall sticking, which needs v0 = v_wall: v0 alone
+             initial_dependencies=("v0",),
              doc_kind="local (Model Exchange)", doc_meaning="du/dt"),
     Variable("der(v)", 20, "DER_V", "Real", "local", "continuous", "calculated",
              "dv/dt (Model Exchange)", getter="get_der_v", derivative_of="v",
-             dependencies=("u", "v", "F_ext", "u_wall"), dependencies_kind=_RHS_KINDS,
+             dependencies=_RHS_DEPS, dependencies_kind=_RHS_KINDS,
              initial_dependencies=_CONTACT_DEPS,
              doc_kind="local (Model Exchange)", doc_meaning="dv/dt"),
     Variable("wall_indicator", 21, "WALL_INDICATOR", "Real", "local", "continuous", "calculated",
              "event indicator: u (the wall), or the net wall force while sticking on the rigid "
              "wall", getter="get_indicator", fmi2=False, event_indicator=True,
-             dependencies=("u", "F_ext", "u_wall"),
-             dependencies_kind=("discrete", "discrete", "discrete"),
+             dependencies=("u", "F_ext", "u_wall", "v_wall"),
+             dependencies_kind=("discrete", "discrete", "discrete", "discrete"),
              doc_kind="local (FMI 3.0 Model Exchange)",
              doc_meaning="the event indicator g0: u, or the net wall force while sticking"),
     Variable("time", 22, "TIME", "Real", "independent", "continuous", None,
@@ -285,16 +289,18 @@ VARIABLES: tuple[Variable, ...] = (
              doc_valid_note="; its derivative \\|.\\| <= 1e12"),
     Variable("u_wall", 24, "U_WALL", "Real", "input", "continuous", None,
              "wall position (contact when u > u_wall): the compliant spring acts on u - u_wall, "
-             "restitution on the velocity relative to the wall (du_wall/dt from the input "
-             "derivative, else 0); a wall that jumps into the mass between steps: compliant - "
-             "the mass is inside (contact, no jump); rigid - the mass is placed on the wall and "
-             "the impact law applied to its relative velocity; |u_wall| <= 1e6",
+             "restitution on the velocity relative to the wall (du_wall/dt: the input v_wall, or "
+             "this input's derivative where one is given); a wall that jumps into the mass "
+             "between steps: compliant - the mass is inside (contact, no jump); rigid - the mass "
+             "is placed on the wall and the impact law applied to its relative velocity; "
+             "|u_wall| <= 1e6",
              start="0", min="-1e6", max="1e6", field="u_wall", getter="get_u_wall",
              description_fmi3="wall position (contact when u > u_wall): the compliant spring "
                               "acts on u - u_wall, restitution on the velocity relative to the "
-                              "wall; a wall that jumps into the mass between steps: compliant - "
-                              "the mass is inside (contact, no jump); rigid - the mass is placed "
-                              "on the wall and the impact law applied to its relative velocity",
+                              "wall (its velocity v_wall); a wall that jumps into the mass "
+                              "between steps: compliant - the mass is inside (contact, no "
+                              "jump); rigid - the mass is placed on the wall and the impact law "
+                              "applied to its relative velocity",
              doc_kind="**input**", doc_meaning="wall position: contact when u > u_wall",
              doc_valid_note="; its derivative \\|.\\| <= 1e6"),
     _output("F_contact", 25, "F_CONTACT", "Real", "continuous",
@@ -302,8 +308,8 @@ VARIABLES: tuple[Variable, ...] = (
             "contact law's force in the compliant wall, the holding force while sticking on the "
             "rigid wall, 0 in flight (rigid impacts are impulses: see v_impact)",
             getter="get_contact_force",
-            dependencies=("u", "v", "F_ext", "u_wall"),
-            dependencies_fmi3=("u", "v", "F_ext", "u_wall"),
+            dependencies=_RHS_DEPS,
+            dependencies_fmi3=_RHS_DEPS,
             dependencies_kind=_RHS_KINDS,
             initial_dependencies=_CONTACT_DEPS,
             description_fmi3="the wall's force on the mass, repulsive positive: the contact "
@@ -364,6 +370,22 @@ VARIABLES: tuple[Variable, ...] = (
     _output("S_v", 37, "S_V", "Real", "discrete", "dv(t1)/dsigma: " + _SENS,
             getter="get_S_v", doc_kind="output",
             doc_meaning=_SENS_DOC.format(d="dv(t1)/dsigma")),
+    Variable("v_wall", 38, "V_WALL", "Real", "input", "continuous", None,
+             "wall velocity du_wall/dt: restitution, the contact laws and sticking act on the "
+             "velocity relative to the wall; in Co-Simulation the wall moves over a step as "
+             "u_wall + v_wall (t - t0) from its value u_wall at the step's start t0 (an FMI 2.0 "
+             "input derivative of u_wall, where one is given, takes its place); in Model "
+             "Exchange the importer sets u_wall and v_wall together; |v_wall| <= 1e6",
+             start="0", min="-1e6", max="1e6", field="v_wall", getter="get_v_wall",
+             description_fmi3="wall velocity du_wall/dt: restitution, the contact laws and "
+                              "sticking act on the velocity relative to the wall; in "
+                              "Co-Simulation the wall moves over a step as u_wall + v_wall "
+                              "(t - t0) from its value u_wall at the step's start t0; in Model "
+                              "Exchange the importer sets u_wall and v_wall together",
+             doc_kind="**input**",
+             doc_meaning="wall velocity: the impact law and the contact laws act on v - v_wall; "
+                         "in Co-Simulation the wall moves as u_wall + v_wall (t - t0) over a "
+                         "step"),
 )
 
 #: Limits the FMU checks that belong to no variable (fmu_core.h: CORE_MAX_TIME,

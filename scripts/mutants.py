@@ -8,7 +8,7 @@ the snippet replaced, the FMU rebuilt there when a C file changed, and the mutan
 against the copy.  A mutant is *killed* when a test fails, *survives* when all pass; a C mutant
 that does not compile is *stillborn* (not counted).
 
-On demand, not in CI (all 52: about 6 minutes one at a time, 3 with --jobs 2, on 2 cores):
+On demand, not in CI (all 63: about 6 minutes one at a time, 3 with --jobs 2, on 2 cores):
 
     .venv/bin/python scripts/mutants.py                      # every mutant, 1 at a time
     .venv/bin/python scripts/mutants.py --only M03,M17       # some
@@ -65,6 +65,9 @@ CF = "tests/fmu/test_closed_form.py"
 TRUTH = "tests/fmu/test_inputs_truth.py"
 GUARD = "tests/fmu/test_grazing_guard.py"
 DERIV = "tests/fmu/test_directional_derivatives.py"
+INIT_DERIV = "tests/fmu/test_initial_derivatives.py"
+ME_WALL = "tests/fmu/test_me_wall_memory.py"
+WALL_VELOCITY = "tests/fmu/test_wall_velocity.py"
 BASINS = "tests/harness/test_basins_kernel.py"
 MEASURES = "tests/analysis/test_basin_measures.py"
 # mutants that only the independent-truth tests kill: those tests run first for them
@@ -85,7 +88,7 @@ MUTANTS: tuple[Mutant, ...] = (
     _m("M04", "fmu_src/model.c", "    case MODE_STICK:\n        y[0] = beside_wall(w, -1.0);\n        y[1] = dw;",
        "    case MODE_STICK:\n        y[0] = beside_wall(w, -1.0);\n        y[1] = 0.0;", f"{FMU_PORTS} {EVENTS}",
        "release from sticking on a moving rigid wall at rest instead of with the wall's velocity"),
-    _m("M05", "fmu_src/model.c", "return forcing(m, tau) + model_external_force(m, tau) - m->nu * m->du_wall -",
+    _m("M05", "fmu_src/model.c", "return forcing(m, tau) + model_external_force(m, tau) - m->nu * model_wall_velocity(m) -",
        "return forcing(m, tau) + model_external_force(m, tau) -", FMU_PORTS,
        "net wall force without the damper on a moving wall (sticking/release decided wrongly)"),
     _m("M06", "fmu_src/model.c", "return (1.0 + m->sigma) * m->F_g * cos(2.0 * M_PI * tau + m->phi);",
@@ -206,7 +209,7 @@ MUTANTS: tuple[Mutant, ...] = (
        "disc = np.sqrt(complex(nu * nu - 2.0 * Omega * Omega))", "tests/mapcheck/test_linear.py",
        "free-flight eigenvalues from the wrong discriminant"),
     # -- found by tests/fmu/test_inputs_truth.py: CVODE on a moving wall ---------------
-    _m("M47", "fmu_src/solver_cvode.c", "        m->u = model_wall_position(m, s->k->tau);\n        m->v = m->du_wall;\n",
+    _m("M47", "fmu_src/solver_cvode.c", "        m->u = model_wall_position(m, s->k->tau);\n        m->v = model_wall_velocity(m);\n",
        "", TRUTH, "a sticking mass integrated by CVODE drifts an ulp off the moving wall (released at rest, "
        "an impact counted every other step)"),
     _m("M48", "fmu_src/model.c", "if (m->wall == WALL_RIGID && y[1] - dw <= 0.0 && model_wall_force(m, tau) <= 0.0) {",
@@ -243,6 +246,18 @@ MUTANTS: tuple[Mutant, ...] = (
        "eps-uncertain: only the neighbours at eps (the last axis direction), not within eps"),
     _m("M60", "harness/runs/basins/ball.py", '"inside": bool(bad.size == 0)', '"inside": True', BASINS,
        "every attractor's tolerance balls pass: one period labels starts also where a boundary is within tol"),
+    # -- Initialization Mode's derivatives, Model Exchange's wall memory, the wall's velocity -------
+    _m("M61", "fmu_src/fmu_derivatives.c", "    const CoreInstance *start = core_view(c, &buf);",
+       "    const CoreInstance *start = c;\n    (void)buf;", INIT_DERIV,
+       "Initialization Mode: partials at the instance's stale state (the defaults' free flight), not "
+       "at the start values (a mass starting in contact gets F_contact's partials 0)"),
+    _m("M62", "fmu_src/fmu_me.c", "        c->me_wall = w;\n", "", ME_WALL,
+       "Model Exchange never updates the wall seen at the last event: a state handed over inside a "
+       "rigid wall the importer moved before that event is taken for the wall's jump"),
+    _m("M63", "fmu_src/fmu_cs.c", "if (model_begin_wall_ramp(&c->m, c->st.clk.tau)) c->st.clk.restart = 1;",
+       "", WALL_VELOCITY,
+       "Co-Simulation ignores v_wall for the wall's motion over a step (it jumps at each communication "
+       "point)"),
 )
 
 

@@ -49,8 +49,8 @@ Error. `fmi3FreeInstance` from the callback is refused (the instance is not free
 
 Other rules the table does not show: `DoStep` needs h > 0 (h = 0 and h = -0.0 are refused);
 tunable `sigma` may change in Step Mode (FMI 2.0 CS), Event Mode (FMI 2.0 ME), Step or Event
-Mode (FMI 3.0), never in Continuous-Time Mode, where only the continuous inputs `F_ext` and
-`u_wall` may be set; `SetDebugLogging` accepts only the declared categories (`logStatusError`,
+Mode (FMI 3.0), never in Continuous-Time Mode, where only the continuous inputs `F_ext`,
+`u_wall` and `v_wall` may be set; `SetDebugLogging` accepts only the declared categories (`logStatusError`,
 `logStatusWarning`, `logEvents`); with logging off only errors are logged.
 
 **Where the two versions differ, and which text decides.**

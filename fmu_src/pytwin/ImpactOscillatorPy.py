@@ -2,8 +2,8 @@
 
 Same variables (names, value references, causalities, variabilities, start values) as
 ``fmu_src/modelDescription.xml``, so that the harness drives either FMU unchanged.  The physics
-and the CVODE driver live in ``impact_twin_model.py`` (bundled into the FMU's resources); this file
-is only the FMI face.
+and the CVODE driver live in ``twin_physics.py`` and ``twin_cvode.py``, gathered by
+``impact_twin_model.py`` (all bundled into the FMU's resources); this file is only the FMI face.
 
 Error reporting: pythonfmu turns *any* Python exception raised in a callback into
 ``fmi2Fatal`` (``PySlaveInstance::handle_py_exception`` throws ``cppfmu::FatalError``); it has

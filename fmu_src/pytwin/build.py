@@ -5,9 +5,9 @@ Usage (from the repository root, with the project's virtual environment)::
     .venv/bin/python fmu_src/pytwin/build.py --out build/fmu/ImpactOscillatorPy.fmu
 
 ``scripts/setup.sh`` runs exactly this when the twin's sources changed.  The FMU bundles the
-slave (``ImpactOscillatorPy.py``), the physics (``impact_twin_model.py``) and pythonfmu's own Python
-files; numpy and scikit-sundae must be importable by the Python that runs the FMU (see
-README.md next to this file).  The model description, InitialUnknowns included, is written by
+slave (``ImpactOscillatorPy.py``), the physics and its driver (``impact_twin_model.py`` and the
+``twin_*.py`` files it gathers) and pythonfmu's own Python files; numpy and scikit-sundae must
+be importable by the Python that runs the FMU (see README.md next to this file).  The model description, InitialUnknowns included, is written by
 the slave class itself (``ImpactOscillatorPy.to_xml``); this script checks it afterwards with
 fmpy's validator and fails the build if the validator reports a problem.
 """
@@ -27,7 +27,9 @@ from xml.etree import ElementTree
 HERE = Path(__file__).resolve().parent
 SCRIPT = HERE / "ImpactOscillatorPy.py"
 # twin_variables.py: generated from fmu_src/variables.py (fmu_src/generate_variables.py)
-PROJECT_FILES = [HERE / "impact_twin_model.py", HERE / "twin_variables.py"]
+PROJECT_FILES = [HERE / name for name in ("impact_twin_model.py", "twin_rules.py",
+                                          "twin_physics.py", "twin_cvode.py",
+                                          "twin_variables.py")]
 FRONT = HERE / "twin_export.c"
 #: The C FMU's state table (which FMI call is allowed in which state), compiled into the front so
 #: that the twin and the C FMU refuse the same calls from one table.

@@ -41,7 +41,7 @@ enum { V_TUNABLE, V_OTHER };
 /* The twin's states (their numbers are the first byte of a serialised state) and the state
  * table's flag of each. */
 typedef enum { S_INSTANTIATED, S_INIT, S_STEP, S_TERMINATED, S_ERROR } TwinState;
-static const int STATE_FLAGS[] = {CS_INSTANTIATED, CS_INIT, CS_STEP, CS_TERMINATED, CS_ERROR};
+static const int STATE_FLAGS[] = {ST_INSTANTIATED, ST_INIT, ST_STEP, ST_TERMINATED, ST_ERROR};
 
 /* pythonfmu's functions, resolved once. */
 #define INNER_FUNCTIONS(X)                                                                      \

@@ -2,8 +2,8 @@
 
 The work of one doStep is bounded by the parameters max_steps_per_time (CVODE steps) and
 max_events_per_time (wall events), per unit of time advanced (at least one unit), and by a cap
-of SOLVER_MAX_STEPS_PER_CALL = 2e6 CVODE steps per doStep (solver.h); the bounds are computed
-in double (a step of 1e9 must not overflow an integer). Exceeding one is fmi2Error with a
+of SOLVER_MAX_STEPS_PER_CALL = 2e6 CVODE steps per doStep (solver_cvode.h); the bounds are
+computed in double (a step of 1e9 must not overflow an integer). Exceeding one is fmi2Error with a
 message that names it. A positive step down to the smallest double succeeds.
 """
 from __future__ import annotations

@@ -37,7 +37,7 @@ CASES = [
 RHS = ("der(u)", "der(v)", "F_contact")
 U_GRID = (-1.5, -0.3, -1e-3, 0.0, 1e-3, 0.05, 0.4)
 V_GRID = (-2.0, 0.0, 0.7)
-INPUTS = ((0.0, 0.0), (0.8, -0.05))  # (F_ext, u_wall)
+INPUTS = ((0.0, 0.0, 0.0), (0.8, -0.05, 0.3))  # (F_ext, u_wall, v_wall)
 
 
 def _start(params: dict, inside: bool) -> dict:
@@ -77,23 +77,23 @@ def _read(x: Instance, unknowns) -> np.ndarray:
 
 
 def _central_differences(x: Instance, unknowns, state, inputs) -> np.ndarray:
-    """d unknowns / d (u, v, F_ext, u_wall) by central differences of the getters."""
+    """d unknowns / d (u, v, F_ext, u_wall, v_wall) by central differences of the getters."""
     u, v = state
-    f, w = inputs
+    f, w, vw = inputs
     cols = []
-    for j in range(4):
-        point = np.array([u, v, f, w])
+    for j in range(5):
+        point = np.array([u, v, f, w, vw])
         h = 1e-6 * max(1.0, abs(point[j]))
         vals = []
         for s in (+1, -1):
             p = point.copy()
             p[j] += s * h
             x.set_states(p[0], p[1])
-            x.set_inputs(F_ext=p[2], u_wall=p[3])
+            x.set_inputs(F_ext=p[2], u_wall=p[3], v_wall=p[4])
             vals.append(_read(x, unknowns))
         cols.append((vals[0] - vals[1]) / (2 * h))
     x.set_states(u, v)
-    x.set_inputs(F_ext=f, u_wall=w)
+    x.set_inputs(F_ext=f, u_wall=w, v_wall=vw)
     return np.array(cols).T
 
 
@@ -119,22 +119,24 @@ def _generator(nu: float, k2: float) -> np.ndarray:
 def _exact(params: dict, mode: str, state, inputs, fmi3: bool) -> np.ndarray:
     """The partials from the closed form (linear regimes) and the laws (Hertz)."""
     nu, O2 = params["nu"], params["Omega"] ** 2
-    rows = np.zeros((4, 4))
+    rows = np.zeros((4, 5))
     if mode == "stick":
-        rows[2, 2:] = rows[3, 2:] = (1.0, -O2)  # the holding force forcing + F_ext - O2 (w + 1)
+        rows[0, 4] = 1.0  # carried by the wall: der(u) = v_wall
+        # the holding force forcing + F_ext - nu v_wall - O2 (w + 1)
+        rows[2, 2:] = rows[3, 2:] = (1.0, -O2, -nu)
         return rows if fmi3 else rows[:3]
     rows[:2, :2] = _generator(nu, O2)
     rows[1, 2] = 1.0
     if params["wall"] != 0:
-        rows[3] = (1.0, 0.0, 0.0, -1.0)  # g0 = u - w
+        rows[3] = (1.0, 0.0, 0.0, -1.0, 0.0)  # g0 = u - w
     if mode == "contact":
-        Fd, Fdv = _law(params, state[0] - inputs[1], state[1])
+        Fd, Fdv = _law(params, state[0] - inputs[1], state[1] - inputs[2])
         if params.get("contact", 0) == 0:
             rows[:2, :2] = _generator(nu, O2 + Fd)
         else:
             rows[1, :2] -= (Fd, Fdv)
-        rows[1, 3] = Fd
-        rows[2] = (Fd, Fdv, 0.0, -Fd)
+        rows[1, 3:] = (Fd, Fdv)
+        rows[2] = (Fd, Fdv, 0.0, -Fd, -Fdv)
     return rows if fmi3 else rows[:3]
 
 
@@ -155,7 +157,7 @@ def _grid(x):
         for v in V_GRID:
             for inputs in INPUTS:
                 x.set_states(u, v)
-                x.set_inputs(F_ext=inputs[0], u_wall=inputs[1])
+                x.set_inputs(F_ext=inputs[0], u_wall=inputs[1], v_wall=inputs[2])
                 yield u, v, inputs
 
 
@@ -191,11 +193,11 @@ def test_co_simulation_partials_at_starts_in_every_region_equal_the_closed_form(
         x = Instance(interface, **dict(params, u0=u0, v0=v0))
         try:
             J = x.jacobian(_unknowns(x))
-            exact = _exact(params, _mode(x, params), (u0, v0), (0.0, 0.0), x.fmi3)
+            exact = _exact(params, _mode(x, params), (u0, v0), (0.0, 0.0, 0.0), x.fmi3)
             assert np.abs(J - exact).max() <= 1e-11 * _scale(exact), (u0, v0)
             if params.get("contact", 0) and abs(u0) < 1e-2:
                 continue
-            for j, name in ((2, "F_ext"), (3, "u_wall")):
+            for j, name in ((2, "F_ext"), (3, "u_wall"), (4, "v_wall")):
                 h = 1e-6
                 vals = []
                 for s in (+1, -1):
@@ -204,7 +206,7 @@ def test_co_simulation_partials_at_starts_in_every_region_equal_the_closed_form(
                 x.set_inputs(**{name: 0.0})
                 fd = (vals[0] - vals[1]) / (2 * h)
                 assert abs(J[2, j] - fd) <= 1e-6 * _scale(J), (u0, v0, name)
-            assert np.array_equal(x.jacobian(("u", "v")), np.eye(4)[:2])
+            assert np.array_equal(x.jacobian(("u", "v")), np.eye(len(KNOWNS))[:2])
         finally:
             x.close()
 

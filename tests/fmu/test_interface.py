@@ -48,7 +48,8 @@ def test_model_description_declares_capabilities():
                                                      "F_contact", "v_impact", "t_impact",
                                                      "J_uu", "J_uv", "J_vu", "J_vv", "S_u", "S_v"}
     assert cs.canInterpolateInputs  # fmi2SetRealInputDerivatives, order 1
-    assert {v.name for v in md.modelVariables if v.causality == "input"} == {"F_ext", "u_wall"}
+    assert {v.name for v in md.modelVariables if v.causality == "input"} == {"F_ext", "u_wall",
+                                                                                   "v_wall"}
     assert {u.variable.name for u in md.initialUnknowns} >= {"u", "v", "F_g", "phi", "kappa"}
     assert md.defaultExperiment.stepSize == "1"
 

@@ -422,7 +422,7 @@ def test_model_structure_declares_outputs_on_inputs():
         md = read_model_description(str(path))
         deps = {o.variable.name: sorted(d.name for d in (o.dependencies or []))
                 for o in md.outputs}
-        assert deps["F_contact"] == ["F_ext", "u", "u_wall", "v"], (path, deps)
+        assert deps["F_contact"] == ["F_ext", "u", "u_wall", "v", "v_wall"], (path, deps)
         assert set(deps) >= {"u", "v", "impacts", "in_contact", "v_impact", "t_impact"}
 
 

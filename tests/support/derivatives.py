@@ -15,7 +15,7 @@ from fmpy.fmi3 import FMU3Model, FMU3Slave
 
 from tests.support.fmu import FMU3_PATH, FMU_PATH
 
-KNOWNS = ("u", "v", "F_ext", "u_wall")
+KNOWNS = ("u", "v", "F_ext", "u_wall", "v_wall")
 INTEGERS = ("wall", "contact", "solver")
 INTERFACES = ("fmi2-me", "fmi2-cs", "fmi3-me", "fmi3-cs")
 _UNZIPPED: dict[str, str] = {}

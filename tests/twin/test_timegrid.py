@@ -100,7 +100,10 @@ def _load_twin_model():
     """impact_twin_model loaded under another name (the twin FMU, running in this process,
     imports its own copy as ``impact_twin_model``; see tests/twin/test_twin.py)."""
     import importlib.util
+    import sys
     path = Path(__file__).resolve().parents[2] / "fmu_src" / "pytwin" / "impact_twin_model.py"
+    if str(path.parent) not in sys.path:  # the parts it gathers, imported by their names
+        sys.path.append(str(path.parent))
     spec = importlib.util.spec_from_file_location("twin_model_timegrid", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

@@ -459,7 +459,10 @@ def test_guard_locates_a_stepped_over_crossing() -> None:
     """Hand the driver's locating step a free flight whose last good point lies before a 1e-6
     deep contact and a turning point past it: it must return the exact entry time."""
     # Loaded under another name: the twin FMU, running in this process, imports its own copy
-    # as ``impact_twin_model`` and must not find this one in sys.modules.
+    # as ``impact_twin_model`` and must not find this one in sys.modules. The parts it gathers
+    # (twin_rules, twin_physics, twin_cvode) are imported by their names from the source folder.
+    if str(TWIN_SRC) not in sys.path:
+        sys.path.append(str(TWIN_SRC))
     spec = importlib.util.spec_from_file_location("twin_model_under_test",
                                                   TWIN_SRC / "impact_twin_model.py")
     mod = importlib.util.module_from_spec(spec)

@@ -9,7 +9,7 @@
 #include <stdio.h>
 
 #include "closed_form.h"
-#include "solver.h"
+#include "solver_cvode.h"
 #include "stepper.h"
 
 /* The methods, by the value of the parameter `solver` (model.h, SolverKind). */
