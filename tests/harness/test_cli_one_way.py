@@ -68,6 +68,10 @@ def test_every_command_runs_with_the_one_default_solver(command, monkeypatch, tm
     run = _built_run(monkeypatch, [command, *MINIMAL[command]], tmp_path)
     assert run.solver == DEFAULT_SOLVER and run.params["solver"] == SOLVERS[DEFAULT_SOLVER]
     assert not run.given("model", "solver")
+    if command == "chart":  # and the chart's parameters, taken from the run object
+        from harness.analysis.chart.problem import chart_params
+
+        assert chart_params(run)["solver"] == SOLVERS[DEFAULT_SOLVER]
 
 
 @pytest.mark.parametrize("command", sorted(MINIMAL))
@@ -99,6 +103,7 @@ def test_one_wall_table_and_one_solver_table() -> None:
         solver_tables += [rel for _ in re.finditer(r"[\"']closed-form[\"']\s*:\s*1\b", text)]
         # a wall or solver tested against a bare code (== 2, != 1) instead of its name
         assert not re.search(r"get\(\"(wall|solver)\"[^)]*\)\)\s*[!=]=\s*\d", text), rel
+        assert not re.search(r"[\"'](wall|solver)[\"']\s*:\s*\d|\b(wall|solver)=\d", text), rel
     assert wall_tables == solver_tables == ["harness/config/defaults.py"]
 
 
