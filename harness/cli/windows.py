@@ -91,8 +91,8 @@ def _nu_Omega(run: Any, args: argparse.Namespace) -> dict[str, float | None]:
 def cmd_windows(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     run = experiment_of(args)
-    res = compare_windows(args.alpha, args.gamma, **_nu_Omega(run, args), r=run.params["r"], wall=wall_name(run.params["wall"]),
-                          Gamma=run.params["Gamma"], M_max=args.M_max, quick=args.quick, out=args.out,
+    res = compare_windows(args.alpha, args.gamma, **_nu_Omega(run, args), r=run.params["r"],
+                          wall=wall_name(run.params["wall"]), Gamma=run.params["Gamma"], M_max=args.M_max, quick=args.quick, out=args.out,
                           map_wall=args.map_wall, branch=args.branch, sigma_range=args.sigma_range, xtol=args.xtol,
                           theta=args.theta, run=run, command=command_line(args))
     for line in res["summary"]:
