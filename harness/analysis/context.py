@@ -1,5 +1,6 @@
-"""What one run of an analysis or of a paper's figure needs (:class:`Context`: the FMU, the
-output directory, quality, workers, progress, solver) and how its results are written
+"""What one run of an analysis or of a paper's figure needs (:class:`Context`: the run object
+-- :class:`~harness.runs.experiment.Experiment`, which opened the FMU and checked the solver --,
+the output directory, quality, the command line) and how its results are written
 (:func:`write_outputs`: ``NAME.json`` and ``report.md``; :func:`to_jsonable`).
 """
 from __future__ import annotations
@@ -13,51 +14,48 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..errors import HarnessInputError
-
 __all__ = ["Context", "to_jsonable", "write_outputs"]
 
 
 class Context:
-    """What a target needs: FMU, output directory, quality, workers, progress.
+    """What a target needs: the run (its FMU and settings), output directory, quality.
 
     Attributes
     ----------
     target : str
+    run : Experiment
+        The run object: the FMU (opened once), its parameters with the solver (checked once),
+        workers and progress, from the same layers as every command.
     out : Path
         Output directory (created).
     quick : bool
     workers : int or None
+        Worker processes asked for (None: the analysis's own default).
     progress : bool
     fmu : FmuModel
     solver : str
         The FMU's integrator, "cvode" (the default: the paper's question is about the ODE as a
         general integrator solves it) or "closed-form".
+    command : str
+        The command line that reproduces this run (the report's footer).
     """
 
-    def __init__(self, target: str, out: str | Path, quick: bool = False, workers: int | None = None,
-                 progress: bool = False, fmu_path: str | None = None, solver: str = "cvode") -> None:
-        from ..config import default_fmu_path
-        from ..fmu.fmi import FmuModel
+    def __init__(self, target: str, out: str | Path, quick: bool = False, run: Any = None,
+                 command: str | None = None) -> None:
+        from ..runs.experiment import Experiment
 
         self.target = target
+        self.run = run if run is not None else Experiment.for_python()
         self.out = Path(out)
         self.out.mkdir(parents=True, exist_ok=True)
         self.quick = bool(quick)
-        self.workers = workers
-        self.progress = progress
-        self.fmu = FmuModel(fmu_path or default_fmu_path(), "--fmu")
-        from ..fmu.fmi import SOLVER_NAMES, SOLVER_PARAMETER
-
-        if solver not in SOLVER_NAMES:
-            raise HarnessInputError("--solver", f"unknown solver {solver!r}; one of {', '.join(SOLVER_NAMES)}")
-        if SOLVER_PARAMETER not in self.fmu.variables and SOLVER_NAMES[solver] != 0:
-            raise HarnessInputError("--solver", f"{self.fmu.path.name} has no closed-form solver mode (no "
-                                    f"parameter {SOLVER_PARAMETER!r}); it integrates with CVODE only")
-        self.solver = solver
+        self.workers = self.run.run.workers if self.run.given("run", "workers") else None
+        self.progress = self.run.run.progress
+        self.fmu = self.run.model
+        self.solver = self.run.solver
         self.t_start = time.perf_counter()
-        #: the ``impact-harness`` command line that reproduces this run (report footer)
-        self.command = f"reproduce {target}{' --quick' if self.quick else ''} --out {self.out}"
+        #: the command line that ran this (report footer); called from Python: the call
+        self.command = command or f"run_target({target!r}, out={str(self.out)!r}, quick={self.quick!r}) from Python"
 
     def simulator(self):
         """A fresh in-process FMU simulator (for shooting and Jacobians)."""
@@ -66,14 +64,9 @@ class Context:
         return FmuSimulator(self.fmu.source(), instance_name=f"reproduce-{self.target}")
 
     def params(self, **overrides: Any) -> dict[str, Any]:
-        """The FMU's defaults with ``overrides`` (initial state removed)."""
-        p = self.fmu.defaults()
-        p.pop("u0", None)
-        p.pop("v0", None)
-        from ..fmu.fmi import SOLVER_NAMES, SOLVER_PARAMETER
-
-        if SOLVER_PARAMETER in self.fmu.variables:
-            p[SOLVER_PARAMETER] = SOLVER_NAMES[self.solver]
+        """The run's parameters (the FMU's defaults, the file's and the flags' values, the solver;
+        no initial state) with ``overrides``."""
+        p = dict(self.run.params)
         for k, v in overrides.items():
             p[k] = self.fmu.coerce(k, v, k)
         return p
@@ -113,7 +106,7 @@ def write_outputs(ctx: Context, result: Mapping[str, Any], report: str) -> tuple
     jpath = ctx.out / f"{ctx.target}.json"
     jpath.write_text(json.dumps(to_jsonable(data), indent=2) + "\n")
     rpath = ctx.out / "report.md"
-    footer = (f"\n\n---\nRun: `impact-harness {ctx.command}`, {ctx.elapsed():.1f} s, FMU sha256 {ctx.fmu.sha256[:12]}, "
+    footer = (f"\n\n---\nRun: `{ctx.command}`, {ctx.elapsed():.1f} s, FMU sha256 {ctx.fmu.sha256[:12]}, "
               f"harness {__version__}. Numbers: `{jpath.name}`.\n")
     rpath.write_text(report.rstrip() + footer)
     return jpath, rpath

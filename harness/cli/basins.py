@@ -80,7 +80,7 @@ def _zoom(text: str | None) -> tuple[float, float, float, float] | None:
 def _use_batch(args: argparse.Namespace, exp: Any) -> bool:
     """Whether the scan runs on the batch kernel (``--kernel``)."""
     s = exp.sampling
-    closed = int(exp.params.get("solver", 0)) == 1 and int(exp.params.get("contact", 0)) == 0
+    closed = exp.solver == "closed-form" and int(exp.params.get("contact", 0)) == 0
     if args.kernel == "batch":
         if not closed:
             raise HarnessInputError("--kernel", "the batch kernel is the closed form: it needs --solver closed-form "
@@ -135,8 +135,7 @@ def cmd_basins(args: argparse.Namespace) -> int:
         from ..analysis.basins.agreement import fmu_agreement
         from ..analysis.basins.summary import with_agreement
 
-        solver = "closed form" if int(exp.params.get("solver", 0)) == 1 else "CVODE"
-        ds = with_agreement(ds, fmu_agreement(exp.model, ds, exp.params, s, args.check_fmu), solver)
+        ds = with_agreement(ds, fmu_agreement(exp.model, ds, exp.params, s, args.check_fmu), exp.solver)
     write_netcdf(ds, out)
     shutil.rmtree(ckpt, ignore_errors=True)  # the NetCDF file now holds everything
     print(report(ds))

@@ -16,6 +16,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ..config import DEFAULT_SOLVER, SOLVERS, solver_name
 from ..errors import HarnessInputError
 from ..io.progress import progress_bar
 from .experiment_args import command_line, experiment_of, output_paths
@@ -193,7 +194,7 @@ def _mu(m: Sequence[complex]) -> str:
 def branch_report(branches: Sequence[Any], kinds: Sequence[str], title: str, search: str, command: str,
                   params: dict, p_range: tuple[float, float] | None = None) -> str:
     """The branches as Markdown: search, stable intervals, located events."""
-    solver = {0: "CVODE", 1: "closed form"}.get(int(params.get("solver", 0)), "?")
+    solver = solver_name(params.get("solver", SOLVERS[DEFAULT_SOLVER]))
     lines = [f"# Continuation: {title}", "", f"Command: `{command}`", "",
              f"FMU solver: {solver}; derivatives: {branches[0].derivatives if branches else '?'}; {search}.", ""]
     for br, kind in zip(branches, kinds):

@@ -13,7 +13,7 @@ import argparse
 
 from ..errors import HarnessInputError, SettingsErrors
 
-__all__ = ["ALIASES", "flag_for", "with_flags"]
+__all__ = ["ALIASES", "flag_for", "with_flags", "command_parser"]
 
 #: Python argument -> the dest (or the name after ``<section>__``) of the option that sets it,
 #: where the names differ.
@@ -24,10 +24,12 @@ ALIASES = {
     "spec.scan_param": "scan",
     "spec.modes": "mode",
     "x": "x_num",           # the Jacobian scan's values of x: --x-start/--x-stop/--x-num
+    "fmu_path": "path",     # compare_windows, chart, run_target: --fmu (fmu__path)
 }
 
 
-def _command_parser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser | None:
+def command_parser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser | None:
+    """The parser of the subcommand ``command``."""
     for action in parser._actions:  # argparse keeps its subparsers only here
         if isinstance(action, argparse._SubParsersAction):
             return action.choices.get(command)
@@ -37,7 +39,7 @@ def _command_parser(parser: argparse.ArgumentParser, command: str) -> argparse.A
 def flag_for(parser: argparse.ArgumentParser, command: str, name: str) -> str | None:
     """The option of ``command`` that sets the Python argument ``name`` (its first spelling,
     e.g. ``-M`` for ``-M/--period``), or None when the command has none (then the name stays)."""
-    sub = _command_parser(parser, command)
+    sub = command_parser(parser, command)
     if sub is None or name.startswith("-"):
         return None
     dest = ALIASES.get(name, name)

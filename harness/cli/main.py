@@ -15,16 +15,14 @@ from __future__ import annotations
 
 import argparse
 import os
-import shlex
 import sys
 from typing import Any, Sequence
 
 from ..errors import FmuError, FmuRejectedInput, HarnessInputError, SweepTaskError
 from . import basins, chart, continue_, jacobian, reproduce, simulate, strobe, sweep, windows
-from .flags import with_flags
+from .experiment_args import PROG, recorded_command
+from .flags import command_parser, with_flags
 from .options import OneLineParser, common_parent, sampling_parent
-
-PROG = "impact-harness"
 
 #: The subcommands' modules, in the order ``--help`` lists them.
 COMMANDS = (simulate, strobe, sweep, jacobian, basins, continue_, reproduce, windows, chart)
@@ -74,11 +72,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     argv = list(sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(_join_list_values(argv))
-    # recorded in the results' attributes
-    args.command_line = " ".join([PROG, *(shlex.quote(a) for a in argv)])
     prog = f"{PROG} {args.command}"
     restore = _terminate_like_interrupt()
     try:
+        # recorded in the results (attributes, reports), the same way for every command
+        args.command_line = recorded_command(command_parser(parser, args.command), args, argv)
         return int(args.func(args) or 0)
     except BaseException as exc:  # every exit of a command passes through one mapping to a status
         return exit_status(exc, prog, parser, args.command)

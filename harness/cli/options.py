@@ -7,10 +7,11 @@ import argparse
 import builtins
 from typing import Any
 
-from ..config.defaults import DEFAULT_SOLVER, MODEL_SHORTCUTS, SECTION_PHASE, SOLVERS, WALL_NAMES
+from ..config.defaults import DEFAULT_SOLVER, MODEL_SHORTCUTS, SECTION_PHASE, SOLVERS, WALLS
 from ..errors import HarnessInputError
 
 __all__ = ["OneLineParser", "count", "size", "positive", "common_parent", "sampling_parent", "execution_options",
+           "experiment_options",
            "overrides_from_args", "model_shortcuts", "solver_option", "theta_option", "SOLVER_HELP", "THETA_HELP"]
 
 #: --help of the shared defaults, written once (harness/config/defaults.py holds the values).
@@ -60,22 +61,31 @@ def positive(text: str) -> float:
 positive.__name__ = "positive number"
 
 
-def common_parent() -> argparse.ArgumentParser:
-    """Options shared by every subcommand that runs the FMU."""
-    p = OneLineParser(add_help=False)
+def experiment_options(p: argparse.ArgumentParser, model_flags: bool = True) -> Any:
+    """The layers every command builds its run from, the same options in each: ``--config`` (an
+    experiment file), ``--fmu``, ``--set``, ``--solver`` and (``model_flags``) the oscillator's
+    flags; returns their group."""
     g = p.add_argument_group("experiment")
     g.add_argument("--config", "-c", metavar="FILE.toml", help="experiment file (TOML); flags override it")
     g.add_argument("--fmu", dest="fmu__path", metavar="PATH",
                    help="FMU to drive (default: build/fmu/ImpactOscillator.fmu or $IMPACT_HARNESS_FMU)")
     g.add_argument("--set", dest="model_set", metavar="NAME=VALUE", action="append", default=[],
                    help="set an FMU parameter, e.g. --set sigma=0.3 --set wall=rigid (repeatable)")
+    solver_option(g, default=None)  # None: the settings' layers supply it (DEFAULT_SOLVER)
+    if model_flags:
+        model_shortcuts(p, "model__")
+    return g
+
+
+def common_parent() -> argparse.ArgumentParser:
+    """Options shared by every subcommand that runs the FMU."""
+    p = OneLineParser(add_help=False)
+    g = experiment_options(p)
     g.add_argument("--u0", dest="initial__u0", type=float, metavar="U",
                    help="initial displacement u at the start time t = theta (the section phase, --theta; "
                    "simulate: t = --t0); default: the FMU's start value")
     g.add_argument("--v0", dest="initial__v0", type=float, metavar="V",
                    help="initial velocity v at the start time t = theta (simulate: t = --t0); default: the FMU's start value")
-    solver_option(g, default=None)  # None: the FMU's own start value, which is the default solver
-    model_shortcuts(p, "model__")
     o = p.add_argument_group("output")
     o.add_argument("--out", "-o", dest="run__out", metavar="FILE.nc", help="NetCDF result file")
     o.add_argument("--plot", dest="run__plot", metavar="FILE.png", help="PNG plot (default: next to --out)")
@@ -155,9 +165,10 @@ def xtol_option(g: Any, default_text: str) -> None:
                    f"whatever this is, with --quick too (default: {default_text})")
 
 
-def solver_option(g: Any, default: str | None = DEFAULT_SOLVER) -> None:
-    """``--solver``: the same choices, default and help in every command."""
-    g.add_argument("--solver", choices=SOLVERS, default=default, help=SOLVER_HELP)
+def solver_option(g: Any, default: str | None = None) -> None:
+    """``--solver``: the same choices, default and help in every command (``default`` None: the
+    settings' layers supply it, :data:`~harness.config.DEFAULT_SOLVER`)."""
+    g.add_argument("--solver", choices=tuple(SOLVERS), default=default, help=SOLVER_HELP)
 
 
 def theta_option(g: Any, dest: str = "theta", default: float | None = SECTION_PHASE) -> None:
@@ -167,7 +178,7 @@ def theta_option(g: Any, dest: str = "theta", default: float | None = SECTION_PH
 
 
 def model_shortcuts(p: argparse.ArgumentParser, prefix: str = "", defaults: dict[str, Any] | None = None,
-                    walls: tuple[str, ...] = WALL_NAMES) -> None:
+                    walls: tuple[str, ...] = tuple(WALLS)) -> None:
     """The oscillator's flags (``--nu --Omega --r --Gamma --wall``), the same in every command:
     shortcuts for ``--set NAME=VALUE``; ``prefix`` is put before each dest (``model__``: a
     settings layer), ``defaults`` are the command's own (stated in the help)."""

@@ -9,9 +9,11 @@ from typing import Any
 
 from mapcheck.compare import markdown_window_table
 
-from ..analysis.windows.problem import MAP_WALLS, WALL_CODES
 from ..analysis.windows.compare_windows import compare_windows
-from .options import model_shortcuts, solver_option, theta_option, xtol_option
+from ..analysis.windows.problem import MAP_WALLS
+from ..config import wall_name
+from .experiment_args import command_line, experiment_of
+from .options import count, experiment_options, theta_option, xtol_option
 
 __all__ = ["register", "cmd_windows"]
 
@@ -24,13 +26,14 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
         "period-M windows from (64), the 2D map (37)/(38), the 2D map with A~(sigma), and the ODE (FMU; every "
         "orbit the up/down scans see continued in sigma to its edges, each edge located on its defining equation: "
         "flips and folds on their test functions, grazes on the gap or impact velocity). Writes report.md, windows.json "
-        "(fig9.json's format), PNG plots and the scans' NetCDF into --out.")
-    g = p.add_argument_group("parameter set: --alpha/--gamma, or --nu/--Omega (below)")
+        "(fig9.json's format), PNG plots and the scans' NetCDF into --out. The oscillator comes from the same "
+        "layers as every command: the FMU's start values < --config FILE.toml ([fmu], [model]) < flags and --set.")
+    experiment_options(p)
+    g = p.add_argument_group("parameter set: --alpha/--gamma, or --nu/--Omega (above, or the experiment file)")
     g.add_argument("--alpha", type=float, help="map parameter alpha of (9), in (0, 1)")
     g.add_argument("--gamma", type=float, help="map parameter gamma of (9), in (0, 1)")
     g.add_argument("--branch", type=int, default=None,
                    help="with an underdamped --alpha/--gamma: the psi branch (0, 1, ...; sets sign(P12) = c1)")
-    model_shortcuts(p, "", {"r": 0.9, "Gamma": 10.0, "wall": "compliant"}, walls=tuple(sorted(WALL_CODES)))
     p.add_argument("--map", choices=MAP_WALLS, default="auto", dest="map_wall",
                    help="the maps' coefficients: auto (from --wall: (48) compliant, (39) rigid), or "
                    "compliant ((48), low-velocity impacts), compliant-high ((39), high-velocity impacts on a stiff "
@@ -50,10 +53,9 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     o.add_argument("--quick", action="store_true", help="coarse scans (fewer points, shorter transients) and a "
                    "coarser fallback bisection (seconds to a minute); the edges located by the continuation are as "
                    "exact as without it")
-    o.add_argument("--workers", "-j", type=int, metavar="N", help="worker processes (default: up to 2)")
-    o.add_argument("--fmu", metavar="PATH", help="FMU (default build/fmu/ImpactOscillator.fmu)")
+    o.add_argument("--workers", "-j", dest="run__workers", type=count, metavar="N",
+                   help="worker processes (default: up to 2)")
     o.add_argument("--no-progress", action="store_true", help="no progress bars")
-    solver_option(o)
     p.set_defaults(func=cmd_windows)
 
 
@@ -75,13 +77,24 @@ def _m_max(text: str) -> int | None:
         raise argparse.ArgumentTypeError(f"must be 'auto' or an integer, got {text!r}") from None
 
 
+def _nu_Omega(run: Any, args: argparse.Namespace) -> dict[str, float | None]:
+    """nu and Omega where a file or a flag gave them (else None: --alpha/--gamma give them);
+    --alpha/--gamma typed win over a file's nu and Omega, flags over the file as everywhere."""
+    typed_map = args.alpha is not None or args.gamma is not None
+    out: dict[str, float | None] = {}
+    for k in ("nu", "Omega"):
+        origin = run.layers.origin.get(("model", k))
+        out[k] = run.params[k] if origin == "cli" or (origin is not None and not typed_map) else None
+    return out
+
+
 def cmd_windows(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
-    res = compare_windows(args.alpha, args.gamma, nu=args.nu, Omega=args.Omega, r=args.r, wall=args.wall,
-                          Gamma=args.Gamma, M_max=args.M_max, quick=args.quick, out=args.out, workers=args.workers,
-                          progress=not args.no_progress, fmu_path=args.fmu, solver=args.solver,
-                          map_wall=args.map_wall, branch=args.branch, sigma_range=args.sigma_range,
-                          xtol=args.xtol, theta=args.theta)
+    run = experiment_of(args)
+    res = compare_windows(args.alpha, args.gamma, **_nu_Omega(run, args), r=run.params["r"],
+                          wall=wall_name(run.params["wall"]), Gamma=run.params["Gamma"], M_max=args.M_max, quick=args.quick, out=args.out,
+                          map_wall=args.map_wall, branch=args.branch, sigma_range=args.sigma_range, xtol=args.xtol,
+                          theta=args.theta, run=run, command=command_line(args))
     for line in res["summary"]:
         print(line)
     print(markdown_window_table(res["windows"], na=res["map_applicability"]))

@@ -65,13 +65,14 @@ Layer: the ground (with :mod:`harness.errors`); imports nothing from the subpack
 """
 from .checks import _count, _number, check_count, check_theta
 from .defaults import (BACKENDS, CLI_FLAGS, DEFAULT_SOLVER, DEFAULTS, MODEL_SHORTCUTS, SECTION_PHASE, SOLVERS,
-                       SWEEP_MODES, WALL_NAMES, default_fmu_path, default_workers, project_root)
+                       SWEEP_MODES, WALLS, default_fmu_path, default_workers, project_root, solver_name,
+                       wall_name)
 from .layers import Layered, load_toml
 from .specs import RunSpec, SamplingSpec, SweepSpec, parameter_values, parse_modes, sweep_directions
 
 __all__ = [
     "BACKENDS", "CLI_FLAGS", "DEFAULTS", "DEFAULT_SOLVER", "MODEL_SHORTCUTS", "SECTION_PHASE", "SOLVERS",
-    "SWEEP_MODES", "WALL_NAMES", "Layered", "RunSpec", "SamplingSpec", "SweepSpec",
+    "SWEEP_MODES", "WALLS", "Layered", "RunSpec", "SamplingSpec", "SweepSpec",
     "check_count", "check_theta", "default_fmu_path", "default_workers", "load_toml", "parameter_values",
-    "parse_modes", "project_root", "sweep_directions",
+    "parse_modes", "project_root", "solver_name", "sweep_directions", "wall_name",
 ]

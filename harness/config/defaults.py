@@ -7,7 +7,8 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["SWEEP_MODES", "BACKENDS", "DEFAULTS", "CLI_FLAGS", "SECTION_PHASE", "DEFAULT_SOLVER", "SOLVERS",
-           "MODEL_SHORTCUTS", "WALL_NAMES", "project_root", "default_fmu_path", "default_workers"]
+           "MODEL_SHORTCUTS", "WALLS", "wall_name", "solver_name", "project_root", "default_fmu_path",
+           "default_workers"]
 
 SWEEP_MODES = ("fresh", "up", "down", "both")
 BACKENDS = ("serial", "processes", "dask")
@@ -41,10 +42,12 @@ def default_workers() -> int:
 #: map is not smooth and Newton shooting stalls; half a period away it is smooth.
 SECTION_PHASE = 0.5
 
-#: The FMU's integrators by CLI name, and the one default of every command: CVODE, the FMU's own
-#: default, which every FMU and every contact law has (the closed form is exact and ~30x faster,
-#: for the linear contact law: ``--solver closed-form``).
-SOLVERS = ("cvode", "closed-form")
+#: The FMU's integrators: the CLI name of each value of the FMU's Integer parameter ``solver`` (the
+#: one solver table: every command, check and report reads it by name).
+SOLVERS: dict[str, int] = {"cvode": 0, "closed-form": 1}
+#: The one default of every command: CVODE, the FMU's own default, which every FMU and every
+#: contact law has (the closed form is exact and ~30x faster, for the linear contact law:
+#: ``--solver closed-form``).
 DEFAULT_SOLVER = "cvode"
 
 #: The oscillator's parameters every command takes as flags (shortcuts for ``--set NAME=VALUE``),
@@ -55,13 +58,32 @@ MODEL_SHORTCUTS: dict[str, str] = {
     "r": "coefficient of restitution r in (0, 1]",
     "Gamma": "compliant wall stiffness ratio Gamma = kappa^2/Omega^2",
 }
-#: The wall models by name (the FMU's ``wall`` parameter: 0 none, 1 compliant, 2 rigid).
-WALL_NAMES = ("none", "compliant", "rigid")
+#: The wall models: the name of each value of the FMU's Integer parameter ``wall`` (the one wall
+#: table: every command, check and report reads it by name).
+WALLS: dict[str, int] = {"none": 0, "compliant": 1, "rigid": 2}
 
-#: Built-in defaults of every section except ``[model]`` (which come from the FMU).
+
+def wall_name(code: object) -> str:
+    """The name of a ``wall`` code (``1`` -> ``"compliant"``); a name is returned as it is."""
+    return _name_of(WALLS, code)
+
+
+def solver_name(code: object) -> str:
+    """The name of a ``solver`` code (``1`` -> ``"closed-form"``); a name is returned as it is."""
+    return _name_of(SOLVERS, code)
+
+
+def _name_of(table: dict[str, int], code: object) -> str:
+    if isinstance(code, str):
+        return code
+    by_code = {v: k for k, v in table.items()}
+    return by_code.get(int(code), str(code))  # type: ignore[call-overload]
+
+#: Built-in defaults of every section (``[model]``: the FMU's start values, except the solver).
 DEFAULTS: dict[str, dict[str, Any]] = {
     "fmu": {"path": None},
-    "model": {},
+    # the FMU's own start values, and the one default solver of every command
+    "model": {"solver": DEFAULT_SOLVER},
     "initial": {"u0": None, "v0": None},
     # 300 transient periods: the slow free-flight mode decays like 0.98^n at Figure 9's
     # parameters, and orbits near window edges converge slowly.

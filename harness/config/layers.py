@@ -16,7 +16,11 @@ if sys.version_info >= (3, 11):
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["Layered", "load_toml"]
+__all__ = ["Layered", "load_toml", "PYTHON_ARGS"]
+
+#: The Python argument of the library's entry points (``compare_windows``, ``chart``,
+#: ``run_target``) that sets a setting, where it is not the key itself.
+PYTHON_ARGS = {("fmu", "path"): "fmu_path"}
 
 
 class Layered:
@@ -59,10 +63,13 @@ class Layered:
         found.raise_if_any()
 
     def arg(self, section: str, key: str) -> str:
-        """How to name ``section.key`` in an error: its CLI flag or its file key."""
+        """How to name ``section.key`` in an error: its CLI flag, its file key, or (a value a
+        Python caller passed, origin ``"api"``) the Python argument."""
         src = self.origin.get((section, key))
         if src == "cli":
             return CLI_FLAGS.get((section, key), f"--{key.replace('_', '-')}")
+        if src == "api":
+            return PYTHON_ARGS.get((section, key), key)
         if src is None:
             return f"{section}.{key}"
         return f"{src}: {section}.{key}"
@@ -70,6 +77,10 @@ class Layered:
     def get(self, section: str, key: str) -> Any:
         """The current value of ``section.key``."""
         return self.values[section][key]
+
+    def given(self, section: str, key: str) -> bool:
+        """Whether ``section.key`` was set by a file, a flag or a Python argument (not a default)."""
+        return (section, key) in self.origin
 
 
 def load_toml(path: str | os.PathLike, argument: str = "--config") -> dict[str, Any]:

@@ -17,7 +17,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import HarnessInputError
-from .fmi import WALL_NAMES
+from ..config.defaults import WALLS
 
 #: Per-start status codes of the kernel (``fmu_src/batch.c``).
 RAN, MATCHED, INVALID, FAILED, ESCAPED = 0, 1, 2, 3, 4
@@ -112,7 +112,7 @@ def kernel_parameters(params: Mapping[str, Any]) -> tuple[list[str], list[float]
     names, values = [], []
     for name, value in params.items():
         if name == "wall" and isinstance(value, str):
-            value = WALL_NAMES[value]
+            value = WALLS[value]
         names.append(str(name))
         values.append(float(value))
     return names, values

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..config.defaults import SOLVERS, WALLS
 from ..errors import FmuError, HarnessInputError
 
 #: Names of the oscillator's variables.  They are the interface between the harness and
@@ -34,8 +35,6 @@ IMPACT_COUNTER = "impacts"
 INITIAL_STATE = ("u0", "v0")
 REQUIRED_VARIABLES = (*STATE_OUTPUTS, IMPACT_COUNTER, *INITIAL_STATE)
 
-#: Symbolic values accepted for the Integer parameter ``wall``.
-WALL_NAMES = {"none": 0, "compliant": 1, "rigid": 2}
 
 #: The FMU's derivatives of its last ``doStep``: a Boolean parameter switches the
 #: variational equations on, six outputs give d(u, v)_end/d(u, v)_start (J_uv = du/dv_start)
@@ -44,9 +43,8 @@ WALL_NAMES = {"none": 0, "compliant": 1, "rigid": 2}
 SENSITIVITY_SWITCH = "sensitivities"
 SENSITIVITY_OUTPUTS = ("J_uu", "J_uv", "J_vu", "J_vv", "S_u", "S_v")
 
-#: Integer parameter choosing the FMU's integrator, and the names the CLI accepts for it.
+#: Integer parameter choosing the FMU's integrator (its names: :data:`harness.config.SOLVERS`).
 SOLVER_PARAMETER = "solver"
-SOLVER_NAMES = {"cvode": 0, "closed-form": 1}
 
 #: Major FMI versions the harness drives (one slave class each in :mod:`harness.fmu.slaves`).
 SUPPORTED_FMI_VERSIONS = ("2", "3")
@@ -246,10 +244,10 @@ def coerce_value(var: VariableInfo, value: Any, argument: str) -> float | int | 
                 raise ValueError
             return float(value)
         if var.type in INTEGER_TYPES:
-            if var.name == "wall" and isinstance(value, str) and value.lower() in WALL_NAMES:
-                return WALL_NAMES[value.lower()]
-            if var.name == SOLVER_PARAMETER and isinstance(value, str) and value.lower() in SOLVER_NAMES:
-                return SOLVER_NAMES[value.lower()]
+            if var.name == "wall" and isinstance(value, str) and value.lower() in WALLS:
+                return WALLS[value.lower()]
+            if var.name == SOLVER_PARAMETER and isinstance(value, str) and value.lower() in SOLVERS:
+                return SOLVERS[value.lower()]
             if isinstance(value, bool):
                 raise ValueError
             f = float(value)
@@ -265,8 +263,8 @@ def coerce_value(var: VariableInfo, value: Any, argument: str) -> float | int | 
                 raise ValueError
             return bool(value)
     except (TypeError, ValueError):
-        hint = {"wall": " (or one of none, compliant, rigid)",
-                SOLVER_PARAMETER: " (or one of " + ", ".join(SOLVER_NAMES) + ")"}.get(var.name, "")
+        hint = {"wall": " (or one of " + ", ".join(WALLS) + ")",
+                SOLVER_PARAMETER: " (or one of " + ", ".join(SOLVERS) + ")"}.get(var.name, "")
         raise HarnessInputError(
             argument, f"{value!r} is not a valid {var.type} value for FMU variable {var.name!r}{hint}"
         ) from None

@@ -40,9 +40,6 @@ def _save(fig: plt.Figure, path: str | os.PathLike) -> Path:
     return Path(path)
 
 
-WALL_NAMES = {0: "no wall", 1: "compliant wall", 2: "rigid wall"}
-
-
 def parameter_title(attrs: dict, exclude: tuple[str, ...] = ()) -> str:
     """The run's physical parameters as a title line, e.g. ``"nu = 4.605, Omega = 0.3059
     ((alpha, gamma) = (0.99, 0.01)), r = 0.9, compliant wall Gamma = 10"``; parameters
@@ -60,10 +57,13 @@ def parameter_title(attrs: dict, exclude: tuple[str, ...] = ()) -> str:
     parts += [f"{k} = {float(m[k]):.4g}" for k in ("sigma", "r") if k in m and k not in exclude]
     wall = m.get("wall")
     if wall is not None and "wall" not in exclude:
+        from ..config.defaults import wall_name
+
         try:
-            name = WALL_NAMES.get(int(wall), f"wall {wall}")
+            name = wall_name(int(wall))
         except (TypeError, ValueError):
-            name = f"{wall} wall"
+            name = str(wall)
+        name = "no wall" if name == "none" else f"{name} wall"
         if name == "compliant wall" and "Gamma" in m and "Gamma" not in exclude:
             name += f" Gamma = {float(m['Gamma']):.4g}"
         parts.append(name)

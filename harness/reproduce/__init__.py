@@ -49,11 +49,22 @@ TARGETS: dict[str, str] = {
 
 
 def run_target(target: str, out: str | Path, quick: bool = False, workers: int | None = None,
-               progress: bool = False, fmu_path: str | None = None, solver: str = "cvode") -> dict[str, Any]:
-    """Run one reproduction; returns its result dict (also written to ``out``)."""
+               progress: bool = False, fmu_path: str | None = None, solver: str | None = None, *,
+               run: Any = None, command: str | None = None) -> dict[str, Any]:
+    """Run one reproduction; returns its result dict (also written to ``out``).
+
+    ``run``: the run object (:class:`~harness.runs.experiment.Experiment`) the command line built
+    from its layers; without it, one is built from ``fmu_path``, ``solver``, ``workers`` and
+    ``progress`` with the same defaults and checks (errors name these arguments).  The figure's
+    own parameters override the run's.  ``command``: the command line recorded in the report.
+    """
     if target not in TARGETS:
-        raise HarnessInputError("FIG", f"unknown target {target!r}; choose from {', '.join(TARGETS)}")
-    ctx = Context(target, out, quick, workers, progress, fmu_path, solver)
+        raise HarnessInputError("target", f"unknown target {target!r}; choose from {', '.join(TARGETS)}")
+    if run is None:
+        from ..runs.experiment import Experiment
+
+        run = Experiment.for_python(fmu_path, solver, workers, progress)
+    ctx = Context(target, out, quick, run, command)
     module = importlib.import_module(TARGETS[target])
     result, report = module.run(ctx)
     write_outputs(ctx, result, report)

@@ -24,14 +24,15 @@ from mapcheck.compare import (
 from mapcheck.exact import ExactOscillator
 from mapcheck.linear import invert_alpha_gamma
 
+from ..config.defaults import WALLS
 from . import Context
 from .fig9_maps import ALPHA, GAMMA, R
 
 #: Rays (a, b, s) in natural coordinates: (x, y, rho) = l eps (a, b, s); x > 0: an impact.
 DIRECTIONS = ((1.0, 0.0, 0.0), (1.0, 1.0, 1.0), (0.5, -1.0, 1.0), (2.0, 0.5, -1.0))
-#: Walls: (FMU wall code, Gamma, map coefficients' wall).  Compliant at Gamma = 10: the
-#: low-velocity map (48) (beta ~ sqrt(eps) -> 0); rigid: (39).
-WALLS = {"compliant": (1, 10.0, "compliant"), "rigid": (2, 10.0, "rigid")}
+#: The FMU's walls compared, each with (Gamma, map coefficients' wall).  Compliant at Gamma = 10:
+#: the low-velocity map (48) (beta ~ sqrt(eps) -> 0); rigid: (39).
+CASES = {"compliant": (10.0, "compliant"), "rigid": (10.0, "rigid")}
 #: The FMU's own error at each point is measured against the closed-form solution of the
 #: ODE (mapcheck.exact, same pre-impact construction); near grazing it grows (low impact
 #: velocity: ~1e-9 compliant, ~3e-8 rigid in u at eps = 1e-4).  Points are fitted only
@@ -75,9 +76,9 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
     eps = SETTINGS[ctx.quick]["eps"]
     sim = ctx.simulator()
     rows: dict[str, Any] = {}
-    for wall, (code, G, mwall) in WALLS.items():
+    for wall, (G, mwall) in CASES.items():
         c = coefficients(nu, Om, R, mwall)
-        params = ctx.params(wall=code, Gamma=G, r=R)
+        params = ctx.params(wall=WALLS[wall], Gamma=G, r=R)
         rows[wall] = {}
         for d in DIRECTIONS:
             errs, fmu_errs, contacts = _errors(sim, params, c, d, eps, nu, Om, wall, G)
@@ -91,7 +92,7 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
     result = {"figure": "direct", "orders": orders, "min_order": worst, "rows": rows, "verdict": verdict,
               "files": files,
               "parameters": {"alpha": ALPHA, "gamma": GAMMA, "nu": nu, "Omega": Om, "r": R,
-                             "walls": {w: {"wall": v[0], "Gamma": v[1], "map": v[2]} for w, v in WALLS.items()},
+                             "walls": {w: {"wall": WALLS[w], "Gamma": v[0], "map": v[1]} for w, v in CASES.items()},
                              "eps": eps, "directions": DIRECTIONS}}
     return result, _report(ctx, result)
 

@@ -26,7 +26,7 @@ from mapcheck.compare import (
 from mapcheck.linear import invert_alpha_gamma
 from mapcheck.windows import MapParams
 
-from ..config import SamplingSpec, SweepSpec
+from ..config import WALLS, SamplingSpec, SweepSpec
 from ..dynamics.maps.shooting import StroboscopicMap, map_guided_windows
 from . import Context
 
@@ -49,7 +49,7 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
     c = coefficients(inv.nu, inv.Omega, R, "compliant")
     dense = np.geomspace(SIGMA_RANGE[0] / 10, 0.1, 40001)
     maps = {"map": map_windows(c, M_MAX, dense, "paper"), "map_A_tilde": map_windows(c, M_MAX, dense, "tilde")}
-    params = ctx.params(nu=inv.nu, Omega=inv.Omega, r=R, Gamma=GAMMA_WALL, wall=1)
+    params = ctx.params(nu=inv.nu, Omega=inv.Omega, r=R, Gamma=GAMMA_WALL, wall=WALLS["compliant"])
     smap = StroboscopicMap(ctx.simulator(), params, 0.5)
     guide = {M: w for M, w in maps["map_A_tilde"].items() if M <= M_MAX_ODE}
     shoot = map_guided_windows(smap, c, guide, (SIGMA_RANGE[0] / 10, 0.05), cfg["xtol_rel"], relative=True)

@@ -23,7 +23,7 @@ import numpy as np
 
 from mapcheck.compare import power_law_with_offset
 
-from ..config import SamplingSpec, SweepSpec
+from ..config import WALLS, SamplingSpec, SweepSpec
 from ..dynamics.maps.jacobian import jacobian_vs_x, resolve_method
 from ..dynamics.maps.singularity_fit import (
     HARD_BETA,
@@ -77,7 +77,7 @@ def jacobian_scans(ctx: Context, r: float, x: np.ndarray, method: str = "auto") 
     sim = ctx.simulator()
     out = {}
     for G in GAMMAS + GAMMAS_EXTRA:
-        p = ctx.params(nu=NU, Omega=OMEGA, r=r, Gamma=G, wall=1, sigma=0.0)
+        p = ctx.params(nu=NU, Omega=OMEGA, r=r, Gamma=G, wall=WALLS["compliant"], sigma=0.0)
         out[G] = jacobian_vs_x(sim, p, x, theta=0.0, measure_theta=0.5, method=method)
     return out
 
@@ -89,7 +89,7 @@ def cross_check(ctx: Context, r: float) -> dict[str, Any]:
     x = np.asarray(X_CHECK)
     worst = 0.0
     for G in GAMMAS + GAMMAS_EXTRA:
-        p = ctx.params(nu=NU, Omega=OMEGA, r=r, Gamma=G, wall=1, sigma=0.0)
+        p = ctx.params(nu=NU, Omega=OMEGA, r=r, Gamma=G, wall=WALLS["compliant"], sigma=0.0)
         ex = jacobian_vs_x(sim, p, x, theta=0.0, measure_theta=0.5, method="exact")
         fd = jacobian_vs_x(sim, p, x, theta=0.0, measure_theta=0.5, method="fd")
         de, df = ex.J[:, 0, 0] - ex.P1[0, 0], fd.J[:, 0, 0] - fd.P1[0, 0]
@@ -120,7 +120,7 @@ def _scan_chain(ctx: Context, r: float, G: float, grid: np.ndarray, cfg: dict[st
     """Up from the non-impacting state, then down from where the up scan ended."""
     from ..runs.sweeps import run_sweep
 
-    params = ctx.params(nu=NU, Omega=OMEGA, r=r, Gamma=G, wall=1)
+    params = ctx.params(nu=NU, Omega=OMEGA, r=r, Gamma=G, wall=WALLS["compliant"])
     sampling = SamplingSpec(theta=0.5, n_transient=cfg["transient"], n_samples=cfg["samples"], tol=1e-4)
     s0 = float(grid[0])
     up = run_sweep(ctx.fmu, SweepSpec("sigma", grid, ("up",)), params, (-(1.0 + s0) - 1.0, 0.0), sampling,

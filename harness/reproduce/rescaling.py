@@ -28,10 +28,12 @@ from mapcheck.compare import map_windows, markdown_window_table
 from mapcheck.linear import alpha_gamma
 
 from ..dynamics.maps.shooting import StroboscopicMap, map_guided_windows
+from ..config.defaults import WALLS
 from . import Context
 
 NU, OMEGA, R, GAMMA_WALL = 100.0, math.sqrt(2.0), 0.5, 10.0
-WALLS = {"compliant": (1, "compliant"), "rigid": (2, "rigid")}
+#: The FMU's walls compared, each with the wall of the maps' coefficients.
+MAP_WALL = {"compliant": "compliant", "rigid": "rigid"}
 SETTINGS = {True: {"M_max": 3, "xtol": 1e-4}, False: {"M_max": 4, "xtol": 1e-6}}
 
 
@@ -65,11 +67,11 @@ def run(ctx: Context) -> tuple[dict[str, Any], str]:
     cfg = SETTINGS[ctx.quick]
     grid = np.linspace(0.0, 1.0, 20001)
     ode, maps, kinds = {}, {}, {}
-    for wall, (code, mwall) in WALLS.items():
+    for wall, mwall in MAP_WALL.items():
         c = coefficients(NU, OMEGA, R, mwall)
         guide = map_windows(c, cfg["M_max"], grid, "tilde")
         maps[wall] = guide
-        smap = StroboscopicMap(ctx.simulator(), ctx.params(nu=NU, Omega=OMEGA, r=R, wall=code, Gamma=GAMMA_WALL), 0.5)
+        smap = StroboscopicMap(ctx.simulator(), ctx.params(nu=NU, Omega=OMEGA, r=R, wall=WALLS[wall], Gamma=GAMMA_WALL), 0.5)
         res = map_guided_windows(smap, c, guide, (1e-4, 1.0), cfg["xtol"])
         ode[wall], kinds[wall] = res["windows"], res["kinds"]
     factors = edge_factors(ode["compliant"], ode["rigid"])

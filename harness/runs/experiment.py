@@ -1,6 +1,9 @@
-"""An experiment bound to its FMU: the settings of :mod:`harness.config` (layered, with their
-origin) checked against the FMU that runs them -- parameters coerced to the FMU's types, the
-initial state, sampling and run options.
+"""An experiment bound to its FMU, the one run object of every command: the settings of
+:mod:`harness.config` (defaults < experiment file < flags or Python arguments, each with its
+origin) checked against the FMU that runs them -- the FMU opened once, parameters coerced to its
+types (the solver checked once: an FMU without the parameter runs CVODE only), the initial state,
+sampling and run options.  The command line (:mod:`harness.cli`) and the library's entry points
+(``compare_windows``, ``chart``, ``run_target``) build it the same way.
 
 Lives in the runs layer because it opens the FMU (:mod:`harness.fmu`); where the settings come
 from and their specs are :mod:`harness.config`'s job.
@@ -12,7 +15,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..config import Layered, RunSpec, SamplingSpec, SweepSpec, _number, default_fmu_path, load_toml, parse_modes
+from ..config import (Layered, RunSpec, SamplingSpec, SweepSpec, _number, default_fmu_path, load_toml, parse_modes,
+                      solver_name)
 from ..errors import HarnessInputError
 
 
@@ -38,6 +42,7 @@ class Experiment:
         config: str | os.PathLike | None = None,
         overrides: Mapping[str, Mapping[str, Any]] | None = None,
         model: Any = None,
+        source: str = "cli",
     ) -> "Experiment":
         """Defaults < TOML file ``config`` < ``overrides`` (CLI), validated.
 
@@ -49,8 +54,11 @@ class Experiment:
             ``{section: {key: value}}``; ``None`` values mean "not given".
         model : FmuModel, optional
             Already opened FMU (otherwise opened from ``fmu.path``).
+        source : str
+            Where ``overrides`` come from: ``"cli"`` (errors name the flags) or ``"api"`` (a
+            Python caller: errors name its arguments).
         """
-        from ..fmu.fmi import FmuModel, INITIAL_STATE, SOLVER_PARAMETER
+        from ..fmu.fmi import FmuModel, INITIAL_STATE
 
         from ..errors import ErrorCollector
 
@@ -60,31 +68,16 @@ class Experiment:
         if config is not None:
             found.check(layers.merge, load_toml(config), Path(config).name)
         if overrides:
-            found.check(layers.merge, overrides, "cli")
+            found.check(layers.merge, overrides, source)
         path = layers.get("fmu", "path") or default_fmu_path()
         if model is None:
+            fallback = "fmu_path" if source == "api" else "--fmu"
             try:
-                model = FmuModel(path, argument=layers.arg("fmu", "path") if layers.origin.get(("fmu", "path")) else "--fmu")
+                model = FmuModel(path, argument=layers.arg("fmu", "path") if layers.given("fmu", "path") else fallback)
             except HarnessInputError as exc:  # nothing below can be checked without the FMU
                 found.add(exc)
                 found.raise_if_any()
-        params = model.defaults()
-        for name, value in layers.values["model"].items():
-            arg = (f"--set {name}" if layers.origin.get(("model", name)) == "cli"
-                   else layers.arg("model", name))
-            if name == SOLVER_PARAMETER and layers.origin.get(("model", name)) == "cli":
-                arg = "--solver"
-            if name == SOLVER_PARAMETER and name not in model.variables:
-                # an FMU without the parameter integrates with CVODE: that choice is a no-op
-                if str(value).lower() in ("cvode", "0"):
-                    continue
-                found.add(HarnessInputError(arg, f"{model.path.name} has no closed-form solver mode (no parameter "
-                                            f"{SOLVER_PARAMETER!r}); it integrates with CVODE only"))
-                continue
-            try:
-                params[name] = model.coerce(name, value, arg)
-            except HarnessInputError as exc:
-                found.add(exc)
+        params = _model_params(model, layers, found)
         state = []
         for key in INITIAL_STATE:
             given = layers.get("initial", key)
@@ -114,6 +107,32 @@ class Experiment:
             layers=layers,
         )
 
+    @classmethod
+    def for_python(cls, fmu_path: str | os.PathLike | None = None, solver: str | None = None,
+                   workers: int | None = None, progress: bool = False,
+                   model: Mapping[str, Any] | None = None, backend: str | None = None,
+                   scheduler: str | None = None) -> "Experiment":
+        """The run of a library entry point called from Python (``compare_windows``, ``chart``,
+        ``run_target``): the same defaults and checks as a command, errors naming the Python
+        arguments (``fmu_path``, ``solver``, ``workers``, ``backend``, ``scheduler``)."""
+        layer: dict[str, dict[str, Any]] = {"fmu": {"path": None if fmu_path is None else str(fmu_path)},
+                                            "model": {**(model or {}), "solver": solver},
+                                            "run": {"workers": workers, "progress": bool(progress), "backend": backend,
+                                                    "scheduler": scheduler}}
+        return cls.from_sources(None, layer, source="api")
+
+    @property
+    def solver(self) -> str:
+        """The FMU's integrator by name (:data:`harness.config.SOLVERS`); CVODE on an FMU without
+        the parameter."""
+        from ..config import DEFAULT_SOLVER
+
+        return solver_name(self.params.get("solver", DEFAULT_SOLVER))
+
+    def given(self, section: str, key: str) -> bool:
+        """Whether ``section.key`` was set by a file, a flag or a Python argument."""
+        return self.layers.given(section, key)
+
     def sweep_spec(self) -> SweepSpec:
         """The ``[sweep]`` section, validated against this experiment's FMU."""
         return SweepSpec.from_layers(self.layers, self.model)
@@ -128,3 +147,28 @@ class Experiment:
             for key, value in self.layers.values[section].items():
                 out[f"{section}.{key}"] = value
         return out
+
+
+def _model_params(model: Any, layers: Layered, found: Any) -> dict[str, Any]:
+    """The FMU's start values with the ``[model]`` layers' values coerced to its types; the solver
+    checked here, once for every command (an FMU without the parameter runs CVODE only)."""
+    from ..fmu.fmi import SOLVER_PARAMETER
+
+    params = model.defaults()
+    for name, value in layers.values["model"].items():
+        origin = layers.origin.get(("model", name))
+        arg = f"--set {name}" if origin == "cli" else layers.arg("model", name)
+        if name == SOLVER_PARAMETER and origin in ("cli", "api"):
+            arg = "--solver" if origin == "cli" else "solver"
+        if name == SOLVER_PARAMETER and name not in model.variables:
+            # an FMU without the parameter integrates with CVODE: that choice is a no-op
+            if str(value).lower() in ("cvode", "0"):
+                continue
+            found.add(HarnessInputError(arg, f"{model.path.name} has no closed-form solver mode (no parameter "
+                                        f"{SOLVER_PARAMETER!r}); it integrates with CVODE only"))
+            continue
+        try:
+            params[name] = model.coerce(name, value, arg)
+        except HarnessInputError as exc:
+            found.add(exc)
+    return params

@@ -16,7 +16,8 @@ import numpy as np
 from ..io.children import _exit_on_signal, die_with_parent
 from ..dynamics.maps.classify import classify_orbit, explain_dynamics, still_settling
 from ..config import SamplingSpec
-from ..fmu.fmi import INITIAL_STATE, WALL_NAMES, FmuSource
+from ..config.defaults import WALLS
+from ..fmu.fmi import INITIAL_STATE, FmuSource
 from ..dynamics.maps.sampling import sample_periods
 from ..fmu.simulator import has_derivatives, simulator_for
 
@@ -110,7 +111,7 @@ def inside_rigid_wall(params: dict[str, Any], state: tuple[float, float]) -> boo
     moving into it.  Told apart here, before the FMU is asked, so that any other refusal at
     initialization (a bad setting) stays an error of the whole run."""
     wall = params.get("wall")
-    if wall not in (WALL_NAMES["rigid"], "rigid"):
+    if wall not in (WALLS["rigid"], "rigid"):
         return False
     u_wall = float(params.get("u_wall", 0.0))
     return state[0] > u_wall or (state[0] == u_wall and state[1] > 0.0)

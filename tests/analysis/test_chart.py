@@ -123,7 +123,7 @@ def test_the_run_line_names_the_whole_model_and_parses_to_the_same_problem(chart
     import shlex
 
     from harness.cli.main import build_parser
-    from harness.fmu.fmi import SOLVER_NAMES
+    from harness.config import SOLVERS, WALLS
 
     out, res = chart
     report = (out / "report.md").read_text()
@@ -132,8 +132,8 @@ def test_the_run_line_names_the_whole_model_and_parses_to_the_same_problem(chart
     args = build_parser().parse_args(shlex.split(line))
     p = res["parameters"]
     for k in ("nu", "Omega", "r", "Gamma"):
-        assert getattr(args, k) == p[k]
-    assert {"compliant": 1, "rigid": 2}[args.wall] == p["wall"] and SOLVER_NAMES[args.solver] == p["solver"]
+        assert getattr(args, f"model__{k}") == p[k]
+    assert WALLS[args.model__wall] == p["wall"] and SOLVERS[args.solver] == p["solver"]
     assert args.sigma_range == "0.1:1.5" and args.quick and args.per_decade == 24
     assert "wall = compliant" in report and "solver = closed-form" in report
 

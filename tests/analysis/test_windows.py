@@ -45,7 +45,8 @@ def test_outputs_in_fig9_format(run) -> None:
     assert (p["r"], p["wall"], p["Gamma"]) == (0.8, "compliant", 10.0)
     report = (out / "report.md").read_text()
     assert "(alpha, gamma) = (0.5, 0.05), r = 0.8, compliant wall, Gamma = 10" in report
-    assert "impact-harness windows --nu" in report  # the footer gives a command that reruns it
+    # the footer gives the command that reruns it, as typed (recorded the one way of every command)
+    assert "Run: `impact-harness windows --alpha 0.5 --gamma 0.05 --r 0.8 --wall compliant --Gamma 10 " in report
 
 
 def _numbers(obj):

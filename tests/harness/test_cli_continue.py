@@ -8,7 +8,7 @@ import pytest
 
 from harness.io.results import read_netcdf
 from harness.config import DEFAULT_SOLVER
-from harness.fmu.fmi import SOLVER_NAMES
+from harness.config import SOLVERS
 from tests.support.cli import run_main
 
 FIG9 = ["--nu", "4.605170185988091", "--Omega", "0.3059238689620112", "--r", "0.9", "--wall", "compliant",
@@ -26,7 +26,7 @@ def test_continue_writes_branch_plot_report(tmp_path: Path, capsys) -> None:
     # the period-1 flip, located on the down branch (Figure 9's M = 1 lower edge)
     assert flips and abs(flips[0]["value"] - 0.8120764) < 1e-6
     assert set(json.loads(ds.attrs["continuation.branches"])) >= {"down", "up"}
-    assert ds.attrs["model.solver"] == SOLVER_NAMES[DEFAULT_SOLVER]  # the one default of every command
+    assert ds.attrs["model.solver"] == SOLVERS[DEFAULT_SOLVER]  # the one default of every command
     assert "fmu.sha256" in ds.attrs or any("sha256" in k for k in ds.attrs)
     assert (tmp_path / "c.png").stat().st_size > 0
     report = (tmp_path / "c.md").read_text()

@@ -11,17 +11,18 @@ import numpy as np
 import pytest
 
 from harness import strobe
+from harness.config import wall_name
 from harness.dynamics.maps.sampling import sample_periods
 from mapcheck.exact import ExactOscillator
 from tests.support.fmu import harness_params as _params
 
 FMU = Path(__file__).resolve().parents[2] / "build" / "fmu" / "ImpactOscillator.fmu"
-WALL_NAMES = {0: "none", 1: "compliant", 2: "rigid"}
+
 FIG7 = dict(nu=0.196, Omega=7.368)  # underdamped case of figures 6 and 7
 
 
 def _oracle(p: dict) -> ExactOscillator:
-    return ExactOscillator(p["nu"], p["Omega"], p["sigma"], r=p["r"], Gamma=p["Gamma"], wall=WALL_NAMES[p["wall"]])
+    return ExactOscillator(p["nu"], p["Omega"], p["sigma"], r=p["r"], Gamma=p["Gamma"], wall=wall_name(p["wall"]))
 
 
 @pytest.mark.parametrize(

@@ -239,24 +239,40 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
     lines += ["", f"Other windows (more than one impact per period): {len(res['other_windows'])} found (chart.json).",
               "", f"Backend: {res['backend']}; scans {res['seconds']:.1f} s wall ({sum(res['task_seconds']):.1f} s in "
               f"tasks); continuation {res['continuation_seconds']:.1f} s; the wall-free window, contradictions and coexistence "
-              f"{res.get('cross_check_seconds', 0.0):.1f} s.", "", f"Run: `impact-harness {command}`."]
+              f"{res.get('cross_check_seconds', 0.0):.1f} s.", "", f"Run: `{command}`."]
     return "\n".join(lines)
 
 
 def chart(problem: ChartProblem, out: str | Path, fmu_path: str | None = None, backend: Any = None,
-          workers: int | None = None, scheduler: str | None = None, command: str = "chart") -> dict[str, Any]:
-    """Run the chart, write chart.json, chart.png and report.md into ``out``; return the result."""
-    from ...config import default_fmu_path
-    from ...fmu.fmi import FmuModel
-    from ..context import to_jsonable
+          workers: int | None = None, scheduler: str | None = None, command: str | None = None, *,
+          run: Any = None) -> dict[str, Any]:
+    """Run the chart, write chart.json, chart.png and report.md into ``out``; return the result.
 
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    fmu = FmuModel(fmu_path or default_fmu_path(), "--fmu")
+    ``problem`` is checked first (:func:`~harness.analysis.chart.problem.check_problem`; build
+    one from ranges with :func:`~harness.analysis.chart.problem.chart_problem`).  ``run``: the
+    run object (:class:`~harness.runs.experiment.Experiment`: the FMU, backend, workers,
+    scheduler) the command line built from its layers; without it one is built from
+    ``fmu_path``, ``backend``, ``workers`` and ``scheduler``, with the same defaults and checks.
+    ``command``: the command line recorded in the report."""
+    from ...runs.experiment import Experiment
+    from ..context import to_jsonable
+    from .problem import check_problem
+
+    check_problem(problem)
+    if run is None:
+        run = Experiment.for_python(fmu_path, workers=workers, backend=backend, scheduler=scheduler)
+    fmu = run.model
     for k in list(problem.params) + [problem.param2]:
         if k not in fmu.variables:
-            raise HarnessInputError("--param2" if k == problem.param2 else k, f"{fmu.path.name} has no parameter {k!r}")
-    res = run_chart(problem, fmu.source(), backend, workers, scheduler)
+            raise HarnessInputError("param2" if k == problem.param2 else k, f"{fmu.path.name} has no parameter {k!r}")
+    for k, v in problem.params.items():
+        fmu.coerce(k, v, k)  # a value the FMU cannot take, refused before any work
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    given = run.given("run", "workers")
+    res = run_chart(problem, fmu.source(), run.run.backend if run.given("run", "backend") or run.run.scheduler else None,
+                    run.run.workers if given else None, run.run.scheduler)
+    command = command or f"chart(problem, out={str(out)!r}) from Python"
     res["parameters"] = {**problem.params, "param2": problem.param2, "values": problem.values, "log": problem.log,
                          "M_max": problem.M_max, "xtol_rel": problem.xtol_rel, "xtol": problem.xtol,
                          "sigma_grid": [float(problem.sigma_grid[0]),
@@ -272,10 +288,9 @@ def chart(problem: ChartProblem, out: str | Path, fmu_path: str | None = None, b
 
 def named_parameters(params: dict[str, Any], digits: int = 6) -> str:
     """'nu = 4.60517, ..., wall = compliant, solver = cvode': enums by name, numbers to ``digits``."""
-    from ...config.defaults import WALL_NAMES
-    from ...fmu.fmi import SOLVER_NAMES
+    from ...config.defaults import solver_name, wall_name
 
-    names = {"wall": dict(enumerate(WALL_NAMES)), "solver": {v: k for k, v in SOLVER_NAMES.items()}}
-    return ", ".join(f"{k} = {names[k].get(int(v), v)}" if k in names else
+    names = {"wall": wall_name, "solver": solver_name}
+    return ", ".join(f"{k} = {names[k](v)}" if k in names else
                      (f"{k} = {v:.{digits}g}" if isinstance(v, float) else f"{k} = {v}") for k, v in params.items())
 

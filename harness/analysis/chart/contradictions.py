@@ -28,6 +28,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from ...config.defaults import WALLS
 from .wall_free import WALL_FREE, _stretch_at, continued_intervals, why_not_continued, window_key_label
 from .curve_interpolation import chord_error
 
@@ -80,7 +81,7 @@ def search_orbit(pmap: Any, M: int, impacts: int, sigmas: Sequence[float],
     for s0, z0, where in starts:
         for s in targets:
             z = np.asarray(z0, float) - pmap.offset(s0) + pmap.offset(s)
-            if int(pmap.params.get("wall", 1)) == 2 and z[0] > float(pmap.params.get("u_wall", 0.0)):
+            if int(pmap.params.get("wall", WALLS["compliant"])) == WALLS["rigid"] and z[0] > float(pmap.params.get("u_wall", 0.0)):
                 continue  # inside a rigid wall: not a state
             pts, _ = pmap.run(s, z, transient)  # one run of the flow: onto the attractor
             _, hit = _solve(pmap, pts[-1] - pmap.offset(s), s, M, impacts, n, True)

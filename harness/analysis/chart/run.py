@@ -31,6 +31,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from ...config.defaults import SECTION_PHASE, WALLS
 from ...errors import HarnessInputError
 from .edge_curves import edge_check, scan_check, widened
 from .window_region import chart_regions
@@ -72,7 +73,7 @@ class ChartProblem:
     transient: int = 200
     samples: int = 24
     xtol_rel: float = 1e-3
-    theta: float = 0.5
+    theta: float = SECTION_PHASE
     xtol: float | None = None
 
 
@@ -135,7 +136,7 @@ def _beta(entry: Mapping[str, Any], params: Mapping[str, Any]) -> float | None:
     """beta = r v_c kappa / |A~| (43) at the window's seed (compliant wall only)."""
     from mapcheck.coeffs import grazing_acceleration
 
-    if int(params.get("wall", 1)) != 1 or entry.get("v_c") is None:
+    if int(params.get("wall", WALLS["compliant"])) != WALLS["compliant"] or entry.get("v_c") is None:
         return None
     Om, s = float(params["Omega"]), float(entry["seed_sigma"])
     kappa = math.sqrt(float(params["Gamma"])) * Om

@@ -36,10 +36,10 @@ from mapcheck.compare import (
     window_differences,
 )
 
-from ...config.defaults import DEFAULT_SOLVER, SECTION_PHASE
+from ...config.defaults import SECTION_PHASE
 from ...errors import HarnessInputError
 from ..context import Context, write_outputs
-from .problem import M_AUTO_LIMIT, WindowProblem, WindowSettings, command_line, default_settings, map_guide
+from .problem import M_AUTO_LIMIT, WindowProblem, WindowSettings, default_settings, map_guide
 from .report import SCAN_TOL, VARIANT_KEYS, report
 
 __all__ = ["WindowProblem", "WindowSettings", "compare_windows", "run_windows", "default_settings"]
@@ -226,9 +226,9 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
                     Omega: float | None = None, r: float = 0.9, wall: str = "compliant", Gamma: float = 10.0,
                     M_max: int | None = None, quick: bool = False, out: str | Path = "results/windows",
                     workers: int | None = None, progress: bool = False, fmu_path: str | None = None,
-                    solver: str = DEFAULT_SOLVER, map_wall: str = "auto", branch: int | None = None,
+                    solver: str | None = None, map_wall: str = "auto", branch: int | None = None,
                     sigma_range: tuple[float, float] | None = None, xtol: float | None = None,
-                    theta: float = SECTION_PHASE) -> dict[str, Any]:
+                    theta: float = SECTION_PHASE, run: Any = None, command: str | None = None) -> dict[str, Any]:
     """Window edges of the maps and of the ODE (FMU) for one parameter set.
 
     Give either (``alpha``, ``gamma``) of the map (9) or (``nu``, ``Omega``) of the ODE.
@@ -243,21 +243,43 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     sigma; ``theta``: the section phase. ``result["coexistence"]`` lists where attractors coexist,
     ``result["summary"]`` the summary's sentences, each derived from the tables.
 
+    ``run``: the run object (:class:`~harness.runs.experiment.Experiment`: the FMU, the solver,
+    workers, progress and any other FMU parameter) the command line built from its layers;
+    without it one is built from ``fmu_path``, ``solver``, ``workers`` and ``progress``, with the
+    same defaults and checks.  ``command``: the command line recorded in the report.
+
     A worker pool is used for the scans and the shooting: call it from a script under
     ``if __name__ == "__main__":`` (the workers re-import the main module).
     """
     if (alpha is None) != (gamma is None) or (nu is None) != (Omega is None) or (alpha is None) == (nu is None):
-        raise HarnessInputError("--alpha/--gamma, --nu/--Omega", "give exactly one pair: (alpha, gamma) or (nu, Omega)")
-    kw = dict(r=float(r), wall=wall, Gamma=float(Gamma), M_max=None if M_max in (None, "auto") else int(M_max),
-              map_wall=map_wall, theta=float(theta))
-    problem = (WindowProblem.from_alpha_gamma(float(alpha), float(gamma), branch, **kw) if alpha is not None
-               else WindowProblem(float(nu), float(Omega), **kw))
-    if workers is not None and workers < 1:
-        raise HarnessInputError("--workers", f"must be >= 1, got {workers}")
-    ctx = Context("windows", out, quick, workers, progress, fmu_path, solver)
-    rng = None if sigma_range is None else (float(sigma_range[0]), float(sigma_range[1]))
+        raise HarnessInputError("nu" if alpha is None and gamma is None else "alpha",
+                                "give exactly one pair: (alpha, gamma) or (nu, Omega)")
+    kw = dict(r=_real(r, "r"), wall=wall, Gamma=_real(Gamma, "Gamma"),
+              M_max=None if M_max in (None, "auto") else int(M_max), map_wall=map_wall, theta=_real(theta, "theta"))
+    problem = (WindowProblem.from_alpha_gamma(_real(alpha, "alpha"), _real(gamma, "gamma"), branch, **kw)
+               if alpha is not None else WindowProblem(_real(nu, "nu"), _real(Omega, "Omega"), **kw))
+    if run is None:
+        from ...runs.experiment import Experiment
+
+        run = Experiment.for_python(fmu_path, solver, workers, progress)
+    rng = None if sigma_range is None else (_real(sigma_range[0], "sigma_range"), _real(sigma_range[1], "sigma_range"))
     settings = default_settings(problem, quick, rng, xtol)
-    ctx.command = command_line(problem, quick, out, solver, rng, xtol)
+    ctx = Context("windows", out, quick, run, command or _python_call(problem, quick, out, rng, xtol))
     result, text = run_windows(ctx, problem, settings)
     write_outputs(ctx, result, text)
     return result
+
+
+def _real(value: Any, argument: str) -> float:
+    """``value`` as a float, or an error naming ``argument``."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise HarnessInputError(argument, f"expected a number, got {value!r}") from None
+
+
+def _python_call(problem: WindowProblem, quick: bool, out: Any, sigma_range: Any, xtol: Any) -> str:
+    """How a Python caller asked the question (the report's footer where no command line ran)."""
+    return (f"compare_windows(nu={problem.nu!r}, Omega={problem.Omega!r}, r={problem.r!r}, wall={problem.wall!r}, "
+            f"Gamma={problem.Gamma!r}, M_max={problem.M_max!r}, theta={problem.theta!r}, quick={quick!r}, "
+            f"sigma_range={sigma_range!r}, xtol={xtol!r}, out={str(out)!r})")

@@ -1,7 +1,6 @@
 """The question :func:`harness.analysis.windows.compare_windows.compare_windows` answers: one parameter set
 (:class:`WindowProblem`: the oscillator, the wall, the periods looked at), how hard to look
-(:class:`WindowSettings`, :func:`default_settings`), and the ``impact-harness windows`` command
-line that asks it again (:func:`command_line`).
+(:class:`WindowSettings`, :func:`default_settings`).
 """
 from __future__ import annotations
 
@@ -15,13 +14,13 @@ from mapcheck.coeffs import Coefficients, coefficients
 from mapcheck.compare import predicted_windows
 from mapcheck.linear import alpha_gamma, invert_alpha_gamma
 
-from ...config.defaults import DEFAULT_SOLVER, SECTION_PHASE
+from ...config.defaults import SECTION_PHASE, WALLS
 from ...errors import HarnessInputError
 
-__all__ = ["WindowProblem", "WindowSettings", "default_settings", "map_guide", "command_line"]
+__all__ = ["WindowProblem", "WindowSettings", "default_settings", "map_guide", "WINDOW_WALLS"]
 
-#: FMU ``wall`` parameter codes.
-WALL_CODES = {"compliant": 1, "rigid": 2}
+#: The walls a window comparison takes (the maps need impacts: no ``"none"``).
+WINDOW_WALLS = ("compliant", "rigid")
 #: Coefficients of the maps: "auto" (from the wall), or a ``wall`` of :func:`mapcheck.coeffs.coefficients`.
 MAP_WALLS = ("auto", "compliant", "compliant-high", "rigid")
 #: Highest period classified by the scans (and searched with --M-max auto).
@@ -59,20 +58,21 @@ class WindowProblem:
     map_wall: str = "auto"
 
     def __post_init__(self) -> None:
-        if self.wall not in WALL_CODES:
-            raise HarnessInputError("--wall", f"must be compliant or rigid, got {self.wall!r}")
+        if self.wall not in WINDOW_WALLS:
+            raise HarnessInputError("wall", f"must be compliant or rigid, got {self.wall!r}")
         if self.map_wall not in MAP_WALLS:
-            raise HarnessInputError("--map", f"must be one of {', '.join(MAP_WALLS)}, got {self.map_wall!r}")
+            raise HarnessInputError("map_wall", f"must be one of {', '.join(MAP_WALLS)}, got {self.map_wall!r}")
         if not (0.0 < self.r <= 1.0):
-            raise HarnessInputError("--r", f"must be in (0, 1], got {self.r}")
+            raise HarnessInputError("r", f"must be in (0, 1], got {self.r}")
         if self.wall == "compliant" and not self.Gamma > 0:
-            raise HarnessInputError("--Gamma", f"must be > 0, got {self.Gamma}")
-        if not (self.nu > 0 and self.Omega > 0):
-            raise HarnessInputError("--nu/--Omega", f"must be > 0, got nu = {self.nu}, Omega = {self.Omega}")
+            raise HarnessInputError("Gamma", f"must be > 0, got {self.Gamma}")
+        for name in ("nu", "Omega"):
+            if not getattr(self, name) > 0:
+                raise HarnessInputError(name, f"must be > 0, got nu = {self.nu}, Omega = {self.Omega}")
         if not 0.0 <= self.theta < 1.0:
-            raise HarnessInputError("--theta", f"must lie in [0, 1), got {self.theta}")
+            raise HarnessInputError("theta", f"must lie in [0, 1), got {self.theta}")
         if self.M_max is not None and not 1 <= self.M_max <= M_AUTO_LIMIT:
-            raise HarnessInputError("--M-max", f"must be 'auto' or in 1..{M_AUTO_LIMIT}, got {self.M_max}")
+            raise HarnessInputError("M_max", f"must be 'auto' or in 1..{M_AUTO_LIMIT}, got {self.M_max}")
 
     @classmethod
     def from_alpha_gamma(cls, alpha: float, gamma: float, branch: int | None = None, **kw: Any) -> "WindowProblem":
@@ -80,12 +80,12 @@ class WindowProblem:
         (alpha^2 < 4 gamma) the psi branch must be chosen (it sets sign(P12) = c1).  Whether the
         maps apply to the oscillator is reported by the run, as for --nu/--Omega."""
         if not 0.0 < gamma < 1.0:
-            raise HarnessInputError("--gamma", f"gamma = det P(1) = exp(-nu) must lie in (0, 1) (nu > 0), got {gamma}")
+            raise HarnessInputError("gamma", f"gamma = det P(1) = exp(-nu) must lie in (0, 1) (nu > 0), got {gamma}")
         try:
             inv = invert_alpha_gamma(alpha, gamma, branch)
         except (ValueError, ArithmeticError) as exc:
-            raise HarnessInputError("--alpha/--gamma", f"no (nu, Omega) for ({alpha}, {gamma}): {exc}"
-                                    + ("; give --branch 0, 1, ... or --nu/--Omega" if "branch" in str(exc) else "")
+            raise HarnessInputError("alpha", f"no (nu, Omega) for (alpha, gamma) = ({alpha}, {gamma}): {exc}"
+                                    + ("; give a branch 0, 1, ... or nu and Omega" if "branch" in str(exc) else "")
                                     ) from exc
         return cls(float(inv.nu), float(inv.Omega), **kw)
 
@@ -105,7 +105,7 @@ class WindowProblem:
         return coefficients(self.nu, self.Omega, self.r, self.map_coefficients_wall)
 
     def fmu_params(self) -> dict[str, Any]:
-        p: dict[str, Any] = {"nu": self.nu, "Omega": self.Omega, "r": self.r, "wall": WALL_CODES[self.wall]}
+        p: dict[str, Any] = {"nu": self.nu, "Omega": self.Omega, "r": self.r, "wall": WALLS[self.wall]}
         if self.wall == "compliant":
             p["Gamma"] = self.Gamma
         return p
@@ -188,11 +188,11 @@ def default_settings(problem: WindowProblem, quick: bool, sigma_range: tuple[flo
     if sigma_range is not None:
         lo, hi = sigma_range
         if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi and lo > -1.0):
-            raise HarnessInputError("--sigma-range", f"needs -1 < LO < HI, both finite, got {lo:g}:{hi:g}")
+            raise HarnessInputError("sigma_range", f"needs -1 < LO < HI, both finite, got {lo:g}:{hi:g}")
     else:
         lo, hi = max(lo, 1e-6), min(hi, 1e3)
     if xtol is not None and not (math.isfinite(xtol) and xtol > 0):
-        raise HarnessInputError("--xtol", f"must be a finite number > 0, got {xtol!r}")
+        raise HarnessInputError("xtol", f"must be a finite number > 0, got {xtol!r}")
     rel = 1e-3 if quick else 1e-4
     search = (lo, hi) if sigma_range is not None else (0.1 * lo, 4.0 * hi)
     st = dict(transient=200 if quick else 300, samples=24 if quick else 40, sigma_range=search, xtol_rel=rel,
@@ -225,19 +225,3 @@ def _map_range(problem: WindowProblem) -> tuple[np.ndarray, tuple[float, float]]
             if los:
                 lo, hi = min(lo, 0.7 * min(los)), max(hi, 2.5 * s_1)
     return table_grid, (lo, hi)
-
-
-def command_line(problem: WindowProblem, quick: bool, out: Any, solver: str = DEFAULT_SOLVER,
-                 sigma_range: tuple[float, float] | None = None, xtol: float | None = None,
-                 command: str = "windows") -> str:
-    """The ``impact-harness`` command line that asks the same question again: every model flag,
-    the range, the tolerance, the solver and the section phase, numbers written in full
-    (``repr``), so that running it gives the same JSON."""
-    wall = f"--wall compliant --Gamma {problem.Gamma!r}" if problem.wall == "compliant" else "--wall rigid"
-    if problem.map_wall != "auto":
-        wall += f" --map {problem.map_wall}"
-    extra = "" if sigma_range is None else f" --sigma-range={sigma_range[0]!r}:{sigma_range[1]!r}"
-    extra += "" if xtol is None else f" --xtol {xtol!r}"
-    return (f"{command} --nu {problem.nu!r} --Omega {problem.Omega!r} --r {problem.r!r} {wall} "
-            f"--M-max {problem.M_max or 'auto'} --theta {problem.theta!r} --solver {solver}{extra}"
-            f"{' --quick' if quick else ''} --out {out}")

@@ -32,6 +32,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from .arclength import ArclengthCorrector, BranchPoint
+from ...config.defaults import WALLS
 from ..maps.jacobian import free_propagator
 from ..maps.periodic_map import PeriodMap, refine_orbit, wall_free_offset
 
@@ -211,7 +212,7 @@ def period_quantities(pmap: PeriodMap, z: np.ndarray, n: int, p: float) -> dict[
     entry velocity; on a compliant wall the entry velocity of the first contact."""
     if n == 0:
         return {(0, "gap"): pmap.gap(np.asarray(z)[None, :], np.zeros(1, dtype=int), p)}
-    if int(pmap.params.get("wall", 1)) == 2 and n <= RIGID_FLIGHTS_MAX:
+    if int(pmap.params.get("wall", WALLS["compliant"])) == WALLS["rigid"] and n <= RIGID_FLIGHTS_MAX:
         flights = _rigid_period(pmap, z, p, n)
         if flights is not None:
             return flights

@@ -15,6 +15,7 @@ import numpy as np
 from .arclength import ArclengthCorrector, BranchPoint
 from .branch import Branch, Event
 from .graze_location import CONTACT_CHANGE_SLACK, GrazeLocation, contact_change_interval, locate_graze
+from ...config.defaults import WALLS
 from ..maps.periodic_map import PeriodMap, refine_orbit
 from .step_control import StepControl
 
@@ -189,7 +190,7 @@ class OrbitWalk:
 
     def graze_kind(self, good: BranchPoint, other: BranchPoint | None, n_beyond: int | None) -> str:
         """"stick" for the sticking onset on a rigid wall, else "graze"."""
-        rigid = int(self.pmap.params.get("wall", 0)) == 2
+        rigid = int(self.pmap.params.get("wall", WALLS["none"])) == WALLS["rigid"]
         if rigid and other is not None:
             # the sticking onset: on one side the orbit sticks to the wall for part of the period
             # (its D(F^M) is exactly 0: the sticking phase forgets the state), on the other not

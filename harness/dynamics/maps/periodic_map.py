@@ -20,6 +20,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from .jacobian import free_propagator, resolve_method
+from ...config.defaults import WALLS
 from ...errors import FmuRejectedInput, HarnessInputError
 from ...fmu.simulator import Simulator
 
@@ -142,7 +143,7 @@ class PeriodMap:
         off = self.offset(p)
         z0 = np.asarray(w, dtype=float) + off
         u_wall = float(self.params.get("u_wall", 0.0))
-        inside = int(self.params.get("wall", 1)) == 2 and (z0[0] > u_wall or (z0[0] == u_wall and z0[1] > 0.0))
+        inside = int(self.params.get("wall", WALLS["compliant"])) == WALLS["rigid"] and (z0[0] > u_wall or (z0[0] == u_wall and z0[1] > 0.0))
         try:
             pts, cont = (None, None) if inside else self.run(p, np.asarray(w, dtype=float) + off, M)
         except FmuRejectedInput:

@@ -136,11 +136,11 @@ def grazing_fits(scan: Any, params: dict[str, Any]) -> tuple[dict[str, Singulari
     """:func:`fit_singularity` of a :func:`harness.dynamics.maps.jacobian.jacobian_vs_x` scan with the
     FMU parameters it ran with: soft and hard regimes at a compliant wall (returned with beta at
     each x), the whole range otherwise (beta None)."""
-    from ...fmu.fmi import WALL_NAMES
+    from ...config.defaults import WALLS
 
     wall = params.get("wall")
-    compliant = wall in (WALL_NAMES["compliant"], "compliant") or (
-        isinstance(wall, float) and int(wall) == WALL_NAMES["compliant"])
+    compliant = wall in (WALLS["compliant"], "compliant") or (
+        isinstance(wall, float) and int(wall) == WALLS["compliant"])
     beta = None
     if compliant:
         beta = contact_beta(scan.x, float(params["r"]), float(params["Gamma"]), float(params["Omega"]),

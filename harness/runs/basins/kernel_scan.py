@@ -25,7 +25,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import xarray as xr
 
-from ...config import SamplingSpec
+from ...config import SOLVERS, SamplingSpec
 from ...dynamics.attractors.identity import Attractor, orbit_points
 from ...errors import HarnessInputError
 from ...fmu import batch_kernel as bk
@@ -50,7 +50,7 @@ def _shooter(model: Any, params: Mapping[str, Any], theta: float) -> Any:
     from ...fmu.simulator import FmuSimulator
 
     sim = FmuSimulator(model.source() if hasattr(model, "source") else model, instance_name="basins-newton")
-    run = {**params, "solver": 1}
+    run = {**params, "solver": SOLVERS["closed-form"]}
 
     def shoot(points: np.ndarray) -> dict[str, Any]:
         s = shoot_attractor(sim, run, theta, points)
