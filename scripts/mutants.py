@@ -67,6 +67,7 @@ GUARD = "tests/fmu/test_grazing_guard.py"
 DERIV = "tests/fmu/test_directional_derivatives.py"
 BASINS = "tests/harness/test_basins_kernel.py"
 MEASURES = "tests/analysis/test_basin_measures.py"
+CHART_RULES = "tests/analysis/test_chart_rules.py"
 # mutants that survived the first run (issue 22): the independent-truth tests that now kill them run first
 ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28",
                                 "M52")}
@@ -243,6 +244,15 @@ MUTANTS: tuple[Mutant, ...] = (
        "eps-uncertain: only the neighbours at eps (the last axis direction), not within eps"),
     _m("M60", "harness/runs/basins/ball.py", '"inside": bool(bad.size == 0)', '"inside": True', BASINS,
        "every attractor's tolerance balls pass: one period labels starts also where a boundary is within tol"),
+    # -- chart: its second routes' rules ----------------------------------------------------------
+    _m("M61", "harness/analysis/chart/wall_free.py",
+       'rows["error"].append(float(abs(a["gap"] + s1) + abs(b["gap"] + s2)))',
+       'rows["error"].append(float(abs(a["gap"] - s1) + abs(b["gap"] - s2)))', CHART_RULES,
+       "the wall-free graze's error measured against gap = +sigma, not the exact -sigma"),
+    _m("M62", "harness/analysis/chart/contradictions.py",
+       'wider = ("scans" if s_s < s_c else "continuation") if side == "lower" else \\',
+       'wider = ("scans" if s_s > s_c else "continuation") if side == "lower" else \\', CHART_RULES,
+       "a lower-edge contradiction settled for the route with the narrower window where shooting finds the orbit"),
 )
 
 

@@ -227,9 +227,10 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
               "|---|---|---|---|---|"]
     for M, cv in res["scans"].items():
         pres = f"{len(cv['present_at'])} of {len(problem.values)}"
+        br = cv.get("bracket")
         cl = ("present to the end" if cv["closes"] is None and cv["value"] else
               "never present" if cv["closes"] is None else
-              f"{cv['closes']:.4g} ([{cv['bracket'][0]:.4g}, {cv['bracket'][1]:.4g}])")
+              f"{cv['closes']:.4g}" + (f" ([{br[0]:.4g}, {br[1]:.4g}])" if br else ""))
         kinds = "-" if not cv["value"] else f"{cv['kind_lower'][-1]}/{cv['kind_upper'][-1]}"
         b = [x for x in cv["beta"] if x is not None]
         br = "-" if not b else f"{min(b):.3g} to {max(b):.3g}"
