@@ -31,8 +31,8 @@ def _case(seed: int) -> list[str]:
     hi = min(base * 1.5, 0.97) if p2 == "r" else base * 1.5
     sig = "-0.2:0.6" if rng.random() < 0.5 else "0.05:2"
     args = ["chart", "--nu", f"{nu:.4g}", "--Omega", f"{Om:.4g}", "--r", f"{r:.4g}", "--wall", wall,
-            "--param2", p2, f"--range={base:.4g}:{hi:.4g}", "--num", "2", "--M-max", "2", "--quick",
-            "--per-decade", "5", f"--sigma-range={sig}", "--solver", "closed-form", "--workers", "1"]
+            "--param2", p2, f"--range={base:.4g}:{hi:.4g}", "--num", "2", "--M-max", "1", "--quick",
+            "--per-decade", "4", f"--sigma-range={sig}", "--solver", "closed-form", "--workers", "1"]
     if wall == "compliant":
         args += ["--Gamma", f"{(base if p2 == 'Gamma' else 30.0):.4g}"]
     return args

@@ -64,8 +64,8 @@ def _exact_graze(M: int, sigma: float, z_seed: np.ndarray) -> float:
     for s in np.linspace(SEEDS[M], sigma - ds[0], 9)[:-1]:  # the exact orbit followed from the seed (period 1 coexists)
         _, z = _exact_gap(flow, float(s), M, z)
     gaps = []
-    for d in ds:  # to 3e-15 (rounding): the gap moves with sigma by only ~0.01, an orbit off by 1e-13 moves its zero 1e-11
-        g, z = _exact_gap(flow, sigma - d, M, z, 3e-15)
+    for d in ds:  # to 3e-15 (tol x the largest scale, 0.1; rounding): the gap moves with sigma by only ~0.01
+        g, z = _exact_gap(flow, sigma - d, M, z, 3e-14)
         gaps.append(g)
     assert gaps[0] > gaps[1] > gaps[2] > 0.0  # the free passage nears the wall as sigma rises to the edge
     roots = np.roots(np.polyfit(-ds, gaps, 2))
