@@ -88,3 +88,16 @@ def test_the_one_parameter_route_brackets_the_exact_flows_closing(held) -> None:
     r = held["closes"]["2"]["routes"]
     pb, s, z = r["p2"], r["sigma"], r["point"]
     assert _exact_min_radius(pb * (1.0 - 1e-4), s, z) < 1.0 < _exact_min_radius(pb * (1.0 + 1e-4), s, z)
+
+
+def test_confirmation_shots_keep_to_the_window_not_to_every_curves_crossing() -> None:
+    """A window about 0.1 wide around sigma 0.22 and a graze curve crossing the same p2 at sigma 175 (run off):
+    the shots are spread between the window's own edges, at the window's density."""
+    from harness.analysis.chart.window_region import bracketing
+    from harness.dynamics.maps.sigma_search import sigma_grid
+
+    edges = bracketing([0.17, 0.27, 175.0], 0.22)
+    assert edges == [0.17, 0.27]
+    grid = sigma_grid(edges[0], edges[1], 0.25, 25)
+    assert grid[0] > 0.14 and grid[-1] < 0.33 and np.sum((grid > 0.17) & (grid < 0.27)) >= 12
+    assert bracketing([0.3, 0.4], 0.22) == [0.3, 0.4]  # beyond every crossing: the two nearest
