@@ -70,6 +70,7 @@ ME_WALL = "tests/fmu/test_me_wall_memory.py"
 WALL_VELOCITY = "tests/fmu/test_wall_velocity.py"
 BASINS = "tests/harness/test_basins_kernel.py"
 MEASURES = "tests/analysis/test_basin_measures.py"
+CHART_RULES = "tests/analysis/test_chart_rules.py"
 # mutants that only the independent-truth tests kill: those tests run first for them
 ALSO_RUN = {i: TRUTH for i in ("M04", "M05", "M10", "M11", "M12", "M17", "M20", "M21", "M27", "M28",
                                 "M52")}
@@ -258,6 +259,15 @@ MUTANTS: tuple[Mutant, ...] = (
        "", WALL_VELOCITY,
        "Co-Simulation ignores v_wall for the wall's motion over a step (it jumps at each communication "
        "point)"),
+    # -- chart: its second routes' rules ----------------------------------------------------------
+    _m("M64", "harness/analysis/chart/wall_free.py",
+       'rows["error"].append(float(abs(a["gap"] + s1) + abs(b["gap"] + s2)))',
+       'rows["error"].append(float(abs(a["gap"] - s1) + abs(b["gap"] - s2)))', CHART_RULES,
+       "the wall-free graze's error measured against gap = +sigma, not the exact -sigma"),
+    _m("M65", "harness/analysis/chart/contradictions.py",
+       'wider = ("scans" if s_s < s_c else "continuation") if side == "lower" else \\',
+       'wider = ("scans" if s_s > s_c else "continuation") if side == "lower" else \\', CHART_RULES,
+       "a lower-edge contradiction settled for the route with the narrower window where shooting finds the orbit"),
 )
 
 

@@ -13,7 +13,7 @@ from ...errors import HarnessInputError
 from .run import ChartProblem, run_chart
 from .window_region import closing_evidence_lines
 
-__all__ = ["plot_chart", "chart_figure", "chart_report", "chart"]
+__all__ = ["plot_chart", "chart_figure", "chart_report", "chart", "sigma_limits"]
 
 
 LINESTYLES = {"flip": "-", "fold": "-.", "ns": ":", "graze": "--", "stick": "--"}
@@ -24,7 +24,7 @@ def plot_chart(res: dict[str, Any], problem: ChartProblem, path: Path, title: st
     import matplotlib.pyplot as plt
 
     fig = chart_figure(res, problem, title)
-    fig.savefig(path, dpi=130)
+    fig.savefig(path, dpi=130, bbox_inches="tight")
     plt.close(fig)
 
 
@@ -37,12 +37,11 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
 
     from .wall_free import WALL_FREE, WALL_FREE_LABEL, draw_wall_free
 
-    fig, (ax, bx) = plt.subplots(2, 1, figsize=(9, 9.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.2]})
+    fig, (ax, bx) = plt.subplots(2, 1, figsize=(12, 9.5), sharex=True, gridspec_kw={"height_ratios": [3, 1.2]})
     cmap = plt.get_cmap("tab10")
-    g0, g1 = float(problem.sigma_grid[0]), float(problem.sigma_grid[-1])
     # a log sigma axis above grazing; an even one where the chart reaches sigma <= 0
-    log_sigma = g0 > 0
-    bottom, top = (g0, g1 * 4.0) if log_sigma else (g0, g1 + 0.25 * (g1 - g0))
+    log_sigma = float(problem.sigma_grid[0]) > 0
+    bottom, top = sigma_limits(res, problem, log_sigma)
     for M, cv in res["scans"].items():
         # the wall-free window ("1/0") in grey, apart from period 1 with an impact
         col = cmap((int(M) - 1) % 10) if M != WALL_FREE else "0.45"
@@ -72,8 +71,8 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
     ax.set_ylabel("forcing above grazing, sigma")
     ax.set_title(title, fontsize=9)
     grid = problem.sigma_grid
-    if ax.lines or ax.collections:
-        ax.legend(fontsize=7, ncol=3, loc="lower right")
+    if ax.lines or ax.collections:  # outside the axes: the structure keeps the plot's space
+        ax.legend(fontsize=7, ncol=1, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     else:  # a blank panel says why
         ax.text(0.5, 0.5, f"no stable maximal window (one impact per period, M <= {problem.M_max})\nin sigma "
                 f"[{grid[0]:.3g}, {grid[-1]:.3g}] at any value of {problem.param2}: nothing to chart",
@@ -88,9 +87,42 @@ def chart_figure(res: dict[str, Any], problem: ChartProblem, title: str) -> Any:
     if problem.log:
         bx.set_xscale("log")
     if bx.get_legend_handles_labels()[0]:
-        bx.legend(fontsize=7, ncol=5)
+        bx.legend(fontsize=7, ncol=1, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     fig.tight_layout()
     return fig
+
+
+def sigma_limits(res: dict[str, Any], problem: ChartProblem, log_sigma: bool) -> tuple[float, float]:
+    """The sigma axis' limits from the data drawn: every continued edge point, every edge the scans
+    located and every closing, with a margin (a twentieth of the span; on a log axis in ln sigma),
+    within the scans' grid widened by its own span (an edge run off far beyond it is drawn to the
+    axis' edge, not given the plot)."""
+    g0, g1 = float(problem.sigma_grid[0]), float(problem.sigma_grid[-1])
+    ys: list[float] = []
+    for w in res.get("windows", []):
+        for _, c in _all_curves(w):
+            if c and "failed" not in c:
+                ys += [float(y) for y in c["sigma"]]
+    for cv in res.get("scans", {}).values():
+        ys += [float(y) for k in ("lower", "upper") for y in cv.get(k, []) if y is not None]
+    wf = (res.get("wall_free") or {}).get("curves", {}).get("upper") or {}
+    ys += [float(y) for y in wf.get("sigma", [])]
+    ys += [float(cl["sigma"]) for cl in res.get("closes", {}).values() if cl.get("sigma") is not None]
+    if log_sigma:
+        lo_cap, hi_cap = g0 / 10.0, g1 * 10.0
+        ys = [y for y in ys if math.isfinite(y) and lo_cap <= y <= hi_cap]
+        if not ys:
+            return g0, g1 * 4.0
+        a, b = math.log(min(ys)), math.log(max(ys))
+        m = max(0.05 * (b - a), 0.1)
+        return math.exp(a - m), math.exp(b + m)
+    span = g1 - g0
+    ys = [y for y in ys if math.isfinite(y) and g0 - span <= y <= g1 + span]
+    if not ys:
+        return g0, g1 + 0.25 * span
+    a, b = min(ys), max(ys)
+    m = max(0.05 * (b - a), 1e-3 * span)
+    return max(a - m, -1.0), b + m
 
 
 def _draw_continued(ax: Any, windows: list[dict[str, Any]], param2: str, cmap: Any, bottom: float,
@@ -165,11 +197,13 @@ def _scan_check_lines(res: dict[str, Any], problem: ChartProblem) -> list[str]:
 def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> str:
     g = problem.sigma_grid
     cs = res["continuation_search"]
+    from .closing_routes import closing_route_lines
     from .contradictions import contradiction_lines
     from .wall_free import coexistence_lines, row_label
 
     lines = [f"# Chart: windows of the ODE over (sigma, {problem.param2})", "",
              # disagreements between the two routes first, each with what settled it
+             *closing_route_lines(res["closes"], problem.param2),
              *contradiction_lines(res.get("contradictions", {"found": [], "compared": None}), problem.param2),
              f"Parameters: {named_parameters(problem.params)}; "
              f"{problem.param2} from {problem.values[0]:g} to {problem.values[-1]:g}{' (log)' if problem.log else ''}.", "",
@@ -185,6 +219,51 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
              "edge leaving the sigma range upward) that direct shooting confirms on both sides (below).", "",
              f"| M | window at {problem.param2} = {problem.values[0]:g} | closes at {problem.param2} | sigma there | how |",
              "|---|---|---|---|---|"]
+    lines += _closing_table(res, problem)
+    lines += closing_evidence_lines(res["closes"], problem.param2)
+    lines += _curve_lines(res, problem)
+    lines += ["", "Each continued edge checked across itself at every point of its curve up to the window's closing "
+              "(the edges continued after a hand-over of its boundary from there) "
+              "(Newton 1e-5 away on either side, across the curve "
+              f"in (ln sigma, {'ln ' if problem.log else ''}{problem.param2}): a flip has a stable orbit on one side and an unstable one on the other, a graze a "
+              "stable orbit on one side and none with its contacts on the other; `edge_check` in chart.json):", ""]
+    for M, chk in res["edge_check"].items():
+        bad = chk["failed"]
+        lines.append(f"- M = {M}: {chk['confirmed']} of {chk['checked']} confirmed"
+                     + (f" (the check stopped: {chk['error']})" if chk.get("error") else "")
+                     + ("" if not bad else "; not confirmed: " + "; ".join(
+                         f"{b['side']} {b['kind']} at {problem.param2} = {b['p2']:.4g}, sigma = {b['sigma']:.5g} "
+                         f"(one side: {b['one_side']}, other: {b['other_side']})" for b in bad[:6])))
+    lines += ["", "## Brute-force check: windows measured per value", "",
+              f"For {len(problem.values)} values, up/down scans of the FMU over sigma in [{g[0]:.3g}, {g[-1]:.3g}] "
+              f"({len(g)} points, {'geometric' if g[0] > 0 else 'evenly spaced'}), every attractor seen continued in sigma to its edges (located as `continue` locates events; where the "
+              f"continuation fails, bisected to {tolerance_text(problem)}, said in chart.json's `located`). Where a window disappears is bracketed between neighbouring values.", "",
+              "| M | present at | disappears (bracket) | edge kinds at the last value | beta range |",
+              "|---|---|---|---|---|"]
+    for M, cv in res["scans"].items():
+        pres = f"{len(cv['present_at'])} of {len(problem.values)}"
+        br = cv.get("bracket")
+        cl = ("present to the end" if cv["closes"] is None and cv["value"] else
+              "never present" if cv["closes"] is None else
+              f"{cv['closes']:.4g}" + (f" ([{br[0]:.4g}, {br[1]:.4g}])" if br else ""))
+        kinds = "-" if not cv["value"] else f"{cv['kind_lower'][-1]}/{cv['kind_upper'][-1]}"
+        b = [x for x in cv["beta"] if x is not None]
+        br = "-" if not b else f"{min(b):.3g} to {max(b):.3g}"
+        lines.append(f"| {row_label(M)} | {pres} | {cl} | {kinds} | {br} |")
+    lines += _scan_check_lines(res, problem)
+    lines += coexistence_lines(res.get("coexistence"), problem.param2)
+    lines += ["", f"Other windows (more than one impact per period): {len(res['other_windows'])} found (chart.json).",
+              "", f"Backend: {res['backend']}; scans {res['seconds']:.1f} s wall ({sum(res['task_seconds']):.1f} s in "
+              f"tasks); continuation {res['continuation_seconds']:.1f} s; the wall-free window, contradictions and coexistence "
+              f"{res.get('cross_check_seconds', 0.0):.1f} s.", "", f"Run: `{command}`."]
+    return "\n".join(lines)
+
+
+def _closing_table(res: dict[str, Any], problem: ChartProblem) -> list[str]:
+    """The rows of the closing table, one per window."""
+    lines: list[str] = []
+    from .wall_free import row_label
+
     for M, cl in res["closes"].items():
         win = cl.get("window_at_start")
         wtxt = "none found" if win is None else f"{_edge_text(win[0])} .. {_edge_text(win[1])}"
@@ -192,8 +271,14 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
             why = cl.get("note") or "; ".join(f"{k}: {v}" for k, v in (cl.get("edges_end") or {}).items())
             lines.append(f"| {row_label(M)} | {wtxt} | does not close in {cl['searched'][0]:g} .. {cl['searched'][1]:g} | - | {why} |")
         else:
-            lines.append(f"| {row_label(M)} | {wtxt} | {cl['closes']:.6g} | {cl['sigma']:.5g} | {cl['how']} |")
-    lines += closing_evidence_lines(res["closes"], problem.param2)
+            sig = "-" if cl.get("sigma") is None else f"{cl['sigma']:.5g}"
+            lines.append(f"| {row_label(M)} | {wtxt} | {cl['closes']:.6g} | {sig} | {cl['how']} |")
+    return lines
+
+
+def _curve_lines(res: dict[str, Any], problem: ChartProblem) -> list[str]:
+    """Every edge curve: its end and turning points."""
+    lines: list[str] = []
     lines += ["", "Every edge curve (chart.json, `windows[*].curves`; after a hand-over `windows[*].handovers`): "
               "its end and turning points:", ""]
     for w in res["windows"]:
@@ -208,39 +293,7 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
             lines.append(f"- M = {w['M']} {side} {c['kind']} edge: {len(c['sigma'])} points, turning points / "
                          f"stability changes: {turns}; ends at ({problem.param2} = {c['end']['p2']:.6g}, sigma = "
                          f"{c['end']['sigma']:.5g}): {c['end']['note']}")
-    lines += ["", "Each continued edge checked across itself at every point of its curve up to the window's closing "
-              "(the edges continued after a hand-over of its boundary from there) "
-              "(Newton 1e-5 away on either side, across the curve "
-              f"in (ln sigma, {'ln ' if problem.log else ''}{problem.param2}): a flip has a stable orbit on one side and an unstable one on the other, a graze a "
-              "stable orbit on one side and none with its contacts on the other; `edge_check` in chart.json):", ""]
-    for M, chk in res["edge_check"].items():
-        bad = chk["failed"]
-        lines.append(f"- M = {M}: {chk['confirmed']} of {chk['checked']} confirmed"
-                     + ("" if not bad else "; not confirmed: " + "; ".join(
-                         f"{b['side']} {b['kind']} at {problem.param2} = {b['p2']:.4g}, sigma = {b['sigma']:.5g} "
-                         f"(one side: {b['one_side']}, other: {b['other_side']})" for b in bad[:6])))
-    lines += ["", "## Brute-force check: windows measured per value", "",
-              f"For {len(problem.values)} values, up/down scans of the FMU over sigma in [{g[0]:.3g}, {g[-1]:.3g}] "
-              f"({len(g)} points, {'geometric' if g[0] > 0 else 'evenly spaced'}), every attractor seen continued in sigma to its edges (located as `continue` locates events; where the "
-              f"continuation fails, bisected to {tolerance_text(problem)}, said in chart.json's `located`). Where a window disappears is bracketed between neighbouring values.", "",
-              "| M | present at | disappears (bracket) | edge kinds at the last value | beta range |",
-              "|---|---|---|---|---|"]
-    for M, cv in res["scans"].items():
-        pres = f"{len(cv['present_at'])} of {len(problem.values)}"
-        cl = ("present to the end" if cv["closes"] is None and cv["value"] else
-              "never present" if cv["closes"] is None else
-              f"{cv['closes']:.4g} ([{cv['bracket'][0]:.4g}, {cv['bracket'][1]:.4g}])")
-        kinds = "-" if not cv["value"] else f"{cv['kind_lower'][-1]}/{cv['kind_upper'][-1]}"
-        b = [x for x in cv["beta"] if x is not None]
-        br = "-" if not b else f"{min(b):.3g} to {max(b):.3g}"
-        lines.append(f"| {row_label(M)} | {pres} | {cl} | {kinds} | {br} |")
-    lines += _scan_check_lines(res, problem)
-    lines += coexistence_lines(res.get("coexistence"), problem.param2)
-    lines += ["", f"Other windows (more than one impact per period): {len(res['other_windows'])} found (chart.json).",
-              "", f"Backend: {res['backend']}; scans {res['seconds']:.1f} s wall ({sum(res['task_seconds']):.1f} s in "
-              f"tasks); continuation {res['continuation_seconds']:.1f} s; the wall-free window, contradictions and coexistence "
-              f"{res.get('cross_check_seconds', 0.0):.1f} s.", "", f"Run: `{command}`."]
-    return "\n".join(lines)
+    return lines
 
 
 def chart(problem: ChartProblem, out: str | Path, fmu_path: str | None = None, backend: Any = None,

@@ -106,7 +106,8 @@ def _solve(pmap: Any, w: np.ndarray, s: float, M: int, impacts: int, n: list[int
         return w, None
     mult = np.linalg.eigvals(ev.J)
     if target and int(ev.contacts.sum()) == impacts and bool(np.all(np.abs(mult) < 1.0)) and _minimal(ev.points, M):
-        return w_new, {"found": True, "sigma": s, "residual": res, "tol": tol, "contacts": ev.contacts.tolist(),
+        return w_new, {"found": True, "sigma": s, "point": ev.points[0].tolist(), "residual": res, "tol": tol,
+                       "contacts": ev.contacts.tolist(),
                        "multipliers": [[float(m.real), float(m.imag)] for m in mult], "newton_solves": n[0]}
     return w_new, None
 

@@ -274,9 +274,16 @@ def _stretches(w: Mapping[str, Any]) -> list[tuple[Mapping[str, Any], float | No
     return [(w["curves"], None, first)] + [(h["curves"], float(h["p2"]), e) for h, e in zip(hs, ends)]
 
 
+#: Across a fold, an orbit Newton finds from the fold's own orbit farther than this (relative to
+#: 1 + sigma) is another orbit (a coexisting stable one between two turns of the fold curve), not
+#: the fold's branch: the branch moves ~sqrt(d) from its fold point.
+FOLD_BRANCH = 0.05
+
+
 def _orbit_across(sim: Any, params: Mapping[str, Any], param2: str, theta: float, M: int, impacts: int, z: Any,
-                  s: float, v: float) -> tuple[bool, bool]:
-    """(an orbit with the contacts found by Newton from ``z`` at (sigma, p2) = (s, v), and stable)."""
+                  s: float, v: float, near: float | None = None) -> tuple[bool, bool]:
+    """(an orbit with the contacts found by Newton from ``z`` at (sigma, p2) = (s, v), and stable); with
+    ``near``, only an orbit within ``near`` (1 + sigma) of ``z`` counts."""
     from ...dynamics.maps.periodic_map import PeriodMap, refine_orbit
 
     s, v = float(s), float(v)
@@ -285,6 +292,8 @@ def _orbit_across(sim: Any, params: Mapping[str, Any], param2: str, theta: float
     # 1e-10 is below CVODE's accuracy on an orbit of size 1e3
     _, ev, ok, _ = refine_orbit(pmap, np.asarray(z, float) - pmap.offset(s), s, M, tol=1e-10 * (1.0 + s))
     same = ok and int(ev.contacts.sum()) == impacts
+    if same and near is not None:
+        same = float(np.max(np.abs(ev.points[0] - np.asarray(z, float)))) <= near * (1.0 + abs(s))
     return same, same and bool(np.all(np.abs(np.linalg.eigvals(ev.J)) < 1.0))
 
 
@@ -310,30 +319,41 @@ def edge_check(source: Any, params: Mapping[str, Any], param2: str, windows: Seq
     out: dict[str, Any] = {}
     for w in windows:
         rep = out.setdefault(str(w["M"]), {"checked": 0, "confirmed": 0, "failed": []})
-        for curves, p_lo, p_hi in _stretches(w):
-            for side in ("lower", "upper"):
-                c = curves.get(side)
-                if not c or "failed" in c or len(c["sigma"]) < 2:
-                    continue
-                Y = np.column_stack([to_s(np.asarray(c["sigma"], float)), to_q(np.asarray(c["p2"], float))])
-                for i, z in enumerate(c["points"]):
-                    if (p_hi is not None and c["p2"][i] > p_hi * (1.0 - 1e-3)) or (p_lo is not None and c["p2"][i] < p_lo):
-                        continue
-                    t = Y[min(i + 1, len(Y) - 1)] - Y[max(i - 1, 0)]
-                    n = np.array([-t[1], t[0]]) / np.linalg.norm(t)
-                    sides = [_orbit_across(sim, params, param2, theta, w["M"], c["impacts"], z, of_s(ls), of_q(q))
-                             for ls, q in (Y[i] + d * n, Y[i] - d * n)]
-                    (a_same, a_stable), (b_same, b_stable) = sides
-                    if c["kind"] in ("graze", "stick", "fold"):
-                        # a fold: the stable orbit meets its unstable partner and both end there, so
-                        # across it there is no orbit at all (not an unstable one, as across a flip)
-                        good = (a_stable and not b_same) or (b_stable and not a_same)
-                    else:
-                        good = a_same and b_same and a_stable != b_stable
-                    rep["checked"] += 1
-                    rep["confirmed"] += int(good)
-                    if not good:
-                        rep["failed"].append({"p2": float(c["p2"][i]), "side": side, "kind": c["kind"],
-                                              "sigma": float(c["sigma"][i]), "one_side": {"orbit": a_same, "stable": a_stable},
-                                              "other_side": {"orbit": b_same, "stable": b_stable}})
+        try:
+            _check_window(sim, params, param2, theta, d, w, rep, (to_q, of_q, to_s, of_s))
+        except Exception as exc:  # noqa: BLE001  (one window's failure is a line of the report; the rest goes on)
+            rep["error"] = f"{type(exc).__name__}: {exc}"
     return out
+
+
+def _check_window(sim: Any, params: Mapping[str, Any], param2: str, theta: float, d: float, w: Mapping[str, Any],
+                  rep: dict[str, Any], axes: tuple) -> None:
+    """:func:`edge_check` of one window into ``rep``."""
+    to_q, of_q, to_s, of_s = axes
+    for curves, p_lo, p_hi in _stretches(w):
+        for side in ("lower", "upper"):
+            c = curves.get(side)
+            if not c or "failed" in c or len(c["sigma"]) < 2:
+                continue
+            Y = np.column_stack([to_s(np.asarray(c["sigma"], float)), to_q(np.asarray(c["p2"], float))])
+            for i, z in enumerate(c["points"]):
+                if (p_hi is not None and c["p2"][i] > p_hi * (1.0 - 1e-3)) or (p_lo is not None and c["p2"][i] < p_lo):
+                    continue
+                t = Y[min(i + 1, len(Y) - 1)] - Y[max(i - 1, 0)]
+                n = np.array([-t[1], t[0]]) / np.linalg.norm(t)
+                near = FOLD_BRANCH if c["kind"] == "fold" else None
+                sides = [_orbit_across(sim, params, param2, theta, w["M"], c["impacts"], z, of_s(ls), of_q(q), near)
+                         for ls, q in (Y[i] + d * n, Y[i] - d * n)]
+                (a_same, a_stable), (b_same, b_stable) = sides
+                if c["kind"] in ("graze", "stick", "fold"):
+                    # a fold: the stable orbit meets its unstable partner and both end there, so
+                    # across it there is no orbit at all (not an unstable one, as across a flip)
+                    good = (a_stable and not b_same) or (b_stable and not a_same)
+                else:
+                    good = a_same and b_same and a_stable != b_stable
+                rep["checked"] += 1
+                rep["confirmed"] += int(good)
+                if not good:
+                    rep["failed"].append({"p2": float(c["p2"][i]), "side": side, "kind": c["kind"],
+                                          "sigma": float(c["sigma"][i]), "one_side": {"orbit": a_same, "stable": a_stable},
+                                          "other_side": {"orbit": b_same, "stable": b_stable}})

@@ -238,6 +238,12 @@ def run_chart(problem: ChartProblem, source: Any, backend: Any = None, workers: 
     scan_range = (0.1 * float(problem.sigma_grid[0]), 4.0 * float(problem.sigma_grid[-1])) \
         if problem.sigma_grid[0] > 0 else widened(problem.sigma_grid)
     cross_checks(source, problem, out, per_value, scan_range)
+    from .closing_routes import reconcile_closings
+
+    # each closing held against every route of the run, and the one-parameter route; where one moved,
+    # the contradictions and coexistence are read again against the closings that stand
+    if reconcile_closings(source, problem, out, per_value):
+        cross_checks(source, problem, out, per_value, scan_range)
     out["cross_check_seconds"] = time.perf_counter() - t1 - out["continuation_seconds"]
     out["maps"] = map_overlays(problem)
     out["backend"] = be.describe()

@@ -130,10 +130,11 @@ def wall_free_scans(values: Sequence[float], per_value: Sequence[Mapping[str, An
                              ("multipliers_inside", e.get("multipliers_inside"))):
                 rows[key].append(val)
     v = [float(x) for x in values]
+    # where the window is first lost after the first value: bracketed by the last value with it
+    i = next((i for i, p in enumerate(present) if not p), None) if present and present[0] else None
     return {**rows, "impacts": 0, "label": WALL_FREE_LABEL, "searched": [v[0], v[-1]],
             "present_at": [x for x, p in zip(v, present) if p],
-            "closes": next((x for x, p in zip(v, present) if not p), None) if present and present[0] else None,
-            "bracket": None}
+            "closes": None if i is None else v[i], "bracket": None if i is None else [v[i - 1], v[i]]}
 
 
 def closing_of(w: Mapping[str, Any], windows: Sequence[Mapping[str, Any]],

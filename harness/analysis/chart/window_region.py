@@ -33,6 +33,7 @@ from ...dynamics.maps.sigma_search import norm_seed, shoot_across, sigma_grid, w
 from ...errors import FmuError
 
 __all__ = ["chart_regions", "closing_evidence_lines", "STEP", "MAX_HANDOVERS", "GRID", "ITERATED", "closing_kind", "edge_crossings",
+           "bracketing",
            "confirm_candidate", "orbit_edges", "follow_window"]
 
 #: Relative distance in p2 from a candidate closing at which the window is tested on each side.
@@ -109,9 +110,23 @@ def _below(curves: Mapping[str, Any], cand: Mapping[str, Any]) -> tuple[float, f
             pb = min(pb, float(cand["p2"]) - c / (2.0 * s2))
         s_e = c / max(cand["p2"] - pb, 1e-300) if c > 0 else 2.0 * float(s2)
         return pb, 1.2 * s_e, 4.0 * s_e, edge_crossings(curves, pb)
-    edges = edge_crossings(curves, pb)
+    edges = bracketing(edge_crossings(curves, pb), float(cand["sigma"]))
     pts = edges + [float(cand["sigma"])] + [float(x) for x in cand.get("sigmas", [])]
     return pb, min(pts), max(pts), edges
+
+
+def bracketing(edges: Sequence[float], sigma: float) -> list[float]:
+    """The edge crossings that bound the window around ``sigma``: the nearest at or below it and the
+    nearest at or above it (the two nearest where it lies beyond all of them).  The shots sample the
+    window there, at a density set by its width, never a range widened to every curve's crossing (a
+    graze curve running off to large sigma crosses the same p2 far away)."""
+    if len(edges) <= 2:
+        return sorted(edges)
+    below = [e for e in edges if e <= sigma]
+    above = [e for e in edges if e >= sigma]
+    if below and above:
+        return sorted({max(below), min(above)})
+    return sorted(sorted(edges, key=lambda e: abs(e - sigma))[:2])
 
 
 def confirm_candidate(sim: Any, params: Mapping[str, Any], param2: str, M: int, impacts: int,
@@ -274,14 +289,17 @@ def _bisect_closing(sim: Any, params: Mapping[str, Any], param2: str, M: int, im
     from ...dynamics.maps.periodic_map import PeriodMap
 
     lo_p, hi_p = float(seen["p2"]), float(gone["p2"])
-    sig = [o for o in seen["sigma"]] + [float(x) for x in gone["sigma_range"]]
+    # the window where it was seen: its orbits and the edges bounding them there (not the range the
+    # shots above a candidate were spread over)
+    sig = [float(o) for o in seen["sigma"]]
+    sig += bracketing(edge_crossings(curves, lo_p), float(seen["orbit"]["sigma"]))
     lo_s, hi_s = min(sig), max(sig)
     seeds = [norm_seed(seen["orbit"]["point"], seen["orbit"]["sigma"], theta)]
     last = seen["orbit"]
     while hi_p / lo_p > 1.0 + STEP:
         mid = math.sqrt(lo_p * hi_p)
         # the window moves with p2: the edges' crossings of mid are in the interval too
-        e = edge_crossings(curves, mid)
+        e = bracketing(edge_crossings(curves, mid), float(last["sigma"]))
         grid = sigma_grid(min([lo_s, *e]), max([hi_s, *e]), 0.25, GRID)
         found = shoot_across(PeriodMap(sim, {**params, param2: mid}, "sigma", theta), M, impacts, grid, seeds, ITERATED)
         if found:
@@ -328,7 +346,11 @@ def chart_regions(source: Any, params: Mapping[str, Any], param2: str, p2_range:
     p0 = {**params, param2: float(p2_range[0])}
     sigma_range = tuple(cont["sigma_range"])
     for w in cont["windows"]:
-        w["closing"] = follow_window(sim, p0, w, param2, p2_range, log2, sigma_range, theta)
+        try:
+            w["closing"] = follow_window(sim, p0, w, param2, p2_range, log2, sigma_range, theta)
+        except Exception as exc:  # noqa: BLE001  (one window's failure is a line of the report; the rest goes on)
+            w["closing"] = {"closes": None, "sigma": None, "how": None, "searched": list(p2_range), "codim2": [],
+                            "tested": [], "note": f"the closing search failed: {type(exc).__name__}: {exc}"}
         hand = [c["p2"] for c in w["closing"]["codim2"] if c["kind"].startswith("boundary hand-over")]
         if hand:  # the edges continued from the start bound the window up to its first hand-over
             w["closing"]["edges_bound_until"] = min(hand)

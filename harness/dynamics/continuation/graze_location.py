@@ -9,6 +9,12 @@ of the orbit:
 * a period with contacts: the **entry velocity** of its first contact, the velocity relative to
   the wall when the free flight from the section reaches it, reaches 0 (the impact dies out).
 
+Where the quantity is a free passage's gap or the entry velocity of a period's only contact, the
+graze is solved with its orbit by Newton on the extended system (:mod:`.graze_newton`: orbit +
+gap = 0, the grazing period a free flight), to the rounding of the map, and its interval is the
+solve's.  Otherwise (the flight after an impact on a rigid wall, the first of several contacts, or
+where that Newton fails) it is extrapolated as follows.
+
 Both are smooth functions along the branch (the impacting orbit's family is smooth in its impact
 velocity: on a rigid wall sigma(v) is analytic, while the stroboscopic map and its multipliers
 blow up like 1/v, which is why Newton gives up a little before the graze).  Neither is ever
@@ -33,6 +39,7 @@ from scipy.optimize import brentq
 
 from .arclength import ArclengthCorrector, BranchPoint
 from ...config.defaults import WALLS
+from .graze_newton import solve_graze
 from ..maps.jacobian import free_propagator
 from ..maps.periodic_map import PeriodMap, refine_orbit, wall_free_offset
 
@@ -97,6 +104,9 @@ class GrazeLocation:
     flight : int
         Which flight of that period (0: from the section to the first contact; j: after the j-th
         impact, on a rigid wall).
+    method : str
+        ``"newton"`` (solved with the orbit on the extended system, :mod:`.graze_newton`;
+        ``samples`` its iterations, ``nearest`` the final |gap|) or ``"fit"`` (extrapolated).
     """
 
     value: float
@@ -106,6 +116,7 @@ class GrazeLocation:
     samples: int
     nearest: float
     flight: int = 0
+    method: str = "fit"
 
     @property
     def width(self) -> float:
@@ -344,6 +355,21 @@ def contact_change_interval(p: float, bracket: float, direction: float) -> tuple
     return lo, hi
 
 
+def _newton(cont: ArclengthCorrector, good: BranchPoint, key: tuple[int, int, str]) -> GrazeLocation | None:
+    """The graze solved with its orbit (:func:`.graze_newton.solve_graze`) where the quantity is a free
+    passage's gap or the entry velocity of a period's only contact (at the graze both are a free
+    flight touching the wall); None otherwise or where Newton fails."""
+    k, j, kind = key
+    n = int(good.ev.contacts[k])
+    if j != 0 or not ((kind == "gap" and n == 0) or (kind == "entry velocity" and n == 1)):
+        return None
+    sol = solve_graze(cont.pmap, good.w, good.p, cont.M, k, good.ev.contacts)
+    if sol is None:
+        return None
+    v, h = sol["value"], sol["half_width"]
+    return GrazeLocation(v, (v - h, v + h), kind, k, sol["iterations"], abs(sol["gap"]), 0, "newton")
+
+
 def locate_graze(cont: ArclengthCorrector, a: BranchPoint, good: BranchPoint) -> GrazeLocation | None:
     """Locate the graze that ends the old contact pattern just beyond ``good`` (the last orbit with
     it, after ``a`` on the branch), on its defining equation.
@@ -360,6 +386,9 @@ def locate_graze(cont: ArclengthCorrector, a: BranchPoint, good: BranchPoint) ->
     s = float(np.linalg.norm(good.x - a.x))
     if s == 0.0 or not qa > qg:
         return None
+    solved = _newton(cont, good, key)
+    if solved is not None:
+        return solved
     floor = (VELOCITY_FLOOR if key[2] == "entry velocity" else GAP_FLOOR) * (1.0 + abs(pmap.sigma(good.p)))
     q0 = max(qg, floor)
     data = _sample(cont, a, good, key, q0, SPREAD * q0)

@@ -257,6 +257,9 @@ def _how_located(located: GrazeLocation | None) -> str:
         which = f"gap of period {located.period}" + (f" after its impact {j}" if j else "")
     else:
         which = f"entry velocity of impact {j + 1} of period {located.period}"
+    if located.method == "newton":
+        return (f"; located where the {which} reaches 0, solved with the orbit by Newton on the extended system "
+                f"(orbit + gap of the free flight = 0, {located.samples} iterations), in [{lo:.15g}, {hi:.15g}]")
     return (f"; located where the {which} reaches 0 (fit of {located.samples} orbits down to "
             f"{located.nearest:.2g}), in [{lo:.12g}, {hi:.12g}]")
 
