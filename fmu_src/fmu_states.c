@@ -16,9 +16,9 @@
  * without eventModeUsed, Intermediate Update Mode), narrowed where this FMU declares less
  * (no clocks, no structural parameters, no providesEvaluateDiscreteStates, no variable with
  * intermediateUpdate = true). docs/fmi-state-machine.md is rendered from this table
- * (scripts/state_table_doc.py; tests/test_fmi_state_doc.py keeps them equal), and
- * tests/test_fmi_conformance.py checks every (state, function) pair against a table written
- * independently from the standards' text (tests/fmi_standard.py).
+ * (scripts/state_table_doc.py; tests/fmu/test_fmi_state_doc.py keeps them equal), and
+ * tests/fmu/test_fmi_conformance.py checks every (state, function) pair against a table written
+ * independently from the standards' text (tests/support/fmi_standard.py).
  *
  * States: I Instantiated, N Initialization Mode, S Step Mode (FMI 2.0: stepComplete), E Event
  * Mode, C Continuous-Time Mode, T Terminated, X Error (FMI 2.0; FMI 3.0 enters Terminated on

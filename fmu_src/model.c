@@ -458,7 +458,7 @@ int model_input_jump(ModelData *m, double tau, double y[2]) {
         } else {
             /* The wall went away. Only the constraint is gone, no force acted: the velocity is
              * continuous, and the mass keeps the velocity it had riding the wall (y[1], the wall's
-             * velocity before the jump), whatever the wall's new velocity (issue 22). */
+             * velocity before the jump), whatever the wall's new velocity. */
             m->mode = MODE_FREE; /* the wall went away: y[1] is kept */
         }
     } else if (y[0] > w || (y[0] == w && y[1] > dw)) {

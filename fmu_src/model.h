@@ -66,10 +66,11 @@ typedef struct {
     /* Integer origin of local time (absolute t = origin + tau), kept equal to the stepper's
      * clock's (stepper.h). */
     double origin;
-    /* Bounds on the work of one doStep, per unit of time advanced (at least one unit; issue
-     * 13.3); the solver also caps a doStep at SOLVER_MAX_STEPS_PER_CALL steps (solver_cvode.h). */
+    /* Bounds on the work of one doStep, per unit of time advanced (counted as at least one
+     * unit, so a doStep shorter than a period gets a whole unit's budget); the solver also caps
+     * a doStep at SOLVER_MAX_STEPS_PER_CALL steps (solver_cvode.h). */
     double max_events_per_time, max_steps_per_time;
-    /* Sensitivities (sens.h) and the solver (stepper.h), issue 11: parameters, and the
+    /* Sensitivities (sens.h) and the solver (stepper.h): parameters, and the
      * derivatives of the state w.r.t. the state at the start of the current doStep (sJ) and
      * w.r.t. sigma (sS). Part of the FMU state. */
     int sensitivities; /* Boolean: integrate sJ, sS */

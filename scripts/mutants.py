@@ -57,7 +57,8 @@ def _m(id: str, path: str, find: str, replace: str, tests: str, what: str) -> Mu
     return Mutant(id, path, find, replace, tuple(ALSO_RUN.get(id, "").split() + tests.split()), what)
 
 
-FMU_PORTS = "tests/fmu/test_ports.py"
+FMU_PORTS = ("tests/fmu/test_ports.py tests/fmu/test_ports_ramps.py "
+             "tests/fmu/test_ports_wall_jumps.py")
 EVENTS = "tests/fmu/test_events_total.py"
 PHYS = "tests/fmu/test_physics.py"
 SENS = "tests/fmu/test_sensitivities.py tests/harness/test_sensitivities.py"

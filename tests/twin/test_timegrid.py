@@ -54,7 +54,7 @@ def twin(twin_fmu: Path) -> Iterator[Driver]:
 
 @pytest.fixture(scope="module")
 def twin_fmu() -> Path:
-    """The twin FMU; built by scripts/setup.sh (tests/twin/test_twin.py rebuilds a stale one)."""
+    """The twin FMU; built by scripts/setup.sh (tests/twin/conftest.py rebuilds a stale one)."""
     assert TWIN_FMU.exists(), f"{TWIN_FMU} missing: build it with scripts/setup.sh"
     return TWIN_FMU
 
@@ -98,7 +98,7 @@ def test_every_grid_matches_the_closed_form_and_the_c_fmu(twin, c_driver, grid, 
 
 def _load_twin_model():
     """impact_twin_model loaded under another name (the twin FMU, running in this process,
-    imports its own copy as ``impact_twin_model``; see tests/twin/test_twin.py)."""
+    imports its own copy as ``impact_twin_model``; see tests/twin/test_twin_closed_form.py)."""
     import importlib.util
     import sys
     path = Path(__file__).resolve().parents[2] / "fmu_src" / "pytwin" / "impact_twin_model.py"
