@@ -155,6 +155,10 @@ class WindowSettings:
     #: the wall): below grazing the wall-free orbit is an attractor, and scans started on it never
     #: leave it, so an impacting attractor beside it is reached only from elsewhere
     far_start: bool = False
+    #: fresh starts of the global search at every sigma of the scan grid (0: no global search)
+    global_starts: int = 1000
+    #: its path: "auto" (the batch kernel for the linear contact law), "batch" or "fmu"
+    global_path: str = "auto"
 
 
 #: The sigma range every default scan covers, whatever the maps say (geometric grid): the
@@ -233,7 +237,7 @@ def problem_dict(problem: WindowProblem) -> dict[str, Any]:
 
 def command_line(problem: WindowProblem, quick: bool, out: Any, solver: str = DEFAULT_SOLVER,
                  sigma_range: tuple[float, float] | None = None, xtol: float | None = None,
-                 command: str = "windows") -> str:
+                 command: str = "windows", global_starts: int | None = None) -> str:
     """The ``impact-harness`` command line that asks the same question again: every model flag,
     the range, the tolerance, the solver and the section phase, numbers written in full
     (``repr``), so that running it gives the same JSON."""
@@ -242,6 +246,7 @@ def command_line(problem: WindowProblem, quick: bool, out: Any, solver: str = DE
         wall += f" --map {problem.map_wall}"
     extra = "" if sigma_range is None else f" --sigma-range={sigma_range[0]!r}:{sigma_range[1]!r}"
     extra += "" if xtol is None else f" --xtol {xtol!r}"
+    extra += "" if global_starts is None else f" --global-starts {global_starts}"
     return (f"{command} --nu {problem.nu!r} --Omega {problem.Omega!r} --r {problem.r!r} {wall} "
             f"--M-max {problem.M_max or 'auto'} --theta {problem.theta!r} --solver {solver}{extra}"
             f"{' --quick' if quick else ''} --out {out}")
