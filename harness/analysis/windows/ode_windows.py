@@ -220,7 +220,8 @@ def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_
     (c_lo, c_hi), how, n_cont = located_edges(smap, fam.M, fam.impacts, fam.seed_sigma,
                                               w0 + smap.offset(fam.seed_sigma), sigma_range)
     base = {"family": fam, "resolved": True, "multipliers": orb.multipliers, "fmu_periods_continuation": n_cont,
-            "v_c": impact_velocity(smap, orb, fam.seed_sigma), "located": how}
+            "v_c": impact_velocity(smap, orb, fam.seed_sigma), "located": how,
+            "seed_state": [float(x) for x in w0 + smap.offset(fam.seed_sigma)]}
     if c_lo is not None and c_hi is not None:
         return {**base, "lower": c_lo, "upper": c_hi}
     sides = (c_lo is None, c_hi is None)
@@ -373,7 +374,7 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
                           "multipliers_inside": r.get("multipliers"), "v_c": r.get("v_c"),
                           "multipliers_near_lower_edge": lo.multipliers,
                           "multipliers_near_upper_edge": hi.multipliers,
-                          "located": r.get("located"),
+                          "located": r.get("located"), "seed_state": r.get("seed_state"),
                           "xtol": xtol_rel * (abs(f.seed_sigma) if relative else 1.0)})
         out["all"].append(entry)
         if f.impacts == 1 and r["resolved"]:
