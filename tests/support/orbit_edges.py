@@ -29,7 +29,7 @@ def _good(flow: ExactFlow, sigma: float, orb: PeriodicOrbit, M: int, k: int) -> 
 
 
 def continue_generic(flow: ExactFlow, M: int, k: int, z0, s_from: float, s_to: float,
-                     steps: int = 4, min_fraction: float = 1e-4) -> PeriodicOrbit:
+                     steps: int = 3, min_fraction: float = 1e-4) -> PeriodicOrbit:
     """March the stable period-M orbit with k contacts from s_from (through z0) to s_to (secant
     predictor, the step halved when the orbit is not found); AssertionError if it is lost."""
     orb = flow.orbit(s_from, M, z0)
