@@ -143,3 +143,18 @@ def test_two_coexisting_orbits_of_one_kind_are_two_windows_and_two_attractors() 
     table = coexistence(rows, (-0.05, 0.05))
     assert max(len(c["attractors"]) for c in table) == 3
     assert any("orbit 2" in a for c in table for a in c["attractors"])
+
+
+def test_one_parameter_set_as_chart_would_search_it() -> None:
+    """:func:`search_parameter_set` on a lightly damped rigid wall just below grazing: no start
+    inside the wall, and its main attractor (period 3, 2 impacts) a stable orbit of the exact flow."""
+    from harness.runs.basins.global_search import search_parameter_set
+
+    got = search_parameter_set(dict(nu=0.1, Omega=2.5, r=0.8, wall=2, sigma=-0.005, solver=1), 0.5, 500)
+    assert got.region.u_hi < 0 and got.other["invalid"] == 0
+    top = got.attractors[0]
+    assert top.key == "3/2" and top.share > 0.5  # the rest still settling after the short transient
+    flow = ExactFlow(0.1, 2.5, 0.8, 10.0, "rigid")
+    orb = flow.orbit(-0.005, 3, top.points[-1])
+    assert orb.converged and int(np.sum(orb.contacts)) == 2
+    assert np.max(np.abs(flow.multipliers(-0.005, orb.z[0], 3))) < 1.0

@@ -288,3 +288,17 @@ def global_search_over(name: str, values: Sequence[float], params: Mapping[str, 
     finally:
         bar.close()
     return out
+
+
+def search_parameter_set(params: Mapping[str, Any], theta: float, n_starts: int = DEFAULT_STARTS, *,
+                         transient: int = 300, samples: int = 40, tol: float = 1e-6,
+                         points: np.ndarray | None = None, path: str = "auto", fmu: Any = None,
+                         workers: int | None = None) -> SearchResult:
+    """:func:`global_search` with the defaults ``windows`` uses, for any parameter set (``chart``
+    at a value of its second parameter): the region around the wall-free orbit at ``params``'
+    sigma and the orbits ``points`` seen there, outside a rigid wall (``wall`` 2)."""
+    sigma = float(params.get("sigma", 0.0))
+    rigid = int(float(params.get("wall", 1))) == 2
+    s = SamplingSpec(theta=theta, n_transient=transient, n_samples=samples, tol=tol)
+    return global_search(params, s, Region.around_orbits(sigma, theta, rigid, points), n_starts, path=path, fmu=fmu,
+                         workers=workers)
