@@ -49,7 +49,7 @@ FMU_TILE = 50
 #: orbits are one attractor when their point sets lie within it (Hausdorff, max norm).
 MATCH_REL = 1e-2
 #: Starts of the seed run in full (the attractors it finds stop the other starts early).
-SEED_STARTS = 64
+SEED_STARTS = 32
 PATHS = ("auto", "batch", "fmu")
 #: On the kernel, the seed runs the whole transient and the other starts a quarter of it (at least
 #: this many periods): most of them stop early on the seed's attractors, and the ones that do

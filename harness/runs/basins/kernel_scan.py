@@ -61,9 +61,9 @@ def _shooter(model: Any, params: Mapping[str, Any], theta: float) -> Any:
 
 
 def _seed(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: SamplingSpec, threads: int,
-          match_tol: float | None, shoot: Any, ball: Any, n: int | None = None) -> Registry:
-    """The first attractors, from a strided subset (``n`` starts, default a share) run in full."""
-    n = min(us.size, n or max(SEED_MIN, min(SEED_MAX, int(us.size * SEED_SHARE))))
+          match_tol: float | None, shoot: Any, ball: Any) -> Registry:
+    """The first attractors, from a strided subset run in full."""
+    n = min(us.size, max(SEED_MIN, min(SEED_MAX, int(us.size * SEED_SHARE))))
     idx = np.unique(np.linspace(0, us.size - 1, n).round().astype(int))
     res = bk.run_batch(params, us[idx], vs[idx], s.theta, s.n_transient, s.n_samples, None, threads)
     if match_tol is None:
@@ -76,15 +76,23 @@ def _seed(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: Sampling
 
 def run_starts(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: SamplingSpec, threads: int,
                match_tol: float, n_seed: int, tile_sampling: SamplingSpec | None = None) -> tuple[np.ndarray, Registry]:
-    """Labels of any starts (not a grid) as one tile after a seed of ``n_seed`` of them, the rest
-    early-stopped on the seed's attractors with the strict rule (two rounds on the orbit: the
-    balls' check costs more than it saves on one tile); returns (labels: registry indices or the
-    negative codes, the registry).  No Newton shooting: the caller shoots what it keeps.
-    ``tile_sampling``: the other starts' sampling (default ``s``; a shorter transient is cheaper
-    where starts do not settle, and a start that reaches a seed's attractor stops anyway)."""
-    reg = _seed(params, us, vs, s, threads, match_tol, None, None, n_seed)
-    res = run_tile(BasinTile(0, us, vs, dict(params), tile_sampling or s, reg.known(), threads))
-    return reg.merge(res), reg
+    """Labels of any starts (not a grid): ``n_seed`` of them (spread over the list) run in full,
+    the others as one tile early-stopped on the seed's attractors with the strict rule (two
+    rounds on the orbit: the balls' check costs more than it saves on one tile); returns (labels:
+    registry indices or the negative codes, the registry).  No Newton shooting: the caller shoots
+    what it keeps.  ``tile_sampling``: the other starts' sampling (default ``s``; a shorter
+    transient is cheaper where starts do not settle, and a start that reaches a seed's attractor
+    stops anyway)."""
+    idx = np.unique(np.linspace(0, us.size - 1, min(us.size, n_seed)).round().astype(int))
+    reg = Registry(match_tol)
+    seed = bk.run_batch(params, us[idx], vs[idx], s.theta, s.n_transient, s.n_samples, None, threads)
+    labels = np.empty(us.size, dtype=np.int32)
+    labels[idx] = reg.merge(label_result(seed, s, reg.known()))
+    rest = np.setdiff1d(np.arange(us.size), idx)
+    if rest.size:
+        res = run_tile(BasinTile(0, us[rest], vs[rest], dict(params), tile_sampling or s, reg.known(), threads))
+        labels[rest] = reg.merge(res)
+    return labels, reg
 
 
 def _tiles(us: np.ndarray, vs: np.ndarray, size: int) -> list[tuple[int, slice]]:
