@@ -59,6 +59,8 @@ def _share(e: dict[str, Any], f: str) -> str:
     b = e.get("basin_share")
     if not b:
         return "-"
+    if b["max"] == 0:
+        return f"no start reached it ({b['values']} searched sigma)"
     return (f"{100 * b['max']:.3g} % at sigma = {b['at_sigma']:{f}} (mean {100 * b['mean']:.3g} % over "
             f"{b['values']} searched sigma)")
 

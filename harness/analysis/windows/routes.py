@@ -323,7 +323,7 @@ def search_sampling(theta: float, transient: int, samples: int) -> Any:
 
 
 #: Periodicity tolerance of the global search's starts (relative to the orbit's size).
-SEARCH_TOL = 1e-5
+SEARCH_TOL = 1e-6
 
 
 def run_search(ctx: Any, problem: Any, st: Any, ds: Any) -> list[Any] | None:
