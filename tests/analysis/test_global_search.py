@@ -158,3 +158,19 @@ def test_one_parameter_set_as_chart_would_search_it() -> None:
     orb = flow.orbit(-0.005, 3, top.points[-1])
     assert orb.converged and int(np.sum(orb.contacts)) == 2
     assert np.max(np.abs(flow.multipliers(-0.005, orb.z[0], 3))) < 1.0
+
+
+def test_the_fmu_path_labels_the_starts_as_the_kernel_does(model) -> None:
+    """The same 16 starts through the FMU with CVODE (the path of a nonlinear contact law, or of
+    --global-path fmu; one process here) reach the attractors the batch kernel finds from them,
+    with the same counts, the orbits' points within 1e-5."""
+    params = dict(nu=0.1, Omega=2.5, r=0.8, wall=2, sigma=-0.005)
+    s = SamplingSpec(theta=0.5, n_transient=200, n_samples=24, tol=1e-6)
+    reg = Region.around_orbits(-0.005, 0.5, True)
+    fmu = global_search({**params, "solver": 0}, s, reg, 16, path="fmu", fmu=model, workers=1, seed=3)
+    kernel = global_search({**params, "solver": 1}, s, reg, 16, path="batch", workers=1, seed=3)
+    assert fmu.path == "fmu" and kernel.path == "batch" and fmu.attractors
+    assert sorted((a.key, a.starts) for a in fmu.attractors) == sorted((a.key, a.starts) for a in kernel.attractors)
+    for a in fmu.attractors:
+        b = next(x for x in kernel.attractors if x.key == a.key)
+        assert hausdorff(a.points, b.points) < 1e-5
