@@ -46,6 +46,9 @@ The public entry points, grouped as you look for them:
   `basin_fractions`, `basin_entropy`, `uncertainty_exponent` (from the grid),
   `uncertainty_from_pairs` (from random pairs of starts), and `fmu_agreement` (random starts
   through the FMU, labels compared).
+* `global_search` -- the attractors of one parameter set from fresh starts (a grid plus random
+  ones over a `Region`), with their basin shares; `global_search_over` at every value of one
+  parameter (``windows`` runs it over sigma).
 
 # Shooting
 
@@ -125,6 +128,8 @@ _EXPORTS = {
     "run_basins": "runs.basins.scan", "Attractor": "dynamics.attractors.identity", "identify_attractors": "dynamics.attractors.identity",
     "run_basins_kernel": "runs.basins.kernel_scan", "basin_fractions": "analysis.basins.measures",
     "basin_entropy": "analysis.basins.measures", "uncertainty_exponent": "analysis.basins.measures",
+    "global_search": "runs.basins.global_search", "global_search_over": "runs.basins.global_search",
+    "Region": "runs.basins.global_search",
     "fmu_agreement": "analysis.basins.agreement", "uncertainty_from_pairs": "analysis.basins.uncertainty",
 }
 

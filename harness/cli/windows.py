@@ -45,6 +45,14 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     xtol_option(s, "1e-4 x the window's sigma, 1e-3 with --quick; with a --sigma-range reaching sigma <= 0: "
                    "1e-8 x its width, 1e-6 quick")
     theta_option(s)
+    s.add_argument("--global-starts", type=int, default=None, metavar="N",
+                   help="fresh starts of the global search at every sigma of the scan grid (a grid plus random "
+                   "starts over the region the attractors occupy, iterated to their attractors with early stopping; "
+                   "default 1000; 0: no global search)")
+    s.add_argument("--global-path", choices=("auto", "batch", "fmu"), default="auto",
+                   help="the global search's path: auto (default: the batch kernel, the exact closed form, for the "
+                   "linear contact law; the FMU otherwise), batch, or fmu (every start through the FMU with --solver, "
+                   "in parallel processes)")
     s.add_argument("--M-max", type=_m_max, default=None, dest="M_max", metavar="{auto,1..12}",
                    help="highest period; auto (default): until period adding truncates (no stable window at M "
                    "and M + 1)")
@@ -94,7 +102,8 @@ def cmd_windows(args: argparse.Namespace) -> int:
     res = compare_windows(args.alpha, args.gamma, **_nu_Omega(run, args), r=run.params["r"],
                           wall=wall_name(run.params["wall"]), Gamma=run.params["Gamma"], M_max=args.M_max, quick=args.quick, out=args.out,
                           map_wall=args.map_wall, branch=args.branch, sigma_range=args.sigma_range, xtol=args.xtol,
-                          theta=args.theta, run=run, command=command_line(args))
+                          theta=args.theta, global_starts=args.global_starts,
+                          global_path=args.global_path, run=run, command=command_line(args))
     for line in res["summary"]:
         print(line)
     print(markdown_window_table(res["windows"], na=res["map_applicability"]))

@@ -272,7 +272,7 @@ def test_each_ode_edge_is_an_edge_of_the_exact_flow_of_its_kind(run, exact, M, s
 
 
 @pytest.mark.parametrize("extra", [["--nu", "3.0"], ["--r", "1.5"], ["--Gamma", "-1"], ["--wall", "soft"],
-                                   ["--map", "soft"]])
+                                   ["--map", "soft"], ["--global-starts", "-1"], ["--global-path", "gpu"]])
 def test_bad_parameters_are_input_errors(extra, tmp_path) -> None:
     """One line on stderr, exit status 2 (argparse's choices, or the harness's input check),
     and nothing run."""

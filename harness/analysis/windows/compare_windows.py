@@ -95,16 +95,20 @@ def _safe_predictions(problem: WindowProblem, M_maps: int, st: WindowSettings) -
 
 
 def _shoot_ode(ctx: Context, problem: WindowProblem, st: WindowSettings, ds: Any, pred: dict[str, dict],
-               c: Coefficients | None) -> dict[str, Any]:
+               c: Coefficients | None, searches: Any = None) -> dict[str, Any]:
     """Every attractor of the scans ``ds`` shot to its window's edges (guided by the A~ map
     where the maps exist: ``c`` not None)."""
     from ...dynamics.maps.shooting import StroboscopicMap
     from .ode_windows import measure
+    from .routes import Routes
 
     smap = StroboscopicMap(ctx.simulator(), ctx.params(**problem.fmu_params()), problem.theta)
-    return measure(smap, st.scan_grid, ds, st.sigma_range, st.xtol if st.xtol is not None else st.xtol_rel,
-                   problem.M_max, None if c is None else pred["map_A_tilde"], c, _workers(ctx),
-                   relative=st.xtol is None)
+    routes = Routes(st.scan_grid, ds, searches, problem.M_max, problem.theta)
+    out = measure(smap, st.scan_grid, ds, st.sigma_range, st.xtol if st.xtol is not None else st.xtol_rel,
+                  problem.M_max, None if c is None else pred["map_A_tilde"], c, _workers(ctx),
+                  relative=st.xtol is None, routes=routes)
+    out["transients"] = routes.transients
+    return out
 
 
 def _applicability(problem: WindowProblem, st: WindowSettings, pred: dict[str, dict],
@@ -164,9 +168,14 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
     t1 = time.perf_counter()
     ds = ode_scans(ctx, problem, st)
     timings["scans"] = time.perf_counter() - t1
+    from .routes import found_only_by_search, run_search, search_summary
+
+    t1 = time.perf_counter()
+    searches = run_search(ctx, problem, st, ds)  # fresh starts at every sigma: what no scan path crosses
+    timings["global_search"] = time.perf_counter() - t1
     t1 = time.perf_counter()
     c = None if no_maps else problem.coefficients()
-    shoot = _shoot_ode(ctx, problem, st, ds, pred, c)
+    shoot = _shoot_ode(ctx, problem, st, ds, pred, c, searches)
     timings["shooting"] = time.perf_counter() - t1
     M_top = max([M_maps] + list(shoot["windows"]))
     ode = {M: shoot["windows"].get(M) for M in range(1, M_top + 1)}
@@ -213,6 +222,9 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
         "best_variant": best,
         "coexistence": coexistence(shoot["all"], st.sigma_range),
         "coincident_edges": coincident,
+        "global_search": search_summary(st.scan_grid, searches),
+        "ode_set_aside": shoot["transients"],
+        "found_only_by_global_search": [f"{r['M']}/{r['impacts']}" for r in found_only_by_search(shoot["all"])],
         "files": files,
         "timings_s": timings,
         "parameters": _parameters(problem, st, shoot, c),
@@ -222,13 +234,26 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
     return result, report(ctx, problem, result)
 
 
+def _global_options(starts: int | None, path: str) -> tuple[int, str]:
+    """(starts per sigma, path) of the global search, checked: 0 starts turn it off."""
+    from ...runs.basins.global_search import DEFAULT_STARTS, PATHS
+
+    n = DEFAULT_STARTS if starts is None else starts
+    if isinstance(n, bool) or not isinstance(n, int) or n < 0:
+        raise HarnessInputError("--global-starts", f"must be an integer >= 0 (0: no global search), got {starts!r}")
+    if path not in PATHS:
+        raise HarnessInputError("--global-path", f"must be one of {', '.join(PATHS)}, got {path!r}")
+    return n, path
+
+
 def compare_windows(alpha: float | None = None, gamma: float | None = None, *, nu: float | None = None,
                     Omega: float | None = None, r: float = 0.9, wall: str = "compliant", Gamma: float = 10.0,
                     M_max: int | None = None, quick: bool = False, out: str | Path = "results/windows",
                     workers: int | None = None, progress: bool = False, fmu_path: str | None = None,
                     solver: str | None = None, map_wall: str = "auto", branch: int | None = None,
                     sigma_range: tuple[float, float] | None = None, xtol: float | None = None,
-                    theta: float = SECTION_PHASE, run: Any = None, command: str | None = None) -> dict[str, Any]:
+                    theta: float = SECTION_PHASE, global_starts: int | None = None,
+                    global_path: str = "auto", run: Any = None, command: str | None = None) -> dict[str, Any]:
     """Window edges of the maps and of the ODE (FMU) for one parameter set.
 
     Give either (``alpha``, ``gamma``) of the map (9) or (``nu``, ``Omega``) of the ODE.
@@ -238,6 +263,9 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     ``"map"``, ``"map_A_tilde"``; ``result["edge_kinds"]["ode"]``, ``result["parameters"]``.
     ``map_wall`` chooses the maps' coefficients: "auto" follows ``wall`` ((48) compliant, (39)
     rigid); "compliant-high" uses (39) with a compliant wall (high-velocity impacts, stiff wall).
+    ``global_starts``: fresh starts of the global search at every sigma of the grid (default
+    1000; 0: none), ``global_path`` its path ("auto", "batch", "fmu":
+    :func:`harness.runs.basins.global_search.global_search`).
     ``sigma_range`` (lo, hi): scan and shoot exactly there, sigma <= 0 allowed (the wall-free
     orbit is then a window, grazing at sigma = 0); ``xtol``: an absolute bisection tolerance in
     sigma; ``theta``: the section phase. ``result["coexistence"]`` lists where attractors coexist,
@@ -264,6 +292,7 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
         run = Experiment.for_python(fmu_path, solver, workers, progress)
     rng = None if sigma_range is None else (_real(sigma_range[0], "sigma_range"), _real(sigma_range[1], "sigma_range"))
     settings = default_settings(problem, quick, rng, xtol)
+    settings.global_starts, settings.global_path = _global_options(global_starts, global_path)
     ctx = Context("windows", out, quick, run, command or _python_call(problem, quick, out, rng, xtol))
     result, text = run_windows(ctx, problem, settings)
     write_outputs(ctx, result, text)

@@ -220,7 +220,8 @@ def shoot_family(smap: Any, fam: Family, sigma_range: tuple[float, float], xtol_
     (c_lo, c_hi), how, n_cont = located_edges(smap, fam.M, fam.impacts, fam.seed_sigma,
                                               w0 + smap.offset(fam.seed_sigma), sigma_range)
     base = {"family": fam, "resolved": True, "multipliers": orb.multipliers, "fmu_periods_continuation": n_cont,
-            "v_c": impact_velocity(smap, orb, fam.seed_sigma), "located": how}
+            "v_c": impact_velocity(smap, orb, fam.seed_sigma), "located": how,
+            "seed_state": [float(x) for x in w0 + smap.offset(fam.seed_sigma)]}
     if c_lo is not None and c_hi is not None:
         return {**base, "lower": c_lo, "upper": c_hi}
     sides = (c_lo is None, c_hi is None)
@@ -327,7 +328,7 @@ def _map_started_families(smap: Any, c: Any, guide: Mapping[int, Any], seen: set
 
 def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, float], xtol_rel: float,
             M_max: int | None, guide: Mapping[int, Any] | None = None, c: Any = None,
-            workers: int = 1, relative: bool = True) -> dict[str, Any]:
+            workers: int = 1, relative: bool = True, routes: Any = None) -> dict[str, Any]:
     """The ODE's windows: families from the scans (plus map-guided starts for windows the
     scans missed), each continued to its edges (:mod:`.located_edges`; a side the continuation
     cannot settle is marched and bisected to ``xtol_rel``, and says so).
@@ -343,15 +344,21 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
         ("continuation", or "bisection (why the continuation did not)"), ``fmu_periods``.
     """
     geometric = bool(grid[0] > 0)  # an even grid reaching sigma <= 0 is marched in even steps
-    fams = families_from_scans(grid, ds, M_max, geometric)
+    # ``routes`` (:class:`.routes.Routes`): every route's orbits told apart by their points
+    fams = families_from_scans(grid, ds, M_max, geometric) if routes is None else routes.families(geometric)
     if guide:
         cap = M_max or max([f.M for f in fams if f.impacts == 1] + [0]) + 2
-        for f in _map_started_families(smap, c, guide, {(f.M, f.impacts) for f in fams}, cap):
+        # a kind only the global search saw may be an orbit Newton does not confirm: the map's start still runs
+        for f in _map_started_families(smap, c, guide, {(f.M, f.impacts) for f in fams
+                                                        if f.found_by != ["global search"]}, cap):
             if sigma_range[0] <= f.seed_sigma <= sigma_range[1]:
                 f.geometric = geometric  # marched like the scans' families
                 fams.append(f)
     ratio = float(np.max(grid[1:] / grid[:-1])) if geometric else float(np.max(np.diff(grid)))
     results, n = shoot_families(smap, fams, sigma_range, xtol_rel, ratio, workers, relative, c)
+    if routes is not None:  # tracks seen beyond their windows shot afresh, one orbit's families merged
+        results, n = routes.refine(results, n, lambda fs: shoot_families(smap, fs, sigma_range, xtol_rel, ratio,
+                                                                         workers, relative, c), xtol_rel)
     out: dict[str, Any] = {"windows": {}, "kinds": {}, "brackets": {}, "intervals": {}, "unresolved": {},
                            "multipliers_at_lower_edge": {}, "xtol": {}, "all": []}
     best: dict[int, dict[str, Any]] = {}
@@ -359,13 +366,15 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
         f, lo, hi = r["family"], r["lower"], r["upper"]
         entry = {"M": f.M, "impacts": f.impacts, "seen": [f.lo, f.hi], "found_by": f.found_by,
                  "seed_sigma": f.seed_sigma, "resolved": r["resolved"]}
+        if routes is not None:
+            entry["basin_share"] = routes.share(r)
         if r["resolved"]:
             entry.update({"lo": lo.sigma, "hi": hi.sigma, "kinds": [lo.kind, hi.kind],
                           "intervals": [[lo.good, lo.bad], [hi.good, hi.bad]],
                           "multipliers_inside": r.get("multipliers"), "v_c": r.get("v_c"),
                           "multipliers_near_lower_edge": lo.multipliers,
                           "multipliers_near_upper_edge": hi.multipliers,
-                          "located": r.get("located"),
+                          "located": r.get("located"), "seed_state": r.get("seed_state"),
                           "xtol": xtol_rel * (abs(f.seed_sigma) if relative else 1.0)})
         out["all"].append(entry)
         if f.impacts == 1 and r["resolved"]:

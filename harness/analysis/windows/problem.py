@@ -155,6 +155,10 @@ class WindowSettings:
     #: the wall): below grazing the wall-free orbit is an attractor, and scans started on it never
     #: leave it, so an impacting attractor beside it is reached only from elsewhere
     far_start: bool = False
+    #: fresh starts of the global search at every sigma of the scan grid (0: no global search)
+    global_starts: int = 1000
+    #: its path: "auto" (the batch kernel for the linear contact law), "batch" or "fmu"
+    global_path: str = "auto"
 
 
 #: The sigma range every default scan covers, whatever the maps say (geometric grid): the

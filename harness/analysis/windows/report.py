@@ -35,17 +35,47 @@ def _all_windows_table(res: dict[str, Any], f: str) -> list[str]:
     if not rows:
         return []
     out = ["| period M | impacts per period | window in sigma | edge kinds (lower/upper) | multipliers inside "
-           "(at the seed) | seen by |", "|---|---|---|---|---|---|"]
+           "(at the seed) | found by | basin share |", "|---|---|---|---|---|---|---|"]
     for e in rows:
         if not e["resolved"]:
             out.append(f"| {e['M']} | {e['impacts']} | Newton did not converge from the scan's state at sigma = "
-                       f"{e['seed_sigma']:{f}} | - | - | {', '.join(e['found_by'])} |")
+                       f"{e['seed_sigma']:{f}} | - | - | {', '.join(e['found_by'])} | {_share(e, f)} |")
             continue
         lo = "below the search range" if e["lo"] is None else format(e["lo"], f)
         hi = "above the search range" if e["hi"] is None else format(e["hi"], f)
         out.append(f"| {e['M']} | {e['impacts']} | [{lo}, {hi}]{_located(e)} | {e['kinds'][0]}/{e['kinds'][1]} | "
-                   f"{_cmplx(e.get('multipliers_inside'))} (sigma = {e['seed_sigma']:{f}}) | {', '.join(e['found_by'])} |")
+                   f"{_cmplx(e.get('multipliers_inside'))} (sigma = {e['seed_sigma']:{f}}) | {', '.join(e['found_by'])} "
+                   f"| {_share(e, f)} |")
     return out
+
+
+def _share(e: dict[str, Any], f: str) -> str:
+    """The window's basin share in the global search: largest, where, and the mean."""
+    b = e.get("basin_share")
+    if not b:
+        return "-"
+    if b["max"] == 0:
+        return f"no start reached it ({b['values']} searched sigma)"
+    return (f"{100 * b['max']:.3g} % at sigma = {b['at_sigma']:{f}} (mean {100 * b['mean']:.3g} % over "
+            f"{b['values']} searched sigma)")
+
+
+def _found_only_by_search(res: dict[str, Any]) -> list[str]:
+    """The note at the top: attractors that only the global search found (the scans missed them)."""
+    rows = [e for e in res.get("ode_windows_all", []) if list(e.get("found_by", [])) == ["global search"]]
+    gs = res.get("global_search")
+    if not gs:
+        return ["**No global search was run** (--global-starts 0): only the attractors the scans' paths cross "
+                "are listed.", ""]
+    if not rows:
+        return [f"Every attractor the global search found ({gs['starts_per_value']} fresh starts at each sigma of "
+                "the grid) was also found by another route.", ""]
+    names = "; ".join(f"period {e['M']} with {e['impacts']} impacts" + (
+        f" in [{e['lo']:.6g}, {e['hi']:.6g}]" if e.get("resolved") and None not in (e.get("lo"), e.get("hi")) else "")
+        + (f", basin share up to {100 * e['basin_share']['max']:.3g} %" if e.get("basin_share") else "")
+        for e in rows)
+    return [f"**The global search found {len(rows)} attractor{'s' if len(rows) > 1 else ''} that no other route "
+            f"found**: {names}.", ""]
 
 
 def _located(e: dict[str, Any]) -> str:
@@ -71,6 +101,7 @@ def _how_found(ctx: Context, problem: Any, res: dict[str, Any], title: str | Non
         f"Parameters: {problem.describe()} -> nu = {p['nu']:.6f}, Omega = {p['Omega']:.6f}{rho}. "
         f"{'Quick' if ctx.quick else 'Full'} run.",
         "",
+        *_found_only_by_search(res),
         "## How the ODE's windows were found",
         "",
         f"From the ODE alone: quasi-static up and down scans of the FMU over sigma in [{g0:.4g}, {g1:.4g}] "
@@ -89,6 +120,14 @@ def _how_found(ctx: Context, problem: Any, res: dict[str, Any], title: str | Non
         "edge not found inside the search range is reported as beyond it, never as a number. Windows narrower than the "
         "scan step can be missed by the scans: the maps' windows that the scans did not see were tried as extra "
         "Newton starts (marked 'map-guided start'); the ODE decides whether the orbit is there.",
+        "",
+        "Beside the scans, a global search at every sigma of the grid starts afresh from a grid plus random states "
+        "over the region the attractors occupy (the wall-free orbit's, widened, and the scans' orbits there), each "
+        "iterated to its attractor with the early stop of `basins`; every periodic orbit it reaches is a route to a "
+        "window like the scans' (marked 'global search'), and its basin share is the fraction of those starts that "
+        "reached it. Orbits of one kind (period, impacts) are one attractor only where their stroboscopic point sets "
+        "coincide: two coexisting orbits of a kind are two windows. Where sigma < 0, the wall-free orbit is listed "
+        "whatever the scans saw ('wall-free orbit').",
         "",
         "The maps are only compared with the ODE's windows (docs/theory.md explains each):",
         "",
@@ -132,8 +171,15 @@ def _maximal_windows(res: dict[str, Any], labels: dict[str, str], digits: int) -
 def _every_window(res: dict[str, Any], f: str) -> list[str]:
     g0, g1, _ = res["parameters"]["sigma_grid"]
     lines = ["", "## Every periodic window of the ODE (any number of impacts per period)", ""]
-    return lines + (_all_windows_table(res, f)
-                    or [f"No stable periodic orbit with impacts was seen in sigma [{g0:.4g}, {g1:.4g}]."])
+    lines += (_all_windows_table(res, f)
+              or [f"No stable periodic orbit with impacts was seen in sigma [{g0:.4g}, {g1:.4g}]."])
+    aside = res.get("ode_set_aside") or []
+    if aside:
+        lines += ["", "Sampled orbits that are not windows (Newton on the FMU did not resolve them; listed in "
+                  "`windows.json` under `ode_set_aside`): " + "; ".join(
+                      f"period {a['M']}, {a['impacts']} impacts, seen in [{a['seen'][0]:{f}}, {a['seen'][1]:{f}}] "
+                      f"by {', '.join(a['found_by'])} ({a['why']})" for a in aside) + "."]
+    return lines
 
 
 def _scan_confirmation(res: dict[str, Any], f: str) -> list[str]:

@@ -47,14 +47,13 @@ def coexistence(rows: Sequence[Mapping[str, Any]], search: tuple[float, float]) 
         ``{"lo", "hi", "attractors": [labels], "keys": ["M/k", ...]}``, in increasing sigma; an
         end None: the overlap goes on beyond the search range.
     """
-    wins = [(r["lo"], r["hi"], f"{r['M']}/{r['impacts']}", attractor_label(r["M"], r["impacts"]))
-            for r in rows if r.get("resolved")]
+    wins = _windows(rows)
     ends = sorted({search[0], search[1], *[x for w in wins for x in w[:2] if x is not None]})
     out: list[dict[str, Any]] = []
     for a, b in zip(ends[:-1], ends[1:]):
         mid = 0.5 * (a + b)
         here = [w for w in wins if (w[0] is None or w[0] < mid) and (w[1] is None or mid < w[1])]
-        keys = sorted({w[2] for w in here}, key=lambda k: tuple(int(x) for x in k.split("/")))
+        keys = sorted({w[2] for w in here}, key=lambda k: tuple(int(x) for x in k.replace("#", "/").split("/")))
         if len(keys) < 2:
             continue
         labels = [next(w[3] for w in here if w[2] == k) for k in keys]
@@ -65,6 +64,21 @@ def coexistence(rows: Sequence[Mapping[str, Any]], search: tuple[float, float]) 
     for c in out:  # an overlap reaching the search range's end goes on beyond it
         c["lo"] = None if c["lo"] == search[0] and _open_below(wins, c["keys"]) else c["lo"]
         c["hi"] = None if c["hi"] == search[1] and _open_above(wins, c["keys"]) else c["hi"]
+    return out
+
+
+def _windows(rows: Sequence[Mapping[str, Any]]) -> list[tuple]:
+    """(lo, hi, key, label) per resolved window: an attractor each, so that two orbits of one kind
+    (period, impacts) are two keys ("2/1#1", "2/1#2") and two labels ("..., orbit 1")."""
+    res = [r for r in rows if r.get("resolved")]
+    kinds = [f"{r['M']}/{r['impacts']}" for r in res]
+    out, seen = [], {}
+    for r, k in zip(res, kinds):
+        label = attractor_label(r["M"], r["impacts"])
+        if kinds.count(k) > 1:
+            seen[k] = seen.get(k, 0) + 1
+            k, label = f"{k}#{seen[k]}", f"{label}, orbit {seen[k]}"
+        out.append((r["lo"], r["hi"], k, label))
     return out
 
 

@@ -74,6 +74,27 @@ def _seed(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: Sampling
     return reg
 
 
+def run_starts(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: SamplingSpec, threads: int,
+               match_tol: float, n_seed: int, tile_sampling: SamplingSpec | None = None) -> tuple[np.ndarray, Registry]:
+    """Labels of any starts (not a grid): ``n_seed`` of them (spread over the list) run in full,
+    the others as one tile early-stopped on the seed's attractors with the strict rule (two
+    rounds on the orbit: the balls' check costs more than it saves on one tile); returns (labels:
+    registry indices or the negative codes, the registry).  No Newton shooting: the caller shoots
+    what it keeps.  ``tile_sampling``: the other starts' sampling (default ``s``; a shorter
+    transient is cheaper where starts do not settle, and a start that reaches a seed's attractor
+    stops anyway)."""
+    idx = np.unique(np.linspace(0, us.size - 1, min(us.size, n_seed)).round().astype(int))
+    reg = Registry(match_tol)
+    seed = bk.run_batch(params, us[idx], vs[idx], s.theta, s.n_transient, s.n_samples, None, threads)
+    labels = np.empty(us.size, dtype=np.int32)
+    labels[idx] = reg.merge(label_result(seed, s, reg.known()))
+    rest = np.setdiff1d(np.arange(us.size), idx)
+    if rest.size:
+        res = run_tile(BasinTile(0, us[rest], vs[rest], dict(params), tile_sampling or s, reg.known(), threads))
+        labels[rest] = reg.merge(res)
+    return labels, reg
+
+
 def _tiles(us: np.ndarray, vs: np.ndarray, size: int) -> list[tuple[int, slice]]:
     n = us.size
     return [(k, slice(a, min(a + size, n))) for k, a in enumerate(range(0, n, size))]

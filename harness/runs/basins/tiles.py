@@ -86,6 +86,26 @@ def classify_start(res: bk.BatchResult, i: int, s: SamplingSpec) -> tuple[int, C
     return NOT_PERIODIC, None
 
 
+def may_be_periodic(u: np.ndarray, v: np.ndarray, s: SamplingSpec) -> np.ndarray:
+    """Per row of samples (starts, samples): whether some shift m <= the largest period repeats
+    them to :func:`harness.dynamics.maps.classify.classify_orbit`'s threshold -- its necessary
+    condition for a period, checked for all starts at once (rows with a NaN: True, left to it)."""
+    n = u.shape[1] if u.ndim == 2 else 0
+    out = np.ones(u.shape[0], dtype=bool)
+    if n < 2 or u.shape[0] == 0:
+        return out
+    finite = np.all(np.isfinite(u), axis=1) & np.all(np.isfinite(v), axis=1)
+    mp = max(1, min(s.max_period if s.max_period is not None else n // 2, n - 1))
+    with np.errstate(invalid="ignore"):
+        thr = s.tol * (1.0 + np.maximum(np.ptp(u, axis=1), np.ptp(v, axis=1)))
+        hit = np.zeros(u.shape[0], dtype=bool)
+        for m in range(1, mp + 1):
+            r = np.maximum(np.max(np.abs(u[:, m:] - u[:, :-m]), axis=1), np.max(np.abs(v[:, m:] - v[:, :-m]), axis=1))
+            hit |= r <= thr
+    out[finite] = hit[finite]
+    return out
+
+
 def run_tile(tile: BasinTile, source: Any = None, progress: Any = None) -> dict[str, Any]:
     """Run a tile (on any worker: ``source`` and ``progress`` are the backends' arguments, unused).
 
@@ -114,7 +134,11 @@ def label_result(res: bk.BatchResult, s: SamplingSpec, known: bk.KnownAttractors
     label[res.status == bk.INVALID] = INVALID
     label[(res.status == bk.FAILED) | (res.status == bk.ESCAPED)] = ESCAPED
     candidates: list[Candidate] = []
-    for i in np.flatnonzero(res.status == bk.RAN):
+    ran = np.flatnonzero(res.status == bk.RAN)
+    hope = may_be_periodic(res.u[ran], res.v[ran], s)
+    for i in ran[~hope]:  # no shift repeats to the tolerance: classify_start's verdict, without its loop
+        label[i] = STICKING if np.any(res.stuck[i]) or int(np.max(res.impacts[i])) >= CHATTER_ENTRIES else NOT_PERIODIC
+    for i in ran[hope]:
         code, cand = classify_start(res, int(i), s)
         if cand is None:
             label[i] = code
