@@ -17,7 +17,7 @@ Newton guess, and a family found that way says so (``found_by = ["map-guided sta
    contacts changing without a located event) falls back on a march and bisection to ``xtol``
    (:func:`harness.dynamics.maps.shooting.window_edges`), and ``located`` says "bisection (why)".
 3. :func:`orbit_edge_kind`: the fallback's kind: flip/fold/torus (a multiplier leaves the unit
-   circle), graze (an extra wall entry), impact-lost (fewer), period-halving (the orbit collapses
+   circle), graze (a wall entry more or fewer), period-halving (the orbit collapses
    onto a shorter period), lost (Newton found nothing, or an orbit of another period and contact
    count: the last good orbit iterated beyond says more).
 """
@@ -141,13 +141,11 @@ def orbit_edge_kind(orb: PeriodicOrbit | None, iterated_entries: int, M: int, im
 
     ``orb`` is Newton's result just beyond the edge (None or not converged: nothing found;
     then ``iterated_entries``, the wall entries of the last good orbit run M periods there,
-    decides between graze and impact-lost).
+    says whether a contact appeared or vanished: a graze).
     """
     if orb is None or not orb.converged:
-        if iterated_entries > impacts:
-            return "graze"
-        if 0 <= iterated_entries < impacts:
-            return "impact-lost" if iterated_entries else "no-impact"
+        if iterated_entries >= 0 and iterated_entries != impacts:
+            return "graze"  # a contact appeared or vanished
         return "lost"
     n = int(np.sum(orb.contacts))
     if n != impacts and minimal_period(orb) < M:
@@ -155,10 +153,8 @@ def orbit_edge_kind(orb: PeriodicOrbit | None, iterated_entries: int, M: int, im
         # period-1 orbit, 2 impacts per 2 periods, reached from the period-2 window at sigma = 0.526,
         # Gamma = 48.9): not this family's continuation, so not a graze; the flow decides
         return orbit_edge_kind(None, iterated_entries, M, impacts)
-    if n > impacts:
-        return "graze"
-    if n < impacts:
-        return "impact-lost" if n else "no-impact"
+    if n != impacts:
+        return "graze"  # a contact appeared or vanished: its gap or entry velocity reached 0
     if minimal_period(orb) < M:
         return "period-halving"
     m = orb.multipliers[int(np.argmax(np.abs(orb.multipliers)))]

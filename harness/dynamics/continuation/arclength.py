@@ -17,7 +17,8 @@ from ..maps.periodic_map import MapEvaluation, PeriodMap
 
 __all__ = ["BranchPoint", "ArclengthCorrector", "CORRECTOR_TOL"]
 
-#: Residual of the corrector: max |F^M(w) - w|.
+#: Residual of the corrector: max |F^M(w) - w| (with CVODE, its accuracy where larger:
+#: :func:`harness.dynamics.maps.periodic_map.map_accuracy`).
 CORRECTOR_TOL = 1e-10
 
 
@@ -59,6 +60,8 @@ class ArclengthCorrector:
 
     def __init__(self, pmap: PeriodMap, M: int, locate_tol: float) -> None:
         self.pmap, self.M, self.locate_tol = pmap, M, locate_tol
+        #: the corrector's residual: CORRECTOR_TOL, or the solver's accuracy over M periods
+        self.tol = pmap.tol(M, CORRECTOR_TOL) if hasattr(pmap, "tol") else CORRECTOR_TOL
 
     def correct(self, x_pred: np.ndarray, t: np.ndarray, max_iter: int = 8) -> tuple[BranchPoint | None, int]:
         """Newton on the extended system from ``x_pred``; (point or None, iterations)."""
@@ -68,7 +71,7 @@ class ArclengthCorrector:
             g = ev.image - x[:2]
             if not np.all(np.isfinite(g)):
                 return None, it
-            if float(np.max(np.abs(g))) < CORRECTOR_TOL and abs(t @ (x - x_pred)) < 1e-12:
+            if float(np.max(np.abs(g))) < self.tol and abs(t @ (x - x_pred)) < 1e-12:
                 return BranchPoint(x[:2], x[2], ev), it
             A = np.vstack([np.hstack([ev.J - np.eye(2), ev.dp[:, None]]), t])
             rhs = -np.append(g, t @ (x - x_pred))

@@ -123,7 +123,7 @@ class OrbitWalk:
         if turn < 0:  # keep the orientation through folds
             trial.tangent = -trial.tangent
         self.failed_here = False
-        if not np.array_equal(trial.ev.contacts, a.ev.contacts):
+        if not np.array_equal(trial.ev.contacts, a.ev.contacts) and not _same_total(trial, a):
             good, bracket, bad = self.cont.locate_contact_change(a, sc.size)
             return not self.graze(good, bracket, bad)
         if self.meets_half_period_flip(trial):
@@ -145,6 +145,13 @@ class OrbitWalk:
         """
         a = self.a
         good, bracket, bad = self.cont.locate_contact_change(a, self.control.size)
+        crossed = section_crossing(self.cont, good) if good is not a else None
+        if crossed is not None:
+            # an impact reached the section phase: the same orbit goes on, its section point
+            # across the impact (not an event)
+            self.advance(crossed)
+            self.control.count()
+            return True
         # a vanishing gap of a free passage, or a contact becoming grazing (its multipliers
         # diverge like 1/sqrt(depth): the square-root singularity)
         # or a change of the contacts that the gap cannot see, told by the flow just beyond
@@ -168,6 +175,11 @@ class OrbitWalk:
         located = locate_graze(self.cont, a, good)
         at = located.value if located is not None else good.p
         nxt = _new_contact_orbit(self.cont, good, bad, at) if self.follow_grazing else None
+        if nxt is not None and int(nxt.ev.contacts.sum()) == n_old and impact_at_section(self.pmap, good):
+            # an impact time crossed the section phase: the same orbit goes on, no event
+            self.advance(nxt)
+            self.control.count()
+            return False
         if nxt is not None and any(np.array_equal(np.roll(nxt.ev.contacts, k), good.ev.contacts) for k in range(M)):
             nxt = None  # the same contacts shifted: the same orbit again, not a new one
         kind = self.graze_kind(good, nxt if nxt is not None else bad, n_beyond)
@@ -258,6 +270,60 @@ def _how_located(located: GrazeLocation | None) -> str:
         which = f"entry velocity of impact {j + 1} of period {located.period}"
     return (f"; located where the {which} reaches 0 (fit of {located.samples} orbits down to "
             f"{located.nearest:.2g}), in [{lo:.12g}, {hi:.12g}]")
+
+
+def _same_total(b: BranchPoint, a: BranchPoint) -> bool:
+    """The contacts moved between the periods of the orbit, their number over M periods the same:
+    an impact time crossed an inner section t = theta + k (0 < k < M), where F^M is smooth; the
+    orbit, its impacts and multipliers go on, so this is no event."""
+    return int(b.ev.contacts.sum()) == int(a.ev.contacts.sum())
+
+
+#: A section point this close to the wall (relative to the orbit's size) has an impact at the
+#: section phase: the contact change there is the impact crossing the section, not a graze.
+SECTION_WALL_TOL = 1e-6
+
+
+def impact_at_section(pmap: PeriodMap, pt: BranchPoint) -> bool:
+    """One of the orbit's section points lies on the wall: an impact at t = theta + k."""
+    size = max(1.0, float(np.max(np.abs(pt.ev.points))))
+    u_wall = float(pmap.params.get("u_wall", 0.0))
+    return bool(np.min(np.abs(np.asarray(pt.ev.points)[:, 0] - u_wall)) <= SECTION_WALL_TOL * size)
+
+
+def section_crossing(cont: ArclengthCorrector, good: BranchPoint) -> BranchPoint | None:
+    """The orbit just beyond ``good`` when ``good``'s section point z_0 lies on the wall (an impact
+    at t = theta): z_0 jumps across that impact (pre-impact v <-> post-impact state by the jump
+    law), so the corrector cannot step over it, but the orbit, its contacts per M periods and its
+    multipliers are continuous.  Newton from the jumped state a little beyond ``good``; the point
+    found is kept when it has the same number of contacts, the same other section points and
+    nearby multipliers.  None where ``good`` has no impact at its section or nothing is found."""
+    pmap, M = cont.pmap, cont.M
+    z0 = np.asarray(good.ev.points[0], dtype=float)
+    u_wall = float(pmap.params.get("u_wall", 0.0))
+    size = max(1.0, float(np.max(np.abs(good.ev.points))))
+    if abs(z0[0] - u_wall) > SECTION_WALL_TOL * size:
+        return None
+    r = float(pmap.params.get("r", 1.0))
+    rigid = int(pmap.params.get("wall", 0)) == 2
+    vs = (-r * z0[1], -z0[1] / r) if rigid else (r * z0[1], z0[1] / r)
+    ahead = float(np.sign(good.tangent[2])) or 1.0
+    n_old = int(good.ev.contacts.sum())
+    for h in (max(10.0 * cont.locate_tol, 1e-9), 1e-7, 1e-6):
+        p = good.p + ahead * h * (1.0 + abs(good.p))
+        for v in vs:
+            start = np.array([min(z0[0], u_wall) if rigid else z0[0], v])
+            w, ev, ok, _ = refine_orbit(pmap, start - pmap.offset(p), p, M)
+            if not ok or int(ev.contacts.sum()) != n_old:
+                continue
+            rest = float(np.max(np.abs(ev.points[1:] - good.ev.points[1:]))) if M > 1 else 0.0
+            mult = np.sort_complex(np.linalg.eigvals(ev.J))
+            if rest < 1e-3 * size and float(np.max(np.abs(mult - np.sort_complex(good.mult)))) < 1e-2:
+                pt = BranchPoint(w, p, ev)
+                if pt.tangent[2] * ahead < 0:
+                    pt.tangent = -pt.tangent
+                return pt
+    return None
 
 
 def _sticks(pt: BranchPoint) -> bool:
