@@ -243,6 +243,13 @@ MUTANTS: tuple[Mutant, ...] = (
        "eps-uncertain: only the neighbours at eps (the last axis direction), not within eps"),
     _m("M60", "harness/runs/basins/ball.py", '"inside": bool(bad.size == 0)', '"inside": True', BASINS,
        "every attractor's tolerance balls pass: one period labels starts also where a boundary is within tol"),
+    # -- found by a random search over oscillators: the closed form's certified crossing search -----
+    _m("M70", "fmu_src/closed_form.c", "(dL > 0.0 && dR > 0.0 && dL + dR > sg->M[2] * hh) ||\n"
+       "                                  (dL < 0.0 && dR < 0.0 && -(dL + dR) > sg->M[2] * hh);",
+       "(dL > 0.0 && dR > 0.0) ||\n                                  (dL < 0.0 && dR < 0.0);",
+       "tests/fmu/test_random_solvers.py",
+       "the certified monotone step without its curvature margin: g taken as monotone between two rates of "
+       "one sign, a crossing and its return missed or doubled (spurious chatter)"),
 )
 
 

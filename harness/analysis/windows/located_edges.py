@@ -89,7 +89,7 @@ def edge_from_event(e: Event, kind: str, direction: float) -> Edge:
         half = max(float(e.bracket), 1e-13 * (1.0 + abs(v)))
         lo, hi = v - half, v + half
     good, bad = (hi, lo) if direction < 0 else (lo, hi)
-    return Edge(v, kind, hi - lo, np.asarray(e.multipliers), good, bad)
+    return Edge(v, kind, hi - lo, np.asarray(e.multipliers), good, bad, np.asarray(e.point, dtype=float))
 
 
 def _how(e: Event) -> str:
@@ -183,7 +183,7 @@ def locate_side(pmap: PeriodMap, M: int, impacts: int, sigma0: float, z0: Any, s
                     return edge, "continuation (flip not confirmed at fixed sigma)"
                 v, lo, hi = polished
                 good, bad = (hi, lo) if direction < 0 else (lo, hi)
-                edge = Edge(v, kind, hi - lo, edge.multipliers, good, bad)
+                edge = Edge(v, kind, hi - lo, edge.multipliers, good, bad, edge.state)
             return edge, _how(e)
         last = float(br.values[-1])
         if not lo <= last <= hi:

@@ -298,6 +298,24 @@ def shoot_families(smap: Any, fams: Sequence[Family], sigma_range: tuple[float, 
     return results, n
 
 
+def _with_flip_children(smap: Any, results: list[dict[str, Any]], n: int, sigma_range: tuple[float, float],
+                        M_max: int | None, xtol_rel: float, ratio: float, relative: bool,
+                        c: Any) -> tuple[list[dict[str, Any]], int]:
+    """``results`` with the stable period-doubled orbits born at their flips that no window
+    starts at yet (:mod:`.flip_children`), shot like the others, generation after generation of
+    a cascade (up to ``M_max``, at most 4 generations)."""
+    from .flip_children import children_at_flips
+
+    for _ in range(4):
+        kids = children_at_flips(smap, results, sigma_range, M_max, Family)
+        if not kids:
+            break
+        more, k = shoot_families(smap, kids, sigma_range, xtol_rel, ratio, 1, relative, c)
+        results, n = results + more, n + k
+    results.sort(key=lambda r: (r["family"].M, r["family"].impacts, r["family"].lo))
+    return results, n
+
+
 def _map_started_families(smap: Any, c: Any, guide: Mapping[int, Any], seen: set[tuple[int, int]],
                           M_cap: int) -> list[Family]:
     """Families of maximal orbits the scans did not see, found by Newton from the map's orbit
@@ -348,6 +366,10 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
                 fams.append(f)
     ratio = float(np.max(grid[1:] / grid[:-1])) if geometric else float(np.max(np.diff(grid)))
     results, n = shoot_families(smap, fams, sigma_range, xtol_rel, ratio, workers, relative, c)
+    results, n = _with_flip_children(smap, results, n, sigma_range, M_max, xtol_rel, ratio, relative, c)
+    from .orbit_rows import misclassified_transients, one_row_per_orbit
+
+    results = misclassified_transients(smap, one_row_per_orbit(results))
     out: dict[str, Any] = {"windows": {}, "kinds": {}, "brackets": {}, "intervals": {}, "unresolved": {},
                            "multipliers_at_lower_edge": {}, "xtol": {}, "all": []}
     best: dict[int, dict[str, Any]] = {}
@@ -355,6 +377,9 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
         f, lo, hi = r["family"], r["lower"], r["upper"]
         entry = {"M": f.M, "impacts": f.impacts, "seen": [f.lo, f.hi], "found_by": f.found_by,
                  "seed_sigma": f.seed_sigma, "resolved": r["resolved"]}
+        if r.get("transient_of"):  # not an orbit: the scans' state had not settled (.orbit_rows)
+            entry["transient_of"] = list(r["transient_of"])
+            entry["transient_periods"] = r["transient_periods"]
         if r["resolved"]:
             entry.update({"lo": lo.sigma, "hi": hi.sigma, "kinds": [lo.kind, hi.kind],
                           "intervals": [[lo.good, lo.bad], [hi.good, hi.bad]],

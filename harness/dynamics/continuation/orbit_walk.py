@@ -123,10 +123,13 @@ class OrbitWalk:
         if turn < 0:  # keep the orientation through folds
             trial.tangent = -trial.tangent
         self.failed_here = False
-        if not np.array_equal(trial.ev.contacts, a.ev.contacts) and not _same_total(trial, a):
+        moved = not np.array_equal(trial.ev.contacts, a.ev.contacts)
+        if moved and not _same_total(trial, a):
             good, bracket, bad = self.cont.locate_contact_change(a, sc.size)
             return not self.graze(good, bracket, bad)
-        if self.meets_half_period_flip(trial):
+        # (a step across an impact at the section moves the section points across that impact,
+        # so z_0 - z_m may change sign there without meeting the period-m orbit)
+        if not moved and self.meets_half_period_flip(trial):
             return False
         self.locate_smooth_events(trial)
         self.advance(trial)
@@ -227,6 +230,9 @@ class OrbitWalk:
         # where the branch meets the period-m orbit: that orbit's flip, located on the
         # period-m orbit itself (the corrector here would fall onto it: it solves F^M = w too)
         pt, bracket = _flip_of_half(self.cont, a, trial, M // 2)
+        lo, hi = sorted((a.p, trial.p))
+        if not lo - 10.0 * bracket - self.cont.locate_tol <= pt.p <= hi + 10.0 * bracket + self.cont.locate_tol:
+            return False  # no flip of the period-m orbit within the step: z_0 - z_m changed sign otherwise
         self.record("flip", pt, bracket, f"the period-{M} branch meets the period-{M // 2} orbit at its flip "
                     "(beyond: the same orbit shifted by half its period); branch ends")
         self.control.stop("flip", f"branch point at {self.pmap.param} = {pt.p:.10g}")

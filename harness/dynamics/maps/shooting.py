@@ -73,6 +73,9 @@ class Edge:
         Last sigma where the shooting found a stable maximal orbit.
     bad : float or None
         First sigma beyond it where it did not (None: not bracketed).
+    state : ndarray (2,) or None
+        A section point (u, v) of the orbit at the edge, where the continuation located it (a
+        flip's period-doubled orbit is sought from it).
     """
 
     sigma: float | None
@@ -81,6 +84,7 @@ class Edge:
     multipliers: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
     good: float | None = None
     bad: float | None = None
+    state: np.ndarray | None = None
 
     @property
     def resolved(self) -> bool:
