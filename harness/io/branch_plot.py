@@ -43,13 +43,16 @@ def _annotate(ax: Any, labels: list[tuple[float, float, str, str]]) -> None:
     """Write each label, raised in steps of 9 points until its drawn box overlaps no label written
     before it (the boxes measured as rendered: a fold and a graze a few label widths apart on the
     axis, or at other heights, still do not print over each other)."""
+    from matplotlib.text import Text
+
     renderer = ax.figure.canvas.get_renderer()
     boxes: list[Any] = []
     for x, y, text, colour in sorted(labels):
         for level in range(40):
             a = ax.annotate(text, (x, y), textcoords="offset points", xytext=(4, 6 + 9 * level), fontsize=7,
                             color=colour, arrowprops=dict(arrowstyle="-", lw=0.4, color=colour) if level else None)
-            box = a.get_window_extent(renderer).expanded(1.05, 1.15)
+            # the text's own box (an annotation's extent includes its leader line down to the point)
+            box = Text.get_window_extent(a, renderer).expanded(1.05, 1.15)
             if not any(box.overlaps(b) for b in boxes):
                 break
             a.remove()

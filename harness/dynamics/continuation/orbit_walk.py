@@ -16,6 +16,7 @@ from .arclength import ArclengthCorrector, BranchPoint
 from .branch import Branch, Event
 from .graze_location import CONTACT_CHANGE_SLACK, GrazeLocation, contact_change_interval, locate_graze
 from ..maps.periodic_map import PeriodMap, refine_orbit
+from .section_crossing import impact_at_section, section_crossed, section_crossing
 from .step_control import StepControl
 
 __all__ = ["OrbitWalk", "STICK_IMPACTS"]
@@ -114,21 +115,28 @@ class OrbitWalk:
                 sc.stop("lost", f"corrector failed down to the smallest step {sc.smallest:g} (orbit lost)")
                 return False
             return True
-        turn = float(trial.tangent @ a.tangent)
-        if abs(turn) < MAX_TURN and sc.can_shrink():
-            # the tangent turned too much in one step: the corrector may have fallen back onto the
-            # branch already followed (a step across a fold); retry shorter
-            sc.shrink()
-            return True
-        if turn < 0:  # keep the orientation through folds
-            trial.tangent = -trial.tangent
-        self.failed_here = False
         moved = not np.array_equal(trial.ev.contacts, a.ev.contacts)
-        if moved and not _same_total(trial, a):
+        crossing = moved and section_crossed(self.pmap, a, trial, sc.size)
+        turn = float(trial.tangent @ a.tangent)
+        if crossing:
+            # an impact time crossed a section t = theta + k: the same orbit, but a section point
+            # may have jumped across that impact, so the tangents' w parts are not comparable;
+            # the orientation is the parameter's direction
+            if trial.tangent[2] * a.tangent[2] < 0:
+                trial.tangent = -trial.tangent
+        else:
+            if abs(turn) < MAX_TURN and sc.can_shrink():
+                # the tangent turned too much in one step: the corrector may have fallen back onto
+                # the branch already followed (a step across a fold); retry shorter
+                sc.shrink()
+                return True
+            if turn < 0:  # keep the orientation through folds
+                trial.tangent = -trial.tangent
+        self.failed_here = False
+        if moved and not crossing:
             good, bracket, bad = self.cont.locate_contact_change(a, sc.size)
             return not self.graze(good, bracket, bad)
-        # (a step across an impact at the section moves the section points across that impact,
-        # so z_0 - z_m may change sign there without meeting the period-m orbit)
+        # (across an impact at the section z_0 - z_m may change sign without meeting the period-m orbit)
         if not moved and self.meets_half_period_flip(trial):
             return False
         self.locate_smooth_events(trial)
@@ -231,8 +239,11 @@ class OrbitWalk:
         # period-m orbit itself (the corrector here would fall onto it: it solves F^M = w too)
         pt, bracket = _flip_of_half(self.cont, a, trial, M // 2)
         lo, hi = sorted((a.p, trial.p))
-        if not lo - 10.0 * bracket - self.cont.locate_tol <= pt.p <= hi + 10.0 * bracket + self.cont.locate_tol:
-            return False  # no flip of the period-m orbit within the step: z_0 - z_m changed sign otherwise
+        # the branch turns at the flip (p = p_flip + c s^2 along it), so the flip lies near the
+        # step, not necessarily inside it; one far away: z_0 - z_m changed sign for another reason
+        near = max(10.0 * (hi - lo), 1e-4 * (1.0 + abs(pt.p)), 10.0 * bracket)
+        if not lo - near <= pt.p <= hi + near:
+            return False
         self.record("flip", pt, bracket, f"the period-{M} branch meets the period-{M // 2} orbit at its flip "
                     "(beyond: the same orbit shifted by half its period); branch ends")
         self.control.stop("flip", f"branch point at {self.pmap.param} = {pt.p:.10g}")
@@ -276,60 +287,6 @@ def _how_located(located: GrazeLocation | None) -> str:
         which = f"entry velocity of impact {j + 1} of period {located.period}"
     return (f"; located where the {which} reaches 0 (fit of {located.samples} orbits down to "
             f"{located.nearest:.2g}), in [{lo:.12g}, {hi:.12g}]")
-
-
-def _same_total(b: BranchPoint, a: BranchPoint) -> bool:
-    """The contacts moved between the periods of the orbit, their number over M periods the same:
-    an impact time crossed an inner section t = theta + k (0 < k < M), where F^M is smooth; the
-    orbit, its impacts and multipliers go on, so this is no event."""
-    return int(b.ev.contacts.sum()) == int(a.ev.contacts.sum())
-
-
-#: A section point this close to the wall (relative to the orbit's size) has an impact at the
-#: section phase: the contact change there is the impact crossing the section, not a graze.
-SECTION_WALL_TOL = 1e-6
-
-
-def impact_at_section(pmap: PeriodMap, pt: BranchPoint) -> bool:
-    """One of the orbit's section points lies on the wall: an impact at t = theta + k."""
-    size = max(1.0, float(np.max(np.abs(pt.ev.points))))
-    u_wall = float(pmap.params.get("u_wall", 0.0))
-    return bool(np.min(np.abs(np.asarray(pt.ev.points)[:, 0] - u_wall)) <= SECTION_WALL_TOL * size)
-
-
-def section_crossing(cont: ArclengthCorrector, good: BranchPoint) -> BranchPoint | None:
-    """The orbit just beyond ``good`` when ``good``'s section point z_0 lies on the wall (an impact
-    at t = theta): z_0 jumps across that impact (pre-impact v <-> post-impact state by the jump
-    law), so the corrector cannot step over it, but the orbit, its contacts per M periods and its
-    multipliers are continuous.  Newton from the jumped state a little beyond ``good``; the point
-    found is kept when it has the same number of contacts, the same other section points and
-    nearby multipliers.  None where ``good`` has no impact at its section or nothing is found."""
-    pmap, M = cont.pmap, cont.M
-    z0 = np.asarray(good.ev.points[0], dtype=float)
-    u_wall = float(pmap.params.get("u_wall", 0.0))
-    size = max(1.0, float(np.max(np.abs(good.ev.points))))
-    if abs(z0[0] - u_wall) > SECTION_WALL_TOL * size:
-        return None
-    r = float(pmap.params.get("r", 1.0))
-    rigid = int(pmap.params.get("wall", 0)) == 2
-    vs = (-r * z0[1], -z0[1] / r) if rigid else (r * z0[1], z0[1] / r)
-    ahead = float(np.sign(good.tangent[2])) or 1.0
-    n_old = int(good.ev.contacts.sum())
-    for h in (max(10.0 * cont.locate_tol, 1e-9), 1e-7, 1e-6):
-        p = good.p + ahead * h * (1.0 + abs(good.p))
-        for v in vs:
-            start = np.array([min(z0[0], u_wall) if rigid else z0[0], v])
-            w, ev, ok, _ = refine_orbit(pmap, start - pmap.offset(p), p, M)
-            if not ok or int(ev.contacts.sum()) != n_old:
-                continue
-            rest = float(np.max(np.abs(ev.points[1:] - good.ev.points[1:]))) if M > 1 else 0.0
-            mult = np.sort_complex(np.linalg.eigvals(ev.J))
-            if rest < 1e-3 * size and float(np.max(np.abs(mult - np.sort_complex(good.mult)))) < 1e-2:
-                pt = BranchPoint(w, p, ev)
-                if pt.tangent[2] * ahead < 0:
-                    pt.tangent = -pt.tangent
-                return pt
-    return None
 
 
 def _sticks(pt: BranchPoint) -> bool:
