@@ -30,10 +30,12 @@ def _has_child(results: Sequence[dict[str, Any]], M: int, k: int, flip: float, t
 
 
 def children_at_flips(smap: Any, results: Sequence[dict[str, Any]], sigma_range: tuple[float, float],
-                      M_max: int | None, family_type: Any) -> list[Any]:
+                      M_max: int | None, family_type: Any, tried: set | None = None) -> list[Any]:
     """Families of the stable period-doubled orbits born at the flips of ``results`` (the shot
     families) that no window of ``results`` already starts at; ``family_type`` builds one
-    (:class:`.ode_windows.Family`)."""
+    (:class:`.ode_windows.Family`).  ``tried`` (updated) holds the flips already tried: each is
+    tried once over the generations of a cascade."""
+    tried = set() if tried is None else tried
     from ...dynamics.continuation.continue_orbit import doubled_orbit
     from ...dynamics.maps.periodic_map import PeriodMap, refine_orbit
 
@@ -42,11 +44,14 @@ def children_at_flips(smap: Any, results: Sequence[dict[str, Any]], sigma_range:
         f = r["family"]
         if not r.get("resolved") or (M_max and 2 * f.M > M_max):
             continue
-        for edge in (r["lower"], r["upper"]):
+        for edge, outward in ((r["lower"], -1.0), (r["upper"], 1.0)):
             if edge is None or edge.kind != "flip" or edge.sigma is None or edge.state is None:
                 continue
             s_f = float(edge.sigma)
             tol = 1e-6 * (1.0 + abs(s_f))
+            if (f.M, f.impacts, round(s_f, 8)) in tried:
+                continue
+            tried.add((f.M, f.impacts, round(s_f, 8)))
             if _has_child(results, f.M, f.impacts, s_f, tol) or not sigma_range[0] <= s_f <= sigma_range[1]:
                 continue
             pmap = PeriodMap(smap.sim, smap.params, "sigma", smap.theta)
@@ -59,11 +64,13 @@ def children_at_flips(smap: Any, results: Sequence[dict[str, Any]], sigma_range:
             if found is None:
                 continue
             w2, s2 = found
-            # a little further from the flip, where the child's multipliers are clear of -1
-            s_in = s2 + math.copysign(min(1e-4 * (1.0 + abs(s_f)), 10.0 * abs(s2 - s_f) + 1e-7), s2 - s_f)
+            if (s2 - s_f) * outward <= 0.0:
+                continue  # subcritical: the child lives where its parent is stable, itself unstable
+            # a little further from the flip, where the child's multipliers are clear of +1
+            s_in = s2 + outward * min(1e-3 * (1.0 + abs(s_f)), 100.0 * abs(s2 - s_f) + 1e-6)
             w3, ev3, ok3, _ = refine_orbit(pmap, w2, s_in, 2 * f.M)
-            if not ok3 or not np.all(np.abs(np.linalg.eigvals(ev3.J)) < 1.0):
-                continue  # subcritical: the child is unstable, no window
+            if not ok3 or not np.all(np.abs(np.linalg.eigvals(ev3.J)) < 1.0 - 1e-6):
+                continue  # not stable there: no window to seed
             if int(ev3.contacts.sum()) != 2 * f.impacts:
                 continue
             z = w3 + pmap.offset(s_in)

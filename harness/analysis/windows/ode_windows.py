@@ -306,8 +306,9 @@ def _with_flip_children(smap: Any, results: list[dict[str, Any]], n: int, sigma_
     a cascade (up to ``M_max``, at most 4 generations)."""
     from .flip_children import children_at_flips
 
+    tried: set = set()
     for _ in range(4):
-        kids = children_at_flips(smap, results, sigma_range, M_max, Family)
+        kids = children_at_flips(smap, results, sigma_range, M_max, Family, tried)
         if not kids:
             break
         more, k = shoot_families(smap, kids, sigma_range, xtol_rel, ratio, 1, relative, c)
@@ -378,7 +379,7 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
         entry = {"M": f.M, "impacts": f.impacts, "seen": [f.lo, f.hi], "found_by": f.found_by,
                  "seed_sigma": f.seed_sigma, "resolved": r["resolved"]}
         if r.get("transient_of"):  # not an orbit: the scans' state had not settled (.orbit_rows)
-            entry["transient_of"] = list(r["transient_of"])
+            entry["transient_of"] = r["transient_of"] if isinstance(r["transient_of"], str) else list(r["transient_of"])
             entry["transient_periods"] = r["transient_periods"]
         if r["resolved"]:
             entry.update({"lo": lo.sigma, "hi": hi.sigma, "kinds": [lo.kind, hi.kind],

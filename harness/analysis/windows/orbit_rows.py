@@ -45,7 +45,9 @@ def one_row_per_orbit(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
         g.found_by = sorted(set(g.found_by) | set(f.found_by))
         g.lo, g.hi = min(g.lo, f.lo), max(g.hi, f.hi)
     # a family Newton could not resolve from its seed, of a kind another seed resolved into a
-    # window containing the seed's sigma: the same orbit (its row would only say "did not converge")
+    # window containing the seed's sigma: the same orbit (its row would only say "did not converge");
+    # a child of branch switching that its shooting could not resolve: no scan saw it, nothing to say
+    out = [r for r in out if r.get("resolved") or any(not b.startswith("branch switching") for b in r["family"].found_by)]
     return [r for r in out if r.get("resolved") or not any(
         o.get("resolved") and (o["family"].M, o["family"].impacts) == (r["family"].M, r["family"].impacts)
         and _inside(o, r["family"].seed_sigma) for o in out)]
@@ -60,9 +62,9 @@ def _inside(r: dict[str, Any], s: float) -> bool:
 
 def misclassified_transients(smap: Any, results: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Each unresolved family run on :data:`TRANSIENT_PERIODS` periods from its scan state at its
-    seed; where the flow then sits on a resolved window's orbit of another kind at that sigma (its
-    period and contacts, its section points within 1e-6 of that orbit's), the result says so:
-    ``transient_of`` the (M, k) reached, the row a transient the scans misclassified."""
+    seed; where the flow then sits on a resolved window's orbit of another kind holding that sigma,
+    or on no period at all, the result says so: ``transient_of`` the (M, k) reached or "not
+    periodic", the row a transient the scans misclassified."""
     from ...dynamics.maps.classify import classify_orbit
     from ...dynamics.maps.sampling import strobe
 
@@ -77,6 +79,10 @@ def misclassified_transients(smap: Any, results: list[dict[str, Any]]) -> list[d
             continue
         c = classify_orbit(st.u, st.v, st.impacts)
         if c.period <= 0:
+            # Newton finds no such orbit there and the flow does not settle on any period: the
+            # scans' classification was a transient (the flow there is chaotic or of a longer period)
+            r["transient_of"] = "not periodic"
+            r["transient_periods"] = TRANSIENT_PERIODS
             continue
         key = (int(c.period), int(c.impacts))
         if key == (f.M, f.impacts):

@@ -43,6 +43,12 @@ def _all_windows_table(res: dict[str, Any], f: str) -> list[str]:
     out = ["| period M | impacts per period | window in sigma | edge kinds (lower/upper) | multipliers inside "
            "(at the seed) | seen by |", "|---|---|---|---|---|---|"]
     for e in rows:
+        if not e["resolved"] and e.get("transient_of") == "not periodic":
+            out.append(f"| {e['M']} | {e['impacts']} | no such orbit: a transient the scans misclassified at sigma = "
+                       f"{e['seed_sigma']:{f}} (Newton found no period-{e['M']} orbit there; run on "
+                       f"{e['transient_periods']} periods from the scan's state, the flow settles on no period up to "
+                       "24) | - | - | " + ", ".join(e["found_by"]) + " |")
+            continue
         if not e["resolved"] and e.get("transient_of"):
             M2, k2 = e["transient_of"]
             out.append(f"| {e['M']} | {e['impacts']} | no such orbit: a transient the scans misclassified at sigma = "
