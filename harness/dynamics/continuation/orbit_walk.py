@@ -168,9 +168,12 @@ class OrbitWalk:
         # or a change of the contacts that the gap cannot see, told by the flow just beyond
         # (on a rigid wall an impact added to a chatter, or the chatter completing into
         # sticking: the map is nonsmooth there too)
-        n_beyond = _contacts_beyond(self.pmap, good, bracket, self.M) if good is not a else None
+        # the current point itself is the last good one where the step had already shrunk onto
+        # the corner (the bisection's bracket within the location's tolerance)
+        at_corner = good is not a or bracket <= 10.0 * self.cont.locate_tol
+        n_beyond = _contacts_beyond(self.pmap, good, bracket, self.M) if at_corner else None
         changed = n_beyond is not None and n_beyond != int(good.ev.contacts.sum())
-        if good is a or not (self.pmap.gap(good.ev.points, good.ev.contacts, good.p) < GRAZE_GAP
+        if not at_corner or not (self.pmap.gap(good.ev.points, good.ev.contacts, good.p) < GRAZE_GAP
                              or float(np.abs(good.mult).max()) > GRAZE_MULTIPLIER or changed):
             return None
         if good.tangent @ a.tangent < 0:

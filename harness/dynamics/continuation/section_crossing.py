@@ -26,10 +26,17 @@ def section_crossed(pmap: PeriodMap, a: BranchPoint, b: BranchPoint, step: float
     smooth; at theta itself z_0 jumps across the impact)."""
     if int(b.ev.contacts.sum()) != int(a.ev.contacts.sum()):
         return False
-    if float(np.max(np.abs(np.sort_complex(a.mult) - np.sort_complex(b.mult)))) > 0.2:
+    k = _crossed_section(np.asarray(a.ev.contacts), np.asarray(b.ev.contacts))
+    if k is None:
         return False
     u_wall = float(pmap.params.get("u_wall", 0.0))
     pa, pb = np.asarray(a.ev.points), np.asarray(b.ev.points)
+    moved = float(np.max(np.abs(np.delete(pa, k, axis=0) - np.delete(pb, k, axis=0)))) if len(pa) > 1 else 0.0
+    # the section point between the two periods passed the wall within the step
+    if min(abs(pa[k, 0] - u_wall), abs(pb[k, 0] - u_wall)) > max(10.0 * moved, 10.0 * step, 1e-6):
+        return False
+    if float(np.max(np.abs(np.sort_complex(a.mult) - np.sort_complex(b.mult)))) > 0.2:
+        return False
     away = (np.abs(pa[:, 0] - u_wall) > 1e-2) & (np.abs(pb[:, 0] - u_wall) > 1e-2)
     return bool(not np.any(away) or float(np.max(np.abs(pa[away] - pb[away]))) <= max(0.05, 20.0 * step))
 
@@ -37,6 +44,23 @@ def section_crossed(pmap: PeriodMap, a: BranchPoint, b: BranchPoint, step: float
 #: A section point this close to the wall (relative to the orbit's size) has an impact at the
 #: section phase: the contact change there is the impact crossing the section, not a graze.
 SECTION_WALL_TOL = 1e-6
+
+
+def _crossed_section(ca: np.ndarray, cb: np.ndarray) -> int | None:
+    """The index k of the section t = theta + k an impact crossed between the contact patterns ca and
+    cb (one contact moved to the neighbouring period: out of period k - 1 into period k, or back),
+    or None where the patterns differ otherwise."""
+    d = cb - ca
+    nz = np.flatnonzero(d)
+    M = len(ca)
+    if len(nz) != 2 or sorted(d[nz]) != [-1, 1]:
+        return None
+    i, j = int(nz[d[nz] == 1][0]), int(nz[d[nz] == -1][0])  # into period i, out of period j
+    if i == (j + 1) % M:
+        return i  # later: past t = theta + i
+    if j == (i + 1) % M:
+        return j  # earlier: back before t = theta + j
+    return None
 
 
 def impact_at_section(pmap: PeriodMap, pt: BranchPoint) -> bool:

@@ -34,6 +34,10 @@ TWO_PI = 2.0 * math.pi
 CVODE_ERROR_PER_RTOL = 1e3
 
 
+#: A Newton tolerance below this asks to polish an orbit as far as the map allows (see refine_orbit).
+POLISH_TOL = 1e-11
+
+
 def map_accuracy(params: Mapping[str, Any], M: int = 1) -> float:
     """The residual max |F^M(w) - w| the FMU's map resolves with the solver in ``params``: 0 for the
     closed form (exact up to rounding: the callers' own tolerances apply), M periods of CVODE's
@@ -274,7 +278,10 @@ def refine_orbit(pmap: PeriodMap, w0: np.ndarray, p: float, M: int, tol: float =
     Returns (w, evaluation at w, converged, residual max|F^M(w) - w|).  Steps are damped to at
     most 0.5 in max norm (the map is nonsmooth at grazing; a wild step lands on another branch).
     """
-    tol = pmap.tol(M, tol) if hasattr(pmap, "tol") else tol
+    # converged within the solver's accuracy; a tol far below the default is a request to polish
+    # (a graze's samples, a flip at fixed sigma): Newton goes on towards it up to max_iter
+    accept = pmap.tol(M, tol) if hasattr(pmap, "tol") else tol
+    tol = tol if tol < POLISH_TOL else accept
     w = np.asarray(w0, dtype=float).copy()
     ev = pmap.evaluate(w, p, M)
     res = float(np.max(np.abs(ev.image - w)))
@@ -293,4 +300,4 @@ def refine_orbit(pmap: PeriodMap, w0: np.ndarray, p: float, M: int, tol: float =
         w = w + dw
         ev = pmap.evaluate(w, p, M)
         res = float(np.max(np.abs(ev.image - w)))
-    return w, ev, bool(res < tol), res
+    return w, ev, bool(res < accept), res
