@@ -104,7 +104,7 @@ class OrbitWalk:
     def step(self) -> bool:
         """Try one step from the current point; False when the branch ends."""
         a, sc = self.a, self.control
-        trial, its = self.cont.correct(a.x + sc.size * a.tangent, a.tangent)
+        trial, its = self.cont.correct(a.x + sc.size * a.tangent, a.tangent, lenient=True)
         if trial is None and not self.failed_here:
             self.failed_here = True
             go_on = self.graze_at_corner()
@@ -186,7 +186,9 @@ class OrbitWalk:
         a, M = self.a, self.M
         n_old = int(a.ev.contacts.sum())
         # the graze on its defining equation (gap or entry velocity = 0), None for another change
-        located = locate_graze(self.cont, a, good)
+        # (where the walk had shrunk onto the corner, the last good orbit is its current point:
+        # the samples of the defining quantity start from the point before it)
+        located = locate_graze(self.cont, a if good is not a or len(self.pts) < 2 else self.pts[-2], good)
         at = located.value if located is not None else good.p
         nxt = _new_contact_orbit(self.cont, good, bad, at) if self.follow_grazing else None
         if nxt is not None and int(nxt.ev.contacts.sum()) == n_old and impact_at_section(self.pmap, good):
