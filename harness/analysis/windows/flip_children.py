@@ -10,7 +10,6 @@ switching at the flip of M/k"), shot and continued to its edges like every other
 """
 from __future__ import annotations
 
-import math
 from typing import Any, Sequence
 
 import numpy as np
