@@ -269,6 +269,13 @@ MUTANTS: tuple[Mutant, ...] = (
        'wider = ("scans" if s_s < s_c else "continuation") if side == "lower" else \\',
        'wider = ("scans" if s_s > s_c else "continuation") if side == "lower" else \\', CHART_RULES,
        "a lower-edge contradiction settled for the route with the narrower window where shooting finds the orbit"),
+    # -- found by a random search over oscillators: the closed form's certified crossing search -----
+    _m("M66", "fmu_src/closed_form.c", "(dL > 0.0 && dR > 0.0 && dL + dR > sg->M[2] * hh) ||\n"
+       "                                  (dL < 0.0 && dR < 0.0 && -(dL + dR) > sg->M[2] * hh);",
+       "(dL > 0.0 && dR > 0.0) ||\n                                  (dL < 0.0 && dR < 0.0);",
+       "tests/fmu/test_random_solvers.py",
+       "the certified monotone step without its curvature margin: g taken as monotone between two rates of "
+       "one sign, a crossing and its return missed or doubled (spurious chatter)"),
 )
 
 

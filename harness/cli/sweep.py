@@ -137,7 +137,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         for direction in ds["direction"].values:
             sel = ds.sel(direction=direction)
             wins = windows(grid, sel["period"].values, sel["orbit_impacts"].values)
-            text = ", ".join(f"P{m} [{lo:g}, {hi:g}]" for m, lo, hi in sorted(wins, key=lambda w: -w[2])) or "none"
+            text = ", ".join(f"P{m} [{lo:.6g}, {hi:.6g}]" for m, lo, hi in sorted(wins, key=lambda w: -w[2])) or "none"
             print(f"  {direction}: windows of maximal orbits (1 impact per period): {text}")
     print(f"wrote {out}")
     if plot:

@@ -105,7 +105,10 @@ def parameter_values(start: Any, stop: Any, num: Any, values: Any, args: tuple[s
         raise HarnessInputError(a_start, "start and stop must be finite")
     if n > 1 and lo == hi:
         raise HarnessInputError(a_stop, f"empty range: start = stop = {lo} with {n} points")
-    return np.linspace(lo, hi, n)
+    grid = np.linspace(lo, hi, n)
+    if n > 1:  # a point that is 0 up to the rounding of lo + k step (-5.55e-17) is 0
+        grid[np.abs(grid) < 1e-9 * abs(hi - lo) / (n - 1)] = 0.0
+    return grid
 
 
 @dataclass(frozen=True)

@@ -39,17 +39,37 @@ def _event_labels(branches: Sequence[Any], span: float) -> list[tuple[float, flo
     return [(x, y, ", ".join(t), c) for x, y, t, c in placed]
 
 
-def _annotate(ax: Any, labels: list[tuple[float, float, str, str]], span: float) -> None:
-    """Write each label, raised in steps of 9 points where an earlier one lies within a tenth of
-    the axis (so that labels of nearby events do not print over each other)."""
-    done: list[tuple[float, int]] = []
+def _annotate(ax: Any, labels: list[tuple[float, float, str, str]]) -> None:
+    """Write each label, raised in steps of 9 points until its drawn box overlaps no label written
+    before it (the boxes measured as rendered: a fold and a graze a few label widths apart on the
+    axis, or at other heights, still do not print over each other)."""
+    from matplotlib.text import Text
+
+    renderer = ax.figure.canvas.get_renderer()
+    boxes: list[Any] = []
     for x, y, text, colour in sorted(labels):
-        level = 0
-        while any(abs(x - x0) < 0.1 * span and lv == level for x0, lv in done):
-            level += 1
-        done.append((x, level))
-        ax.annotate(text, (x, y), textcoords="offset points", xytext=(4, 6 + 9 * level), fontsize=7, color=colour,
-                    arrowprops=dict(arrowstyle="-", lw=0.4, color=colour) if level else None)
+        for level in range(40):
+            a = ax.annotate(text, (x, y), textcoords="offset points", xytext=(4, 6 + 9 * level), fontsize=7,
+                            color=colour, arrowprops=dict(arrowstyle="-", lw=0.4, color=colour) if level else None)
+            # the text's own box (an annotation's extent includes its leader line down to the point)
+            box = Text.get_window_extent(a, renderer).expanded(1.05, 1.15)
+            if not any(box.overlaps(b) for b in boxes):
+                break
+            a.remove()
+        boxes.append(box)
+
+
+def _runs(stable: np.ndarray, impacts: np.ndarray) -> list[tuple[int, int]]:
+    """(first, last) index of each stretch of a branch drawn in one style and colour: the segment
+    i -> i + 1 is stable when both ends are, and takes the contacts of its first end."""
+    seg = [(bool(stable[i] and stable[i + 1]), int(impacts[i])) for i in range(len(stable) - 1)]
+    runs: list[tuple[int, int]] = []
+    for i, s in enumerate(seg):
+        if runs and seg[runs[-1][0]] == s:
+            runs[-1] = (runs[-1][0], i + 1)
+        else:
+            runs.append((i, i + 1))
+    return runs
 
 
 def branch_figure(branches: Sequence[Any], path: str | Path, title: str) -> Path:
@@ -71,20 +91,21 @@ def branch_figure(branches: Sequence[Any], path: str | Path, title: str) -> Path
     for br in branches:
         x, stable, imp = br.values, br.stable, br.impacts
         mu = np.abs(br.multipliers).max(axis=1)
-        for i in range(len(x) - 1):
-            key = (br.M, int(imp[i]))
-            c = keys.setdefault(key, colors[len(keys) % len(colors)])
+        # one line per stretch of equal style: a dash pattern restarts with every line, so a branch
+        # drawn segment by segment in short steps looks solid even where it is dashed
+        for i, j in _runs(stable, imp):
+            c = keys.setdefault((br.M, int(imp[i])), colors[len(keys) % len(colors)])
             style = "-" if (stable[i] and stable[i + 1]) else "--"
             for k in range(br.M):
-                y = br.points[:, k, 0]
-                ax.plot(x[i:i + 2], y[i:i + 2], style, color=c, lw=1.4)
-            axm.plot(x[i:i + 2], mu[i:i + 2], style, color=c, lw=1.2)
+                ax.plot(x[i:j + 1], br.points[i:j + 1, k, 0], style, color=c, lw=1.4)
+            axm.plot(x[i:j + 1], mu[i:j + 1], style, color=c, lw=1.2)
         for e in br.events:
             m, ec = MARKERS.get(e.kind, ("*", "k"))
             ax.plot([e.value], [e.point[0]], m, color=ec, ms=7, mfc="none", mew=1.6,
                     label=("end of a branch" if e.kind == "end" else e.kind) if e.kind not in seen else None)
             seen.add(e.kind)
-    _annotate(ax, _event_labels(branches, span), span)
+    fig.tight_layout()
+    _annotate(ax, _event_labels(branches, span))
     handles = [Line2D([], [], color=c, lw=1.4, label=f"period {M}, {n} impact{'s' if n != 1 else ''} per period")
                for (M, n), c in keys.items()]
     handles += [Line2D([], [], color="k", lw=1.2, ls="-", label="stable"),

@@ -17,8 +17,10 @@ FIG9 = ["--nu", "4.605170185988091", "--Omega", "0.3059238689620112", "--r", "0.
 
 def test_continue_writes_branch_plot_report(tmp_path: Path, capsys) -> None:
     out = tmp_path / "c.nc"
+    # 80 points: the period-2 branch switched onto at the flip climbs to its nonsmooth fold at 0.819
+    # (the stable window's graze) in steps that shrink towards the corner, then runs down
     code, stdout, err = run_main(["continue", *FIG9, "--range", "0.7:1.1", "--start", "1.0", "--switch",
-                                  "--max-points", "40", "--out", str(out), "--no-progress"], capsys)
+                                  "--max-points", "80", "--out", str(out), "--no-progress"], capsys)
     assert code == 0, err
     ds = read_netcdf(out)
     events = json.loads(ds.attrs["continuation.events"])

@@ -195,7 +195,11 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
     best, score = best_variant(ode, variants) if variants and any(w is not None for w in ode.values()) else (None, {})
     from .edge_coincidence import reconcile
 
-    coincident = reconcile(shoot["all"])  # before the figures and the coexistence: one point, not two
+    from ...dynamics.maps.periodic_map import map_accuracy
+
+    # before the figures and the coexistence: one point, not two; with CVODE each location carries
+    # its orbits' error (~1e-9 in sigma), ten times one period's accuracy is the floor of agreement
+    coincident = reconcile(shoot["all"], 10.0 * map_accuracy(ctx.params(), 1))
     t1 = time.perf_counter()
     from .plots import plot_all
 

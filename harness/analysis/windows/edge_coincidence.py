@@ -41,7 +41,7 @@ def _pairs(rows: Sequence[dict[str, Any]]):
                     yield p, side, c, 1 - side
 
 
-def reconcile(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+def reconcile(rows: Sequence[dict[str, Any]], accuracy: float = 0.0) -> list[dict[str, Any]]:
     """Give a period-doubled window's birth the parent's flip, and the wall-free window's graze
     sigma = 0, or flag the two numbers when they differ by more than their tolerances.
 
@@ -49,7 +49,9 @@ def reconcile(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     matches takes the shared value (``located_by`` says so).  Returns one record per pair:
     ``what`` (in words), ``edge`` ("M/k lo|hi"), ``sigma`` (the shared value), ``difference``
     (the edge's own bisection minus it), ``tolerance`` (the brackets' half-widths together),
-    ``agree``.
+    ``agree``.  ``accuracy`` (in sigma) is added to every tolerance: the location error of the
+    solver's orbits (0 for the closed form; CVODE's ~1e-9 moves a root by that much whatever the
+    width of its bracket), so a birth at its parent's flip is one point under both solvers.
     """
     key = ("lo", "hi")
     out = []
@@ -58,15 +60,17 @@ def reconcile(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         if own is None:
             continue
         bp, bc = _bracket(p, ps), _bracket(c, cs)
-        tol = sum(0.5 * (b[1] - b[0]) for b in (bp, bc) if b is not None) + _ROUND_OFF
-        agree = bool(bp and bc and bp[0] <= bc[1] + _ROUND_OFF and bc[0] <= bp[1] + _ROUND_OFF) or abs(own - flip) <= tol
+        slack = _ROUND_OFF + accuracy
+        tol = sum(0.5 * (b[1] - b[0]) for b in (bp, bc) if b is not None) + slack
+        agree = bool(bp and bc and bp[0] <= bc[1] + slack and bc[0] <= bp[1] + slack) or abs(own - flip) <= tol
         out.append(_settle(c, cs, flip, own, tol, agree,
                            f"the flip of period {p['M']} ({p['M']}/{p['impacts']})"))
     for r in rows:  # the wall-free orbit (1 + sigma) cos(2 pi t) - 1 touches the wall at sigma = 0
         if r.get("resolved") and r["impacts"] == 0 and r["hi"] is not None and r["kinds"][1] == "graze":
             b = _bracket(r, 1)
-            tol = (0.5 * (b[1] - b[0]) if b else 0.0) + _ROUND_OFF
-            agree = bool(b and b[0] - _ROUND_OFF <= 0.0 <= b[1] + _ROUND_OFF) or abs(r["hi"]) <= tol
+            tol = (0.5 * (b[1] - b[0]) if b else 0.0) + _ROUND_OFF + accuracy
+            slack = _ROUND_OFF + accuracy
+            agree = bool(b and b[0] - slack <= 0.0 <= b[1] + slack) or abs(r["hi"]) <= tol
             out.append(_settle(r, 1, 0.0, r["hi"], tol, agree, "sigma = 0, where the wall-free orbit grazes"))
     return out
 

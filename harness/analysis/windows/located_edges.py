@@ -11,8 +11,10 @@ says which).
 The location does not depend on ``--quick``: only the search (scan grid, transients) does.
 
 The continuation's kinds are mapped onto the reports' vocabulary: flip, fold, torus (ns),
-graze (one more contact beyond), impact-lost / no-impact (one fewer / none), period-halving (a
-period-2m branch meeting the period-m orbit at its flip), stick.
+graze (a contact appears or vanishes: its gap or entry velocity reaches 0), period-halving (a
+period-2m branch meeting the period-m orbit at its flip), stick.  An impact time crossing the
+section phase t = n + theta is not an edge: the orbit, its contacts over a period and its
+multipliers go on through it (the continuation steps across, :mod:`harness.dynamics.continuation.orbit_walk`).
 
 The branch is checked before its event is believed: every point before it must be stable with
 the family's contacts (a step that crossed a flip and a graze at once would otherwise give the
@@ -22,7 +24,6 @@ is reported as such and left to the march and bisection (:func:`harness.dynamics
 from __future__ import annotations
 
 import math
-import re
 from typing import Any
 
 import numpy as np
@@ -66,13 +67,10 @@ def report_kind(branch: Branch, e: Event, impacts: int) -> str:
         return "period-halving" if _minimal_period(branch.points[e.index]) < branch.M else "flip"
     if e.kind == "ns":
         return "torus"
-    if e.kind != "graze":
-        return e.kind  # fold, stick
-    m = re.search(r"(\d+) -> (\d+) impacts", e.note)
-    n_new = int(m.group(2)) if m else (impacts + 1 if e.quantity != "entry velocity" else impacts - 1)
-    if n_new > impacts:
-        return "graze"
-    return "impact-lost" if n_new > 0 else "no-impact"
+    # fold, stick; a contact appearing or vanishing is a graze either way (its defining quantity,
+    # a gap or an entry velocity, reaches 0); an impact time crossing the section phase is no
+    # event at all (the continuation goes on through it)
+    return e.kind
 
 
 def edge_from_event(e: Event, kind: str, direction: float) -> Edge:
@@ -91,7 +89,7 @@ def edge_from_event(e: Event, kind: str, direction: float) -> Edge:
         half = max(float(e.bracket), 1e-13 * (1.0 + abs(v)))
         lo, hi = v - half, v + half
     good, bad = (hi, lo) if direction < 0 else (lo, hi)
-    return Edge(v, kind, hi - lo, np.asarray(e.multipliers), good, bad)
+    return Edge(v, kind, hi - lo, np.asarray(e.multipliers), good, bad, np.asarray(e.point, dtype=float))
 
 
 def _how(e: Event) -> str:
@@ -185,7 +183,7 @@ def locate_side(pmap: PeriodMap, M: int, impacts: int, sigma0: float, z0: Any, s
                     return edge, "continuation (flip not confirmed at fixed sigma)"
                 v, lo, hi = polished
                 good, bad = (hi, lo) if direction < 0 else (lo, hi)
-                edge = Edge(v, kind, hi - lo, edge.multipliers, good, bad)
+                edge = Edge(v, kind, hi - lo, edge.multipliers, good, bad, edge.state)
             return edge, _how(e)
         last = float(br.values[-1])
         if not lo <= last <= hi:

@@ -17,7 +17,7 @@ Newton guess, and a family found that way says so (``found_by = ["map-guided sta
    contacts changing without a located event) falls back on a march and bisection to ``xtol``
    (:func:`harness.dynamics.maps.shooting.window_edges`), and ``located`` says "bisection (why)".
 3. :func:`orbit_edge_kind`: the fallback's kind: flip/fold/torus (a multiplier leaves the unit
-   circle), graze (an extra wall entry), impact-lost (fewer), period-halving (the orbit collapses
+   circle), graze (a wall entry more or fewer), period-halving (the orbit collapses
    onto a shorter period), lost (Newton found nothing, or an orbit of another period and contact
    count: the last good orbit iterated beyond says more).
 """
@@ -141,13 +141,11 @@ def orbit_edge_kind(orb: PeriodicOrbit | None, iterated_entries: int, M: int, im
 
     ``orb`` is Newton's result just beyond the edge (None or not converged: nothing found;
     then ``iterated_entries``, the wall entries of the last good orbit run M periods there,
-    decides between graze and impact-lost).
+    says whether a contact appeared or vanished: a graze).
     """
     if orb is None or not orb.converged:
-        if iterated_entries > impacts:
-            return "graze"
-        if 0 <= iterated_entries < impacts:
-            return "impact-lost" if iterated_entries else "no-impact"
+        if iterated_entries >= 0 and iterated_entries != impacts:
+            return "graze"  # a contact appeared or vanished
         return "lost"
     n = int(np.sum(orb.contacts))
     if n != impacts and minimal_period(orb) < M:
@@ -155,10 +153,8 @@ def orbit_edge_kind(orb: PeriodicOrbit | None, iterated_entries: int, M: int, im
         # period-1 orbit, 2 impacts per 2 periods, reached from the period-2 window at sigma = 0.526,
         # Gamma = 48.9): not this family's continuation, so not a graze; the flow decides
         return orbit_edge_kind(None, iterated_entries, M, impacts)
-    if n > impacts:
-        return "graze"
-    if n < impacts:
-        return "impact-lost" if n else "no-impact"
+    if n != impacts:
+        return "graze"  # a contact appeared or vanished: its gap or entry velocity reached 0
     if minimal_period(orb) < M:
         return "period-halving"
     m = orb.multipliers[int(np.argmax(np.abs(orb.multipliers)))]
@@ -359,6 +355,13 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
     if routes is not None:  # tracks seen beyond their windows shot afresh, one orbit's families merged
         results, n = routes.refine(results, n, lambda fs: shoot_families(smap, fs, sigma_range, xtol_rel, ratio,
                                                                          workers, relative, c), xtol_rel)
+    from .flip_children import with_flip_children
+    from .orbit_rows import misclassified_transients, one_row_per_orbit
+
+    results, n = with_flip_children(smap, results, n, sigma_range, M_max, Family, lambda fs: shoot_families(
+        smap, fs, sigma_range, xtol_rel, ratio, 1, relative, c))
+
+    results = misclassified_transients(smap, one_row_per_orbit(results))
     out: dict[str, Any] = {"windows": {}, "kinds": {}, "brackets": {}, "intervals": {}, "unresolved": {},
                            "multipliers_at_lower_edge": {}, "xtol": {}, "all": []}
     best: dict[int, dict[str, Any]] = {}
@@ -368,6 +371,9 @@ def measure(smap: Any, grid: np.ndarray, ds: Any, sigma_range: tuple[float, floa
                  "seed_sigma": f.seed_sigma, "resolved": r["resolved"]}
         if routes is not None:
             entry["basin_share"] = routes.share(r)
+        if r.get("transient_of"):  # not an orbit: the scans' state had not settled (.orbit_rows)
+            entry["transient_of"] = r["transient_of"] if isinstance(r["transient_of"], str) else list(r["transient_of"])
+            entry["transient_periods"] = r["transient_periods"]
         if r["resolved"]:
             entry.update({"lo": lo.sigma, "hi": hi.sigma, "kinds": [lo.kind, hi.kind],
                           "intervals": [[lo.good, lo.bad], [hi.good, hi.bad]],

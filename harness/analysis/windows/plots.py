@@ -157,6 +157,22 @@ def _window_rows(windows: dict[str, Any], applies: dict[str, str | None], every:
     return rows
 
 
+def bar_lanes(spans: list[tuple[float, float]]) -> tuple[list[int], int]:
+    """A lane for each interval (lo, hi) of one row such that intervals in one lane do not overlap
+    (the first lane free at its start, in order of the starts), and the number of lanes used."""
+    order = sorted(range(len(spans)), key=lambda j: spans[j])
+    ends: list[float] = []  # the right end of each lane so far
+    lane = [0] * len(spans)
+    for j in order:
+        lo, hi = spans[j]
+        k = next((k for k, e in enumerate(ends) if e < lo), len(ends))
+        if k == len(ends):
+            ends.append(hi)
+        ends[k] = hi
+        lane[j] = k
+    return lane, max(1, len(ends))
+
+
 def _plot_windows(ctx: Any, problem: Any, st: Any, windows: dict[str, Any], applies: dict[str, str | None],
                   every: list[dict[str, Any]] | None = None) -> str:
     """TARGET_windows.png: every window, one row per ODE attractor and per map that applies; an
@@ -172,17 +188,20 @@ def _plot_windows(ctx: Any, problem: Any, st: Any, windows: dict[str, Any], appl
     cmap = plt.get_cmap("tab10")
     seen: set[int] = set()
     for i, (_, wins, is_map) in enumerate(rows):
-        for lo, hi, M in wins:
-            a = (map_lo if is_map else x_lo) if lo is None else max(lo, x_lo)
-            b = x_hi if hi is None else min(hi, x_hi)
-            if b < a:
-                continue  # wholly outside the plotted range
-            ax.plot([a, b], [i, i], lw=8, solid_capstyle="butt", color=cmap((M - 1) % 10),
+        bars = [((map_lo if is_map else x_lo) if lo is None else max(lo, x_lo), x_hi if hi is None else min(hi, x_hi),
+                 lo, hi, M) for lo, hi, M in wins]
+        bars = [b for b in bars if b[1] >= b[0]]  # a window wholly outside the plotted range is not drawn
+        lane, n_lanes = bar_lanes([(a, b) for a, b, *_ in bars])
+        for (a, b, lo, hi, M), k in zip(bars, lane):
+            # overlapping windows of one row (a map's period-1 and period-2 windows) side by side in
+            # lanes of the row, each visible
+            y = i + (k - 0.5 * (n_lanes - 1)) * 0.7 / n_lanes
+            ax.plot([a, b], [y, y], lw=8 / n_lanes, solid_capstyle="butt", color=cmap((M - 1) % 10),
                     label=f"period {M}" if M not in seen else None)
             seen.add(M)
             for end, open_, sign in ((a, lo is None or lo < x_lo, -1), (b, hi is None or hi > x_hi, 1)):
                 if open_:  # beyond the searched (or plotted) range: an arrow to its end
-                    ax.annotate("", xy=(end, i), xytext=(end - sign * 0.04 * (x_hi - x_lo), i),
+                    ax.annotate("", xy=(end, y), xytext=(end - sign * 0.04 * (x_hi - x_lo), y),
                                 arrowprops=dict(arrowstyle="->", lw=1.5, color="k"))
     ax.set_yticks(range(len(rows)), [r[0] for r in rows], fontsize=8)
     ax.set_xlabel("forcing amplitude above grazing, sigma")

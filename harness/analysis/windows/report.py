@@ -9,6 +9,7 @@ from mapcheck.compare import markdown_window_table
 
 from ..context import Context
 from .plots import labels_for
+from .summary import attractor_label
 
 #: Map variants (keys in the JSON); the coefficient equation depends on the wall.
 VARIANT_KEYS = ("theory_64", "map", "map_A_tilde")
@@ -37,6 +38,19 @@ def _all_windows_table(res: dict[str, Any], f: str) -> list[str]:
     out = ["| period M | impacts per period | window in sigma | edge kinds (lower/upper) | multipliers inside "
            "(at the seed) | found by | basin share |", "|---|---|---|---|---|---|---|"]
     for e in rows:
+        if not e["resolved"] and e.get("transient_of") == "not periodic":
+            out.append(f"| {e['M']} | {e['impacts']} | no such orbit: a transient the scans misclassified at sigma = "
+                       f"{e['seed_sigma']:{f}} (Newton found no period-{e['M']} orbit there; run on "
+                       f"{e['transient_periods']} periods from the scan's state, the flow settles on no period up to "
+                       "24) | - | - | " + ", ".join(e["found_by"]) + " |")
+            continue
+        if not e["resolved"] and e.get("transient_of"):
+            M2, k2 = e["transient_of"]
+            out.append(f"| {e['M']} | {e['impacts']} | no such orbit: a transient the scans misclassified at sigma = "
+                       f"{e['seed_sigma']:{f}} (Newton found no period-{e['M']} orbit there; run on "
+                       f"{e['transient_periods']} periods from the scan's state, it reaches {attractor_label(M2, k2)}, "
+                       "listed) | - | - | " + ", ".join(e["found_by"]) + " |")
+            continue
         if not e["resolved"]:
             out.append(f"| {e['M']} | {e['impacts']} | Newton did not converge from the scan's state at sigma = "
                        f"{e['seed_sigma']:{f}} | - | - | {', '.join(e['found_by'])} | {_share(e, f)} |")

@@ -162,6 +162,8 @@ def _closest_line(f: Mapping[str, Any], labels: Mapping[str, str], res: Mapping[
         return ("No applicable map has a window at every period where the ODE has one (a missing window counts as "
                 "an infinite difference).")
     gap, width, name = f["gap"], f["width"], labels[f["closest"]]
+    if gap == 0.0:  # the same edges to the last digit: agreement, whatever the windows' widths
+        return f"{name} agrees best with the ODE: its edges equal the ODE's (largest edge difference 0 in sigma)."
     if width is not None and gap <= 0.1 * width:
         return (f"{name} agrees best with the ODE: largest edge difference {gap:.2g} in sigma, under a tenth of "
                 f"the narrowest ODE window compared ({width:.2g}).")

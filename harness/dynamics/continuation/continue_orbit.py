@@ -42,7 +42,7 @@ from .step_control import StepControl
 from ...errors import HarnessInputError
 from ...fmu.simulator import Simulator
 
-__all__ = ["continue_orbit", "switch_at_flip", "STICK_IMPACTS"]
+__all__ = ["continue_orbit", "doubled_orbit", "switch_at_flip", "STICK_IMPACTS"]
 
 
 def _start_point(pmap: PeriodMap, p0: float, z0: Any, M: int) -> BranchPoint:
@@ -133,10 +133,14 @@ def switch_at_flip(sim: Simulator, params: Mapping[str, Any], branch: Branch, ev
                    delta: float = 1e-4, **kwargs: Any) -> Branch | None:
     """Start the period-2M branch at a located flip of ``branch`` and continue it.
 
-    The period-2M orbit bifurcates from the flip point along the eigenvector e of mu = -1, with
-    amplitude ~ sqrt(|p - p_flip|).  Newton on F^{2M} is started at p_flip +- ``delta`` from
-    z_flip +- sqrt(delta) e (then with delta / 100); the first solution that is not the period-M
-    orbit (|F^M(w) - w| > 1e-7) and has twice its contacts starts :func:`continue_orbit` with period 2M, directed away from the flip.
+    The period-2M orbit bifurcates from the flip point (w_f, p_f) along the eigenvector e of
+    mu = -1: w = w_f + s e + O(s^2), p = p_f + O(s^2).  It is solved with its amplitude s fixed
+    (branch switching): Newton on F^{2M}(w; p) - w = 0, e . (w - w_f) = s in (w, p), from
+    (w_f + s e, p_f), for a few amplitudes s; the period-M orbit, whose component along e is
+    not s at any p near the flip, is not a solution of that system.  The first solution that is
+    not the period-M orbit (|F^M(w) - w| above the solver's accuracy) and has twice its contacts
+    starts :func:`continue_orbit` with period 2M, directed away from the flip.  Where none
+    converges, Newton at fixed p_f +- ``delta`` from w_f +- sqrt(delta) e is tried as well.
     ``kwargs`` go to :func:`continue_orbit` (p_range, max_points, ...).
 
     Returns
@@ -152,18 +156,63 @@ def switch_at_flip(sim: Simulator, params: Mapping[str, Any], branch: Branch, ev
     ev = pmap.evaluate(w_f, event.value, M)
     vals, vecs = np.linalg.eig(ev.J)
     e = np.real(vecs[:, int(np.argmin(np.abs(vals + 1.0)))])
+    e = e / np.linalg.norm(e)
     impacts = 2 * int(np.asarray(branch.contacts[event.index]).sum())
+    found = doubled_orbit(pmap, w_f, float(event.value), e, M, impacts)
+    if found is None:
+        found = _doubled_at_fixed_p(pmap, w_f, float(event.value), e, M, impacts, delta)
+    if found is None:
+        return None
+    w, p = found
+    side = math.copysign(1.0, p - float(event.value)) if p != event.value else 1.0
+    return continue_orbit(sim, params, 2 * M, p, w + pmap.offset(p), direction=side, pmap=pmap, **kwargs)
+
+
+def _is_doubled(pmap: PeriodMap, w: np.ndarray, p: float, ev: Any, M: int, impacts: int) -> bool:
+    """A period-2M orbit with ``impacts`` contacts that is not the period-M orbit run twice."""
+    if int(np.asarray(ev.contacts).sum()) != impacts:
+        return False
+    half = pmap.evaluate(w, p, M, derivatives=False).image
+    return float(np.max(np.abs(half - w))) > max(1e-7, 100.0 * pmap.tol(M, 0.0))
+
+
+def doubled_orbit(pmap: PeriodMap, w_f: np.ndarray, p_f: float, e: np.ndarray, M: int,
+                  impacts: int) -> tuple[np.ndarray, float] | None:
+    """The period-2M orbit next to the flip at (w_f, p_f) with eigenvector ``e``: (w, p) solved
+    with its amplitude along e fixed (Newton in (w, p) on F^{2M}(w; p) = w, e . (w - w_f) = s),
+    for amplitudes s from 1e-3 to 3e-2 and 1e-4; None when none converges onto such an orbit."""
+    tol = pmap.tol(2 * M, 1e-10)
+    for amp in (1e-3, 1e-2, 1e-4, 3e-2):
+        for sgn in (1.0, -1.0):
+            s = sgn * amp
+            x = np.append(w_f + s * e, p_f)
+            for _ in range(25):
+                ev = pmap.evaluate(x[:2], x[2], 2 * M)
+                g = np.append(ev.image - x[:2], e @ (x[:2] - w_f) - s)
+                if not np.all(np.isfinite(g)):
+                    break
+                if float(np.max(np.abs(g[:2]))) < tol and abs(g[2]) < 1e-12:
+                    if _is_doubled(pmap, x[:2], float(x[2]), ev, M, impacts):
+                        return x[:2].copy(), float(x[2])
+                    break
+                A = np.vstack([np.hstack([ev.J - np.eye(2), ev.dp[:, None]]), np.append(e, 0.0)])
+                try:
+                    dx = np.linalg.solve(A, -g)
+                except np.linalg.LinAlgError:
+                    break
+                big = float(np.max(np.abs(dx)))  # damped like the corrector (the map is nonsmooth)
+                x = x + (dx * (0.1 * (1.0 + abs(p_f)) / big) if big > 0.1 * (1.0 + abs(p_f)) else dx)
+    return None
+
+
+def _doubled_at_fixed_p(pmap: PeriodMap, w_f: np.ndarray, p_f: float, e: np.ndarray, M: int, impacts: int,
+                        delta: float) -> tuple[np.ndarray, float] | None:
+    """Newton at fixed p_f +- d from w_f +- sqrt(d) e (d = ``delta``, then delta / 100)."""
     for d in (delta, 1e-2 * delta):
         for side in (+1.0, -1.0):
-            p = event.value + side * d
+            p = p_f + side * d
             for amp in (+1.0, -1.0):
                 w, ev2, ok, _ = refine_orbit(pmap, w_f + amp * math.sqrt(d) * e, p, 2 * M)
-                # the bifurcating orbit: period 2M (not the period-M orbit) with the contacts of two
-                # turns of the period-M orbit (not a coexisting orbit Newton may fall onto)
-                if not ok or int(ev2.contacts.sum()) != impacts:
-                    continue
-                half = pmap.evaluate(w, p, M, derivatives=False).image
-                if float(np.max(np.abs(half - w))) > 1e-7:
-                    z = w + pmap.offset(p)
-                    return continue_orbit(sim, params, 2 * M, p, z, direction=side, pmap=pmap, **kwargs)
+                if ok and _is_doubled(pmap, w, p, ev2, M, impacts):
+                    return w, p
     return None

@@ -17,6 +17,7 @@ from .branch import Branch, Event
 from .graze_location import CONTACT_CHANGE_SLACK, GrazeLocation, contact_change_interval, locate_graze
 from ...config.defaults import WALLS
 from ..maps.periodic_map import PeriodMap, refine_orbit
+from .section_crossing import impact_at_section, section_crossed, section_crossing
 from .step_control import StepControl
 
 __all__ = ["OrbitWalk", "STICK_IMPACTS"]
@@ -104,7 +105,7 @@ class OrbitWalk:
     def step(self) -> bool:
         """Try one step from the current point; False when the branch ends."""
         a, sc = self.a, self.control
-        trial, its = self.cont.correct(a.x + sc.size * a.tangent, a.tangent)
+        trial, its = self.cont.correct(a.x + sc.size * a.tangent, a.tangent, lenient=True)
         if trial is None and not self.failed_here:
             self.failed_here = True
             go_on = self.graze_at_corner()
@@ -115,19 +116,29 @@ class OrbitWalk:
                 sc.stop("lost", f"corrector failed down to the smallest step {sc.smallest:g} (orbit lost)")
                 return False
             return True
+        moved = not np.array_equal(trial.ev.contacts, a.ev.contacts)
+        crossing = moved and section_crossed(self.pmap, a, trial, sc.size)
         turn = float(trial.tangent @ a.tangent)
-        if abs(turn) < MAX_TURN and sc.can_shrink():
-            # the tangent turned too much in one step: the corrector may have fallen back onto the
-            # branch already followed (a step across a fold); retry shorter
-            sc.shrink()
-            return True
-        if turn < 0:  # keep the orientation through folds
-            trial.tangent = -trial.tangent
+        if crossing:
+            # an impact time crossed a section t = theta + k: the same orbit, but a section point
+            # may have jumped across that impact, so the tangents' w parts are not comparable;
+            # the orientation is the parameter's direction
+            if trial.tangent[2] * a.tangent[2] < 0:
+                trial.tangent = -trial.tangent
+        else:
+            if abs(turn) < MAX_TURN and sc.can_shrink():
+                # the tangent turned too much in one step: the corrector may have fallen back onto
+                # the branch already followed (a step across a fold); retry shorter
+                sc.shrink()
+                return True
+            if turn < 0:  # keep the orientation through folds
+                trial.tangent = -trial.tangent
         self.failed_here = False
-        if not np.array_equal(trial.ev.contacts, a.ev.contacts):
+        if moved and not crossing:
             good, bracket, bad = self.cont.locate_contact_change(a, sc.size)
             return not self.graze(good, bracket, bad)
-        if self.meets_half_period_flip(trial):
+        # (across an impact at the section z_0 - z_m may change sign without meeting the period-m orbit)
+        if not moved and self.meets_half_period_flip(trial):
             return False
         self.locate_smooth_events(trial)
         self.advance(trial)
@@ -146,14 +157,24 @@ class OrbitWalk:
         """
         a = self.a
         good, bracket, bad = self.cont.locate_contact_change(a, self.control.size)
+        crossed = section_crossing(self.cont, good) if good is not a else None
+        if crossed is not None:
+            # an impact reached the section phase: the same orbit goes on, its section point
+            # across the impact (not an event)
+            self.advance(crossed)
+            self.control.count()
+            return True
         # a vanishing gap of a free passage, or a contact becoming grazing (its multipliers
         # diverge like 1/sqrt(depth): the square-root singularity)
         # or a change of the contacts that the gap cannot see, told by the flow just beyond
         # (on a rigid wall an impact added to a chatter, or the chatter completing into
         # sticking: the map is nonsmooth there too)
-        n_beyond = _contacts_beyond(self.pmap, good, bracket, self.M) if good is not a else None
+        # the current point itself is the last good one where the step had already shrunk onto
+        # the corner (the bisection's bracket within the location's tolerance)
+        at_corner = good is not a or bracket <= 10.0 * self.cont.locate_tol
+        n_beyond = _contacts_beyond(self.pmap, good, bracket, self.M) if at_corner else None
         changed = n_beyond is not None and n_beyond != int(good.ev.contacts.sum())
-        if good is a or not (self.pmap.gap(good.ev.points, good.ev.contacts, good.p) < GRAZE_GAP
+        if not at_corner or not (self.pmap.gap(good.ev.points, good.ev.contacts, good.p) < GRAZE_GAP
                              or float(np.abs(good.mult).max()) > GRAZE_MULTIPLIER or changed):
             return None
         if good.tangent @ a.tangent < 0:
@@ -166,9 +187,16 @@ class OrbitWalk:
         a, M = self.a, self.M
         n_old = int(a.ev.contacts.sum())
         # the graze on its defining equation (gap or entry velocity = 0), None for another change
-        located = locate_graze(self.cont, a, good)
+        # (where the walk had shrunk onto the corner, the last good orbit is its current point:
+        # the samples of the defining quantity start from the point before it)
+        located = locate_graze(self.cont, a if good is not a or len(self.pts) < 2 else self.pts[-2], good)
         at = located.value if located is not None else good.p
         nxt = _new_contact_orbit(self.cont, good, bad, at) if self.follow_grazing else None
+        if nxt is not None and int(nxt.ev.contacts.sum()) == n_old and impact_at_section(self.pmap, good):
+            # an impact time crossed the section phase: the same orbit goes on, no event
+            self.advance(nxt)
+            self.control.count()
+            return False
         if nxt is not None and any(np.array_equal(np.roll(nxt.ev.contacts, k), good.ev.contacts) for k in range(M)):
             nxt = None  # the same contacts shifted: the same orbit again, not a new one
         kind = self.graze_kind(good, nxt if nxt is not None else bad, n_beyond)
@@ -216,6 +244,12 @@ class OrbitWalk:
         # where the branch meets the period-m orbit: that orbit's flip, located on the
         # period-m orbit itself (the corrector here would fall onto it: it solves F^M = w too)
         pt, bracket = _flip_of_half(self.cont, a, trial, M // 2)
+        lo, hi = sorted((a.p, trial.p))
+        # the branch turns at the flip (p = p_flip + c s^2 along it), so the flip lies near the
+        # step, not necessarily inside it; one far away: z_0 - z_m changed sign for another reason
+        near = max(10.0 * (hi - lo), 1e-4 * (1.0 + abs(pt.p)), 10.0 * bracket)
+        if not lo - near <= pt.p <= hi + near:
+            return False
         self.record("flip", pt, bracket, f"the period-{M} branch meets the period-{M // 2} orbit at its flip "
                     "(beyond: the same orbit shifted by half its period); branch ends")
         self.control.stop("flip", f"branch point at {self.pmap.param} = {pt.p:.10g}")

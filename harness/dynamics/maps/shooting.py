@@ -33,6 +33,7 @@ import numpy as np
 
 from mapcheck.orbits import PeriodicOrbit, edge_kind, solve_periodic_orbit
 
+from .periodic_map import map_accuracy
 from .stroboscopic_map import StroboscopicMap
 from ...errors import FmuRejectedInput
 
@@ -60,7 +61,7 @@ class Edge:
         The edge: midpoint of the final bracket [``good``, ``bad``] (width <= xtol).  None
         when the edge is unresolved (no bracket: ``kind`` "range" or "unresolved").
     kind : str
-        "flip"/"fold"/"torus" (stability), "graze" (extra contact), "no-impact", "lost"
+        "flip"/"fold"/"torus" (stability), "graze" (a contact more or fewer), "lost"
         (Newton found nothing beyond), "range" (no edge inside the search range),
         "unresolved" (no stable maximal orbit to start from).
     bracket : float
@@ -72,6 +73,9 @@ class Edge:
         Last sigma where the shooting found a stable maximal orbit.
     bad : float or None
         First sigma beyond it where it did not (None: not bracketed).
+    state : ndarray (2,) or None
+        A section point (u, v) of the orbit at the edge, where the continuation located it (a
+        flip's period-doubled orbit is sought from it).
     """
 
     sigma: float | None
@@ -80,6 +84,7 @@ class Edge:
     multipliers: np.ndarray = field(default_factory=lambda: np.full(2, np.nan))
     good: float | None = None
     bad: float | None = None
+    state: np.ndarray | None = None
 
     @property
     def resolved(self) -> bool:
@@ -101,11 +106,16 @@ def good_orbit(smap: StroboscopicMap, M: int, sigma: float, guesses: list[np.nda
     dstep = smap.at_with_jacobian(sigma)
     failed: PeriodicOrbit | None = None
     ok_orbit = accept or (lambda o: o.maximal and o.stable)
+    newton = dict(newton or NEWTON)
+    # the residual target (tol times the largest scale) no finer than the solver resolves: with
+    # CVODE the map's own error over M periods (1e-10 to 1e-9), not the closed form's rounding
+    acc = map_accuracy(getattr(smap, "params", {}), M)
+    newton["tol"] = max(float(newton["tol"]), acc / float(np.max(newton["scale"])))
     for g in guesses:
         if g is None:
             continue
         try:
-            orb = solve_periodic_orbit(step, g, M, **(newton or NEWTON), dstep=dstep)
+            orb = solve_periodic_orbit(step, g, M, **newton, dstep=dstep)
         except FmuRejectedInput:
             # a Newton step put the start inside a rigid wall: no orbit from this guess
             continue
@@ -259,11 +269,12 @@ class _EdgeSearch:
             kind = kind_of(o_bad, n_iter)
         else:
             kind = edge_kind(o_bad) if o_bad is not None else "lost"
+            kind = "graze" if kind == "no-impact" else kind  # the impact vanished: a graze
             if kind == "lost":
                 # Newton found no orbit beyond the edge: iterate the last good orbit there and
                 # look at its contacts (an extra one in a non-impacting period: a graze)
                 _, n = self.smap.iterate(s_bad, _rotate_to_impact(o_good, M), M)
-                kind = "graze" if n > 1 else ("no-impact" if n == 0 else "lost")
+                kind = "graze" if n != 1 else "lost"  # a contact appeared or vanished
         return Edge(0.5 * (s_good + s_bad), kind, abs(s_bad - s_good), o_good.multipliers,
                     float(s_good), float(s_bad))
 
