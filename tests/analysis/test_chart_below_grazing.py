@@ -4,7 +4,7 @@
 Independent truth: mapcheck's closed-form flow and its own Newton shooting
 (:class:`tests.support.edges.ExactFlow`), sharing nothing with the FMU. Apart from
 tests/analysis/test_chart.py (whose module fixture is one chart of Figure 9) so that two workers
-can share the two.
+can share the charts.
 """
 from __future__ import annotations
 
