@@ -27,7 +27,7 @@ def test_a_chart_below_grazing_continues_the_flip_of_the_coexisting_orbit_on_the
     (mapcheck's own Newton: a multiplier -1, one impact per period), across the range of r."""
     assert main(["chart", "--nu", "0.8", "--Omega", "2.5", "--r", "0.95", "--wall", "rigid", "--param2", "r",
                  "--range", "0.85:0.95", "--num", "3", "--M-max", "4", "--quick", "--sigma-range=-0.3:0.3",
-                 "--workers", "1", "--solver", "closed-form", "--out", str(tmp_path)]) == 0
+                 "--workers", "2", "--solver", "closed-form", "--out", str(tmp_path)]) == 0
     res = json.loads((tmp_path / "chart.json").read_text())
     (w2,) = [w for w in res["windows"] if w["M"] == 2]
     flip = w2["curves"]["upper"]
@@ -54,7 +54,7 @@ def test_a_fold_below_grazing_continued_over_gamma_is_the_exact_flows_fold(tmp_p
     confirms every point (a fold has no orbit beyond it, stable or not)."""
     assert main(["chart", "--nu", "0.3", "--Omega", "1.2", "--r", "0.8", "--wall", "compliant", "--Gamma", "10",
                  "--param2", "Gamma", "--range", "10:40", "--log", "--num", "3", "--M-max", "3", "--quick",
-                 "--sigma-range=-0.05:0.3", "--workers", "1", "--solver", "closed-form", "--out", str(tmp_path)]) == 0
+                 "--sigma-range=-0.05:0.3", "--workers", "2", "--solver", "closed-form", "--out", str(tmp_path)]) == 0
     res = json.loads((tmp_path / "chart.json").read_text())
     (w3,) = [w for w in res["windows"] if w["M"] == 3]
     fold = w3["curves"]["lower"]

@@ -26,7 +26,7 @@ pytestmark = pytest.mark.slow
 
 CASE = dict(nu=1.0, Omega=3.2, r=0.99)
 ARGS = ["chart", "--nu", "1.0", "--Omega", "3.2", "--r", "0.99", "--wall", "rigid", "--param2", "nu", "--range",
-        "1.0:1.3", "--num", "3", "--M-max", "2", "--quick", "--sigma-range=-0.05:0.05", "--workers", "1",
+        "1.0:1.3", "--num", "3", "--M-max", "2", "--quick", "--sigma-range=-0.05:0.05", "--workers", "2",
         "--solver", "closed-form"]
 
 
