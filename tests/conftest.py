@@ -29,3 +29,24 @@ def _same_working_directory():
     yield
     if os.getcwd() != cwd:
         os.chdir(cwd)
+
+
+def pytest_configure(config) -> None:
+    """Keep the file order below: pytest-xdist (3.6+) otherwise hands out whole files
+    (--dist=loadfile) by their number of tests, most first, which left the long files with few
+    tests (the charts, the benchmark smoke tests) for last, one core busy with them and the other
+    idle."""
+    if hasattr(config.option, "loadscopereorder"):
+        config.option.loadscopereorder = False
+
+
+def pytest_collection_modifyitems(config, items) -> None:
+    """Files with slow tests first (in their collection order), then the others, most tests first:
+    whole files go to the workers in this order, so the files that take long start early and the
+    many short ones fill the end evenly on both cores."""
+    files: dict = {}
+    for item in items:
+        files.setdefault(item.path, []).append(item)
+    slow = {path: any(i.get_closest_marker("slow") for i in its) for path, its in files.items()}
+    order = sorted(files, key=lambda path: (not slow[path], 0 if slow[path] else -len(files[path])))
+    items[:] = [item for path in order for item in files[path]]
