@@ -20,14 +20,14 @@ import sys
 from typing import Any, Sequence
 
 from ..errors import FmuError, FmuRejectedInput, HarnessInputError, SweepTaskError
-from . import basins, chart, continue_, jacobian, reproduce, simulate, strobe, sweep, windows
+from . import atlas, basins, chart, continue_, jacobian, reproduce, simulate, strobe, sweep, windows
 from .flags import with_flags
 from .options import OneLineParser, common_parent, sampling_parent
 
 PROG = "impact-harness"
 
 #: The subcommands' modules, in the order ``--help`` lists them.
-COMMANDS = (simulate, strobe, sweep, jacobian, basins, continue_, reproduce, windows, chart)
+COMMANDS = (simulate, strobe, sweep, jacobian, basins, continue_, reproduce, windows, chart, atlas)
 
 
 def build_parser() -> argparse.ArgumentParser:
