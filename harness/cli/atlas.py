@@ -95,6 +95,8 @@ def _plane(args: argparse.Namespace, exp: Any) -> Any:
 
     n_p2, n_s = _grid(args.grid)
     lo, hi = _range(args.range_, "--range")
+    if args.log and lo <= 0:
+        raise HarnessInputError("--range", f"a geometric range needs LO > 0, got {lo:g}")
     a, b, what = LIMITS[args.param2]
     if not (a < lo and hi <= b) and not (args.param2 == "nu" and lo >= 0 and hi < b):
         raise HarnessInputError("--range", f"{args.param2} must be {what}, got {args.range_}")

@@ -5,7 +5,9 @@ An edge curve of the window of period M bounds the region where the window's orb
 impact per period; the wall-free orbit: period 1, no impact) is stable. Along each curve, at steps
 of one pixel, the atlas is probed on both sides, ``offset`` pixels away along the curve's normal
 (in pixel coordinates): the curve agrees with the atlas there when the class is stable on exactly
-one side. A disagreement is kept with what the atlas has on both sides and why it may be so:
+one side. Past the chart's closing of its window (a curve continued beyond it, e.g. the graze of
+the orbit after it lost stability) a curve is no edge and is not probed (``past_closing`` counts
+those pixels). A disagreement is kept with what the atlas has on both sides and why it may be so:
 
 - ``narrow``: another edge of the same window passes within the probe's reach (the window is
   narrower than 2 x offset pixels there, or the curve runs into a corner or a turning point);
@@ -46,9 +48,11 @@ def read_curves(path: str | Path, param2: str) -> list[dict[str, Any]]:
     out = []
     for w in data["windows"]:
         sets = [w.get("curves") or {}, *((h.get("curves") or {}) for h in w.get("handovers", []))]
+        closes = (w.get("closing") or {}).get("closes")
         for cs in sets:
             for side in ("lower", "upper"):
-                out += _curve(cs.get(side), int(w["M"]), 1, side)
+                for c in _curve(cs.get(side), int(w["M"]), 1, side):
+                    out.append({**c, "closes": closes})
     wf = data.get("wall_free") or {}
     out += _curve((wf.get("curves") or {}).get("upper"), 1, 0, "upper", "graze")
     return out
@@ -90,16 +94,20 @@ def compare_curves(maps: ClassMaps, curves: list[dict[str, Any]], p2: np.ndarray
                    log_p2: bool, log_sigma: bool, offset: int = PROBE_OFFSET) -> dict[str, Any]:
     """The curves checked against the atlas (module comment): counts and every disagreement."""
     shape = maps.dominant.shape
-    checked, seen, found = 0, set(), []
+    checked, past, seen, found = 0, 0, set(), []
     for c in curves:
         k = window_class(maps, c["M"], c["impacts"])
         others = [o for o in curves if o is not c and o["M"] == c["M"] and o["impacts"] == c["impacts"]]
         for (x, y), n in _probes(c, p2, sigma, log_p2, log_sigma):
             a = (int(round(x + offset * n[0])), int(round(y + offset * n[1])))
             b = (int(round(x - offset * n[0])), int(round(y - offset * n[1])))
-            if not all(0 <= q[0] < shape[0] and 0 <= q[1] < shape[1] for q in (a, b)) or (a, b, c["M"]) in seen:
+            key = (int(round(x)), int(round(y)), c["M"], c["impacts"], c["side"])
+            if not all(0 <= q[0] < shape[0] and 0 <= q[1] < shape[1] for q in (a, b)) or key in seen:
                 continue
-            seen.add((a, b, c["M"]))
+            seen.add(key)
+            if c.get("closes") is not None and p2[key[0]] > c["closes"]:
+                past += 1  # the curve beyond the window's closing bounds no stable orbit: no edge there
+                continue
             checked += 1
             pa, pb = (bool(maps.present[k][q]) if k >= 0 else False for q in (a, b))
             if pa != pb:
@@ -108,7 +116,8 @@ def compare_curves(maps: ClassMaps, curves: list[dict[str, Any]], p2: np.ndarray
     reasons: dict[str, int] = {}
     for d in found:
         reasons[d["why"]] = reasons.get(d["why"], 0) + 1
-    return {"probe_offset_pixels": offset, "checked": checked, "disagree": len(found), "by_reason": reasons,
+    return {"probe_offset_pixels": offset, "checked": checked, "past_closing": past, "disagree": len(found),
+            "by_reason": reasons,
             "disagreements": found}
 
 

@@ -59,7 +59,8 @@ def _curve_lines(cv: Mapping[str, Any]) -> list[str]:
              f"{cv['count']} continued edge curves from `{cv['file']}`. Along each, every pixel, the atlas was probed "
              f"{cv['probe_offset_pixels']} pixels to either side across the curve: a curve agrees where its window's "
              "class (M, one impact; the wall-free orbit: period 1, no impact) is stable on exactly one side.", "",
-             f"**{cv['disagree']} of {cv['checked']} probes disagree.**"]
+             f"**{cv['disagree']} of {cv['checked']} probes disagree.** ({cv['past_closing']} pixels of curves continued "
+             "past their window's closing in the chart were not probed: there they bound no stable orbit.)"]
     for why, n in sorted(cv["by_reason"].items(), key=lambda x: -x[1]):
         lines.append(f"- {why}: {n} -- {REASONS[why]}")
     if cv["disagreements"]:
