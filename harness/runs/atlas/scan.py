@@ -139,13 +139,13 @@ def run_atlas_plane(plane: AtlasPlane, route: str = "kernel", model: Any = None,
         bar.update((slices[k].stop - slices[k].start) * n_sigma)
 
     todo = {k: AtlasTile(k, plane, sl, route, threads) for k, sl in tiles if k not in done}
+    source = model.source() if route == "fmu" and hasattr(model, "source") else None
     try:
         if be is None:
             for k, tile in todo.items():
                 run_test_hook(f"atlas-tile-{k:05d}", 0)  # tests interrupt a run at a known tile
-                finish(k, run_tile(tile))
+                finish(k, run_tile(tile, source))
         else:
-            source = model.source() if model is not None and hasattr(model, "source") else model
             be.run(run_tile, todo, source, finish)
     finally:
         bar.close()
