@@ -79,9 +79,17 @@ def subset(n_pix: int, seed: int) -> None:
     for name, c in per_start.items():
         print(f"{name}: {c * 1e3:.2f} ms CPU per start ({n_pix} pixels x 8 starts); x{c / per_start['kernel']:.0f} the "
               f"kernel; the whole plane ~{c * total / 3600:.1f} CPU hours ({c * total / 7200:.2f} h on 2 cores)")
+    kinds = ("periodic", "sticking", "chaotic", "aperiodic", "escaped", "invalid", "failed")
+
+    def text(lab) -> str:
+        return ", ".join(f"{kinds[k]}" + (f" P{m}/{i}" if k in (0, 1) else "") for k, m, i in zip(*lab))
+
     for name in per_start:
         same = sum(np.array_equal(np.stack(a), np.stack(b)) for a, b in zip(labels[name], labels["kernel"]))
         print(f"{name}: {same} of {n_pix} pixels with every start's (kind, period, impacts) the kernel's")
+        for (g, s), a, b in zip(rows, labels[name], labels["kernel"]):
+            if not np.array_equal(np.stack(a), np.stack(b)):
+                print(f"  Gamma {g:.6g}, sigma {s:.4f}: {text(a)}  |  kernel: {text(b)}")
 
 
 def main() -> None:

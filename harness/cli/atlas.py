@@ -117,9 +117,16 @@ def _plane(args: argparse.Namespace, exp: Any) -> Any:
         raise HarnessInputError("--lyapunov-periods", f"must be in 0..--max-periods, got {args.lyapunov_periods}")
     if not (math.isfinite(args.tol) and 0 < args.tol < 0.1):
         raise HarnessInputError("--tol", f"must be in (0, 0.1), got {args.tol!r}")
+    p2 = _values(lo, hi, n_p2, args.log, "--range")
+    if args.param2 in ("alpha", "gamma"):
+        from ..runs.atlas.plane import nu_omega
+
+        try:
+            nu_omega(params, args.param2, p2)
+        except HarnessInputError as exc:
+            raise HarnessInputError("--range", exc.reason) from None
     run = RunLength(n_max=args.max_periods, m_max=args.M_max, tol=args.tol, n_lyap=args.lyapunov_periods)
-    return AtlasPlane(params, args.param2, _values(lo, hi, n_p2, args.log, "--range"),
-                      _values(s_lo, s_hi, n_s, args.sigma_log, "--sigma-range"), args.starts,
+    return AtlasPlane(params, args.param2, p2, _values(s_lo, s_hi, n_s, args.sigma_log, "--sigma-range"), args.starts,
                       float(exp.sampling.theta), args.seed, run)
 
 

@@ -17,19 +17,39 @@ FIXED = {"chaotic": "#1a1a1a", "aperiodic": "#7f7f7f", "escaped": "#ffffff"}
 LINESTYLES = {"flip": "-", "fold": "--", "graze": ":", "torus": "-."}
 
 
+#: Distinct colours for the periodic classes that fill the most pixels (tab20 without its greys,
+#: which would read as aperiodic); the others share :data:`OTHER` and one legend entry.
+PALETTE = [i for i in range(20) if i not in (14, 15)]
+OTHER = "#f2c6de"
+
+
 def class_colours(maps: ClassMaps) -> list[Any]:
-    """One colour per class: periodic ones from tab20 (by M, then impacts), the others fixed."""
+    """One colour per class: the periodic ones by the pixels where they dominate (most first),
+    distinct for the first len(PALETTE), :data:`OTHER` beyond; the others fixed."""
     import matplotlib
 
     cmap = matplotlib.colormaps["tab20"]
-    out, n = [], 0
-    for cl in maps.classes:
-        if cl.kind in FIXED:
-            out.append(FIXED[cl.kind])
-        else:
-            out.append(cmap((2 * n + (n // 10)) % 20))
-            n += 1
-    return out
+    counts = np.bincount(maps.dominant[maps.dominant >= 0].ravel(), minlength=len(maps.classes))
+    periodic = [c for c, cl in enumerate(maps.classes) if cl.kind not in FIXED]
+    rank = {c: k for k, c in enumerate(sorted(periodic, key=lambda c: (-counts[c], c)))}
+    return [FIXED[cl.kind] if cl.kind in FIXED else (cmap(PALETTE[rank[c]]) if rank[c] < len(PALETTE) else OTHER)
+            for c, cl in enumerate(maps.classes)]
+
+
+def legend_patches(maps: ClassMaps, cols: list[Any]) -> list[Any]:
+    """One patch per class with its own colour (periodic ones in the order of their pixels), one for
+    the classes sharing :data:`OTHER`, and the hatches."""
+    from matplotlib.patches import Patch
+
+    counts = np.bincount(maps.dominant[maps.dominant >= 0].ravel(), minlength=len(maps.classes))
+    own = [c for c, col in enumerate(cols) if not (isinstance(col, str) and col == OTHER)]
+    own.sort(key=lambda c: (maps.classes[c].kind in FIXED, -counts[c] if maps.classes[c].kind not in FIXED else c))
+    out = [Patch(facecolor=cols[c], edgecolor="0.5", label=maps.classes[c].name) for c in own]
+    shared = [maps.classes[c].name for c, col in enumerate(cols) if isinstance(col, str) and col == OTHER]
+    if shared:
+        out.append(Patch(facecolor=OTHER, edgecolor="0.5", label=f"{len(shared)} other periodic classes"))
+    return out + [Patch(facecolor="white", edgecolor="0.3", hatch="///", label="2 attractors"),
+                  Patch(facecolor="white", edgecolor="0.3", hatch="xxx", label="3 or more attractors")]
 
 
 def _edges(x: np.ndarray, log: bool) -> np.ndarray:
@@ -50,7 +70,6 @@ def atlas_figure(maps: ClassMaps, p2: np.ndarray, sigma: np.ndarray, param2: str
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
-    from matplotlib.patches import Patch
 
     cols = class_colours(maps)
     fig, ax = plt.subplots(figsize=(10.5, 6.2))
@@ -61,9 +80,7 @@ def atlas_figure(maps: ClassMaps, p2: np.ndarray, sigma: np.ndarray, param2: str
     multi = maps.n_attractors.T.astype(float)
     if np.any(multi >= 2):
         ax.contourf(p2, sigma, multi, levels=[1.5, 2.5, 1e9], colors="none", hatches=["///", "xxx"])
-    handles = [Patch(facecolor=c, edgecolor="0.5", label=cl.name) for c, cl in zip(cols, maps.classes)]
-    handles += [Patch(facecolor="white", edgecolor="0.3", hatch="///", label="2 attractors"),
-                Patch(facecolor="white", edgecolor="0.3", hatch="xxx", label="3 or more attractors")]
+    handles = legend_patches(maps, cols)
     for c in curves or []:
         k = next((i for i, cl in enumerate(maps.classes) if cl.kind == "periodic" and cl.M == c["M"]
                   and cl.impacts == c["impacts"]), None)
