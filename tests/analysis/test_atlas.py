@@ -96,6 +96,37 @@ def test_a_rerun_computes_only_the_missing_tiles(tmp_path) -> None:
         run_atlas_plane(other, progress=False, checkpoint=str(ckpt), tile_pixels=4)
 
 
+@pytest.mark.slow  # real processes interrupted and rerun
+def test_cli_interrupted_at_a_tile_keeps_the_finished_ones_and_resumes(tmp_path) -> None:
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    import xarray as xr
+
+    from harness.runs.tasks import TEST_HOOK_ENV
+
+    root = Path(__file__).resolve().parents[2]
+    out = tmp_path / "a"
+    # 8 x 1024 pixels: two tiles of 4 rows (4096 pixels each)
+    cmd = [sys.executable, "-m", "harness", *FIG9_CLI, "--param2", "Gamma", "--range", "10:100", "--sigma-range",
+           "0.2:1", "--grid", "8x1024", "--starts", "1", "--no-plot"]
+    first = subprocess.run([*cmd, "--out", str(out)], cwd=root, capture_output=True, text=True, timeout=600,
+                           env={**os.environ, TEST_HOOK_ENV: "atlas-tile-00001:0:interrupt"})
+    assert first.returncode == 130 and "interrupted" in first.stderr, first.stderr
+    assert sorted(p.name for p in (out / "atlas.partial").glob("tile-*.npz")) == ["tile-00000.npz"]
+    second = subprocess.run([*cmd, "--out", str(out)], cwd=root, capture_output=True, text=True, timeout=600)
+    assert second.returncode == 0, second.stderr
+    resumed = xr.open_dataset(out / "atlas.nc")
+    assert resumed.attrs["atlas.tiles_resumed"] == 1 and resumed.attrs["atlas.tiles"] == 2
+    fresh = subprocess.run([*cmd, "--out", str(tmp_path / "fresh")], cwd=root, capture_output=True, text=True,
+                           timeout=600)
+    assert fresh.returncode == 0, fresh.stderr
+    for name in ("attractor", "kind", "period", "impacts", "lyapunov"):
+        np.testing.assert_array_equal(resumed[name].values, xr.open_dataset(tmp_path / "fresh" / "atlas.nc")[name].values)
+
+
 def _chart_json(path, curves: list[tuple[int, str, list[float], list[float]]], closes=None) -> None:
     windows = {}
     for M, side, p2, sigma in curves:
