@@ -19,6 +19,11 @@
  * start of the pixel reached, and follows that orbit point by point for two rounds (at least four
  * periods) with the same wall entries, is that orbit and stops there.
  *
+ * A start still not periodic after n_max periods but whose last M states lie within
+ * SETTLE_RESIDUAL of the M before them (a multiplier near -1 or +1 contracts slowly, as next to a
+ * flip or a fold) is closed onto its period-M orbit by Newton with the exact Jacobian of the
+ * M-period map (settle); only a start that Newton cannot close counts as aperiodic.
+ *
  * Outputs per start (pixel-major, k starts per pixel): status (ATLAS_*), period, wall entries per
  * orbit period, periods run, whether the orbit sticks (sticking at a sample, or chatter: at least
  * CHATTER_ENTRIES wall entries in one period), the exponent, and the orbit's M points in time
@@ -56,6 +61,10 @@ enum { ATLAS_PERIODIC = 0, ATLAS_APERIODIC = 1, ATLAS_INVALID = 2, ATLAS_FAILED 
 #define COLLAPSE_FACTOR 1e3
 /* Largest period searched (the history kept is twice that). */
 #define ATLAS_MAX_PERIOD 64
+/* A start not periodic after n_max periods whose last M states are within this (relative) of
+ * the M before them is closed onto its period-M orbit by Newton, in at most SETTLE_ITERATIONS. */
+#define SETTLE_RESIDUAL 1e-3
+#define SETTLE_ITERATIONS 6
 /* Largest number of starts per pixel. */
 #define ATLAS_MAX_STARTS 256
 
@@ -210,6 +219,78 @@ static int follow(const PixelOrbits *po, Follow *f, double u, double v, int e) {
     return -1;
 }
 
+/* A state (u, v) at the section time t as the FMU starts one there: a fresh stepper. */
+static void start_at(Stepper *st, ModelData *m, const ModelData *m0, double u, double v, double t) {
+    *m = *m0;
+    m->u0 = u;
+    m->v0 = v;
+    memset(st, 0, sizeof *st);
+    st->ops = &STEPPER_CLOSED_FORM;
+    st->ops->create(st, m);
+    stepper_start(st, t);
+    m->origin = st->clk.origin;
+    m->in_tau = st->clk.tau;
+    model_initialize_state(m, st->clk.tau);
+}
+
+/* How far the last M states are from the M before them (relative, as the tolerance; infinite
+ * when the wall entries differ). */
+static double residual(const double *hu, const double *hv, const int *he, int h, int k, int M) {
+    double worst = 0.0;
+    for (int j = 0; j < M; ++j) {
+        const int a = (k - j) % h, b = (k - j - M) % h;
+        if (he[a] != he[b]) return INFINITY;
+        const double d = fmax(fabs(hu[a] - hu[b]), fabs(hv[a] - hv[b])) / (1.0 + fabs(hu[b]) + fabs(hv[b]));
+        worst = fmax(worst, d);
+    }
+    return worst;
+}
+
+/* A start not settled in n_max periods but near a period-M orbit (a multiplier near -1 or +1
+ * contracts slowly): Newton on the M-period map from its state (u, v) at t0 = theta + k0, each
+ * iteration M periods with the exact sensitivities, until M periods close within the tolerance
+ * with the wall entries of the first iteration, and the orbit is stable (exponent < 0). 1 with
+ * the orbit (points, entries, impacts, exponent) in o, pts, ents; 0 otherwise. */
+static int settle(const ModelData *m0, double u, double v, int k0, const AtlasRun *r, int M, double *pts, int *ents,
+                  AtlasOutcome *o, char *err, int errlen) {
+    int first[ATLAS_MAX_PERIOD];
+    for (int it = 0; it < SETTLE_ITERATIONS; ++it) {
+        Stepper st;
+        ModelData m;
+        start_at(&st, &m, m0, u, v, r->theta + k0);
+        m.sensitivities = 1;
+        double J[2][2] = {{1.0, 0.0}, {0.0, 1.0}}, t = r->theta + k0;
+        int ok = 1, before = 0, imp = 0, sticks = 0;
+        for (int i = 0; i < M && ok; ++i) {
+            sens_reset(&m);
+            ok = one_period(&st, &m, r->theta, k0 + i + 1, &t, err, errlen) == 0;
+            const int e = m.impacts - before;
+            before = m.impacts;
+            if (it == 0) first[i] = e;
+            ok = ok && e == first[i];
+            chain(m.sJ, J);
+            pts[2 * i] = m.u, pts[2 * i + 1] = m.v, ents[i] = e;
+            imp += e;
+            sticks |= m.mode == MODE_STICK || e >= CHATTER_ENTRIES;
+        }
+        const double du = m.u - u, dv = m.v - v, eps = r->tol * (1.0 + fabs(u) + fabs(v));
+        stepper_free(&st);
+        if (!ok) return 0;
+        o->periods += M;
+        if (fabs(du) <= eps && fabs(dv) <= eps) { /* an attractor only if stable: not a saddle in chaos */
+            const double lyap = log_spectral_radius(J) / M;
+            if (!(lyap < 0.0)) return 0;
+            o->status = ATLAS_PERIODIC, o->period = M, o->impacts = imp, o->sticks = sticks, o->lyap = lyap;
+            return 1;
+        }
+        const double a = 1.0 - J[0][0], b = -J[0][1], c = -J[1][0], d = 1.0 - J[1][1], det = a * d - b * c;
+        if (!(fabs(det) > 1e-14)) return 0;
+        u += (d * du - b * dv) / det;
+        v += (-c * du + a * dv) / det;
+    }
+    return 0;
+}
+
 /* One start of one pixel's model: run to its periodic orbit (or n_max periods), then its exponent;
  * a start that lands on an orbit of `po` returns as status ATLAS_MATCHED with .period = its index. */
 static AtlasOutcome run_start(const ModelData *m0, double u0, double v0, const AtlasRun *r,
@@ -261,12 +342,21 @@ static AtlasOutcome run_start(const ModelData *m0, double u0, double v0, const A
         return o;
     }
     if (M > 1) M = collapse(hu, hv, he, h, k, M, COLLAPSE_FACTOR * r->tol);
+    if (!M && o.status == ATLAS_APERIODIC && k >= h) { /* not settled: near an orbit, Newton closes it */
+        o.periods = k;
+        for (int c = 1; c <= r->m_max; ++c)
+            if (residual(hu, hv, he, h, k, c) <= SETTLE_RESIDUAL &&
+                settle(m0, hu[k % h], hv[k % h], k, r, c, pts, ents, &o, err, errlen)) {
+                stepper_free(&st);
+                return o;
+            }
+        for (int i = 0; i < r->m_max; ++i) pts[2 * i] = pts[2 * i + 1] = NAN, ents[i] = -1;
+    }
     if (o.status == ATLAS_APERIODIC) {
         for (int j = 0; j < (M ? M : 1); ++j) { /* the orbit's points, oldest first */
             const int slot = (k - (M ? M : 1) + 1 + j) % h;
             pts[2 * j] = hu[slot], pts[2 * j + 1] = hv[slot], ents[j] = he[slot];
-            o.impacts += he[slot];
-            o.sticks |= hs[slot];
+            if (M) o.impacts += he[slot], o.sticks |= hs[slot]; /* an aperiodic start: neither */
         }
         o.period = M;
         const int s = M ? orbit_exponent(&st, &m, r, M, &k, &t, &o.lyap, err, errlen) : 0;
