@@ -22,7 +22,10 @@
  * A start still not periodic after n_max periods but whose last M states lie within
  * SETTLE_RESIDUAL of the M before them (a multiplier near -1 or +1 contracts slowly, as next to a
  * flip or a fold) is closed onto its period-M orbit by Newton with the exact Jacobian of the
- * M-period map (settle); only a start that Newton cannot close counts as aperiodic.
+ * M-period map (settle); only a start that Newton cannot close counts as aperiodic. Likewise a
+ * start found periodic with period M but within SETTLE_RESIDUAL of period d | M (a period-d orbit
+ * with a multiplier near -1 converges slowly, and its period-2d recurrence closes first) is
+ * closed onto the period-d orbit when that one is stable.
  *
  * Outputs per start (pixel-major, k starts per pixel): status (ATLAS_*), period, wall entries per
  * orbit period, periods run, whether the orbit sticks (sticking at a sample, or chatter: at least
@@ -342,11 +345,18 @@ static AtlasOutcome run_start(const ModelData *m0, double u0, double v0, const A
         return o;
     }
     if (M > 1) M = collapse(hu, hv, he, h, k, M, COLLAPSE_FACTOR * r->tol);
+    for (int d = 1; d < M && M > 1; ++d) /* a period-d orbit still settling, seen as period M */
+        if (M % d == 0 && residual(hu, hv, he, h, k, d) <= SETTLE_RESIDUAL &&
+            settle(m0, hu[k % h], hv[k % h], k, r, d, pts, ents, &o, err, errlen)) {
+            o.periods += k;
+            stepper_free(&st);
+            return o;
+        }
     if (!M && o.status == ATLAS_APERIODIC && k >= h) { /* not settled: near an orbit, Newton closes it */
-        o.periods = k;
         for (int c = 1; c <= r->m_max; ++c)
             if (residual(hu, hv, he, h, k, c) <= SETTLE_RESIDUAL &&
                 settle(m0, hu[k % h], hv[k % h], k, r, c, pts, ents, &o, err, errlen)) {
+                o.periods += k;
                 stepper_free(&st);
                 return o;
             }
