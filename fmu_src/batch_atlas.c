@@ -249,6 +249,29 @@ static double residual(const double *hu, const double *hv, const int *he, int h,
     return worst;
 }
 
+/* The smallest d | M with the M points (time order) repeating after d within `loose` and the same
+ * wall entries: Newton on the M-period map also closes an orbit of period d | M (traversed M / d
+ * times). The last d points and entries are moved to the front (NaN, -1 after them). */
+static int reduce_period(double *pts, int *ents, int M, double loose) {
+    for (int d = 1; d < M; ++d) {
+        if (M % d) continue;
+        int ok = 1;
+        for (int j = 0; j + d < M && ok; ++j) {
+            const double eps = loose * (1.0 + fabs(pts[2 * j]) + fabs(pts[2 * j + 1]));
+            ok = ents[j] == ents[j + d] && fabs(pts[2 * j] - pts[2 * (j + d)]) <= eps &&
+                 fabs(pts[2 * j + 1] - pts[2 * (j + d) + 1]) <= eps;
+        }
+        if (!ok) continue;
+        for (int j = 0; j < d; ++j) {
+            pts[2 * j] = pts[2 * (M - d + j)], pts[2 * j + 1] = pts[2 * (M - d + j) + 1];
+            ents[j] = ents[M - d + j];
+        }
+        for (int j = d; j < M; ++j) pts[2 * j] = pts[2 * j + 1] = NAN, ents[j] = -1;
+        return d;
+    }
+    return M;
+}
+
 /* A start not settled in n_max periods but near a period-M orbit (a multiplier near -1 or +1
  * contracts slowly): Newton on the M-period map from its state (u, v) at t0 = theta + k0, each
  * iteration M periods with the exact sensitivities, until M periods close within the tolerance
@@ -283,7 +306,8 @@ static int settle(const ModelData *m0, double u, double v, int k0, const AtlasRu
         if (fabs(du) <= eps && fabs(dv) <= eps) { /* an attractor only if stable: not a saddle in chaos */
             const double lyap = log_spectral_radius(J) / M;
             if (!(lyap < 0.0)) return 0;
-            o->status = ATLAS_PERIODIC, o->period = M, o->impacts = imp, o->sticks = sticks, o->lyap = lyap;
+            const int d = reduce_period(pts, ents, M, COLLAPSE_FACTOR * r->tol);
+            o->status = ATLAS_PERIODIC, o->period = d, o->impacts = imp / (M / d), o->sticks = sticks, o->lyap = lyap;
             return 1;
         }
         const double a = 1.0 - J[0][0], b = -J[0][1], c = -J[1][0], d = 1.0 - J[1][1], det = a * d - b * c;
