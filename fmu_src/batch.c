@@ -26,6 +26,7 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "batch.h"
 #include "closed_form.h"
 #include "model.h"
 #include "stepper.h"
@@ -34,13 +35,8 @@
 #include <omp.h>
 #endif
 
-#define BATCH_EXPORT __attribute__((visibility("default")))
-
 /* Per-start status (the `status` output). */
 enum { BATCH_RAN = 0, BATCH_MATCHED = 1, BATCH_INVALID = 2, BATCH_FAILED = 3, BATCH_ESCAPED = 4 };
-
-/* Above this |u| or |v| a start has escaped (the FMU's own bound is 1e15, CORE_MAX_STATE). */
-static const double ESCAPE_BOUND = 1e12;
 
 /* The settable values ModelData stores, by name: generated from fmu_src/variables.py, so a
  * parameter added there is known here without an edit. */
@@ -56,7 +52,7 @@ static const ParamField PARAMS[] = {
 /* The method's own settings: this kernel is the closed form from the given start, whatever they say. */
 static const char *const IGNORED[] = {"solver", "rtol", "atol", "sensitivities", "u0", "v0"};
 
-static int set_param(ModelData *m, const char *name, double x) {
+int batch_set_param(ModelData *m, const char *name, double x) {
     for (size_t i = 0; i < sizeof IGNORED / sizeof IGNORED[0]; ++i)
         if (!strcmp(name, IGNORED[i])) return 0;
     for (size_t i = 0; i < sizeof PARAMS / sizeof PARAMS[0]; ++i) {
@@ -69,12 +65,16 @@ static int set_param(ModelData *m, const char *name, double x) {
     return -1;
 }
 
-/* The model of every start, checked as the FMU checks it at the end of initialisation. */
-static int build_model(ModelData *m, int n_params, const char *const *names, const double *values,
-                       char *err, int errlen) {
+int batch_build_model(ModelData *m, int n_params, const char *const *names, const double *values,
+                      char *err, int errlen) {
     model_set_defaults(m);
+    return batch_finish_model(m, n_params, names, values, err, errlen);
+}
+
+int batch_finish_model(ModelData *m, int n_params, const char *const *names, const double *values,
+                       char *err, int errlen) {
     for (int i = 0; i < n_params; ++i)
-        if (set_param(m, names[i], values[i]) != 0) {
+        if (batch_set_param(m, names[i], values[i]) != 0) {
             snprintf(err, (size_t)errlen, "the batch kernel does not know the parameter %s", names[i]);
             return -1;
         }
@@ -194,7 +194,7 @@ static Outcome run_start(const ModelData *m0, double u0, double v0, double theta
 }
 
 /* Library version: the loader refuses a stale build. */
-BATCH_EXPORT int impact_batch_version(void) { return 2; }
+BATCH_EXPORT int impact_batch_version(void) { return BATCH_VERSION; }
 
 BATCH_EXPORT int impact_batch_threads(void) {
 #ifdef _OPENMP
@@ -223,7 +223,7 @@ BATCH_EXPORT int impact_batch_run(int n_params, const char *const *names, const 
                                   int errlen) {
     ModelData m0;
     err[0] = '\0';
-    if (build_model(&m0, n_params, names, values, err, errlen) != 0) return -1;
+    if (batch_build_model(&m0, n_params, names, values, err, errlen) != 0) return -1;
     const Known known = {n_known, width, known_period, known_points, known_entries, tol, confirm};
     int failed = 0;
 #ifdef _OPENMP

@@ -19,13 +19,13 @@ import sys
 from typing import Any, Sequence
 
 from ..errors import FmuError, FmuRejectedInput, HarnessInputError, SweepTaskError
-from . import basins, chart, continue_, jacobian, reproduce, simulate, strobe, sweep, windows
+from . import atlas, basins, chart, continue_, jacobian, reproduce, simulate, strobe, sweep, windows
 from .experiment_args import PROG, recorded_command
 from .flags import command_parser, with_flags
 from .options import OneLineParser, common_parent, sampling_parent
 
 #: The subcommands' modules, in the order ``--help`` lists them.
-COMMANDS = (simulate, strobe, sweep, jacobian, basins, continue_, reproduce, windows, chart)
+COMMANDS = (simulate, strobe, sweep, jacobian, basins, continue_, reproduce, windows, chart, atlas)
 
 
 def build_parser() -> argparse.ArgumentParser:

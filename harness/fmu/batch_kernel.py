@@ -22,7 +22,7 @@ from ..config.defaults import WALLS
 #: Per-start status codes of the kernel (``fmu_src/batch.c``).
 RAN, MATCHED, INVALID, FAILED, ESCAPED = 0, 1, 2, 3, 4
 LIBRARY_NAME = "libimpact_batch.so"
-_VERSION = 2
+_VERSION = 3
 _LIBS: dict[str, ctypes.CDLL] = {}
 
 

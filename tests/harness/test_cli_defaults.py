@@ -10,7 +10,7 @@ import pytest
 from harness.cli.main import build_parser
 from harness.config import DEFAULT_SOLVER, DEFAULTS, MODEL_SHORTCUTS, SECTION_PHASE
 
-RUNS_FMU = ("sweep", "basins", "strobe", "continue", "windows", "chart")
+RUNS_FMU = ("sweep", "basins", "strobe", "continue", "windows", "chart", "atlas")
 
 
 def _subparsers() -> dict[str, argparse.ArgumentParser]:
@@ -28,7 +28,7 @@ def test_every_command_takes_the_model_flags_and_the_solver(command) -> None:
     assert solver.help.count("default") == 1 and f"{DEFAULT_SOLVER} (default" in solver.help
 
 
-@pytest.mark.parametrize("command", ("sweep", "basins", "strobe", "continue", "windows"))
+@pytest.mark.parametrize("command", ("sweep", "basins", "strobe", "continue", "windows", "atlas"))
 def test_the_section_phase_is_one_default(command) -> None:
     p = _subparsers()[command]
     theta = next(a for a in p._actions if "--theta" in a.option_strings)

@@ -123,6 +123,25 @@ def test_batch_kernel_basins_on_dask_equal_the_local_scan(cluster, tmp_path: Pat
     np.testing.assert_array_equal(again["attractor"].values, local["attractor"].values)
 
 
+def test_atlas_tiles_on_dask_equal_the_local_run(cluster, tmp_path: Path) -> None:
+    """The atlas's tiles on the two workers: the same per-start results as in this process, and a
+    rerun with the checkpoint computes nothing."""
+    from harness.runs.atlas.plane import AtlasPlane
+    from harness.runs.atlas.scan import run_atlas_plane
+
+    client, _ = cluster
+    params = {"nu": 4.605170185988091, "Omega": 0.3059238689620112, "r": 0.9, "Gamma": 10.0, "wall": 1}
+    plane = AtlasPlane(params, "Gamma", np.geomspace(10, 300, 4), np.linspace(0.2, 1.1, 5), starts=3, theta=0.0)
+    local = run_atlas_plane(plane, progress=False, tile_pixels=5)
+    ckpt = tmp_path / "ckpt"
+    remote = run_atlas_plane(plane, progress=False, tile_pixels=5, backend=client, checkpoint=str(ckpt))
+    assert remote.describe.startswith("batch kernel (closed form in C) on dask")
+    for k in local.data:
+        np.testing.assert_array_equal(remote.data[k], local.data[k])
+    again = run_atlas_plane(plane, progress=False, tile_pixels=5, backend=client, checkpoint=str(ckpt))
+    assert again.resumed == again.tiles == 4
+
+
 def test_dask_sweep_equals_local_and_survives_a_killed_worker(model: FmuModel, cluster) -> None:
     client, workers = cluster
     spec = SweepSpec("sigma", np.linspace(0.2, 1.0, 8), ("fresh", "up"))
