@@ -31,6 +31,7 @@ MINIMAL = {
     "basins": ["--u0-grid=-1:1:2", "--v0-grid=-1:1:2"],
     "reproduce": ["fig9"], "windows": ["--nu", "4.6", "--Omega", "0.3"],
     "chart": ["--nu", "4.6", "--Omega", "0.3", "--r", "0.9", "--param2", "Gamma", "--range", "10:20"],
+    "atlas": ["--nu", "4.6", "--Omega", "0.3", "--r", "0.9", "--param2", "Gamma", "--range", "10:20"],
 }
 
 
