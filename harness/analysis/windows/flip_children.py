@@ -73,10 +73,35 @@ def children_at_flips(smap: Any, results: Sequence[dict[str, Any]], sigma_range:
             if int(ev3.contacts.sum()) != 2 * f.impacts:
                 continue
             z = w3 + pmap.offset(s_in)
-            out.append(family_type(2 * f.M, 2 * f.impacts, s_in, s_in, s_in, z,
-                                   [f"branch switching at the flip of {f.M}/{f.impacts}"],
-                                   [(s_in, z)], f.geometric))
+            child = family_type(2 * f.M, 2 * f.impacts, s_in, s_in, s_in, z,
+                                [f"branch switching at the flip of {f.M}/{f.impacts}"], [(s_in, z)], f.geometric)
+            child.born_at = (edge, "lower" if outward > 0 else "upper")  # its parent's flip, and the side facing it
+            out.append(child)
     return out
+
+
+def born_at_parent_flip(r: dict[str, Any]) -> dict[str, Any]:
+    """A child's edge facing its parent is its birth at the parent's flip (the period-doubled
+    orbit collapses onto its parent there): where the continuation of that side ended anywhere
+    else (it ran on along the doubled parent, past the flip), that edge is the parent's flip,
+    with the parent's bracket, and ``located`` says so."""
+    born = getattr(r["family"], "born_at", None)
+    if born is None or not r.get("resolved"):
+        return r
+    flip, side = born
+    e = r[side]
+    tol = 10.0 * max(abs((flip.bad if flip.bad is not None else flip.sigma) - flip.sigma), 1e-9 * (1.0 + abs(flip.sigma)))
+    if e is not None and e.sigma is not None and e.kind == "period-halving" and abs(e.sigma - flip.sigma) <= tol:
+        return r
+    from dataclasses import replace
+
+    r = dict(r)
+    r[side] = replace(flip, kind="period-halving", good=flip.bad, bad=flip.good, state=None,
+                      multipliers=np.full(2, np.nan))
+    located = list(r.get("located") or ["continuation", "continuation"])
+    located[0 if side == "lower" else 1] = "the parent's flip (born there by branch switching)"
+    r["located"] = located
+    return r
 
 
 def with_flip_children(smap: Any, results: list[dict[str, Any]], n: int, sigma_range: tuple[float, float],
@@ -90,6 +115,6 @@ def with_flip_children(smap: Any, results: list[dict[str, Any]], n: int, sigma_r
         if not kids:
             break
         more, k = shoot(kids)
-        results, n = results + more, n + k
+        results, n = results + [born_at_parent_flip(r) for r in more], n + k
     results.sort(key=lambda r: (r["family"].M, r["family"].impacts, r["family"].lo))
     return results, n
