@@ -131,7 +131,7 @@ def _plane(args: argparse.Namespace, exp: Any) -> Any:
 
 
 def _route(args: argparse.Namespace, exp: Any) -> str:
-    closed = int(exp.params.get("solver", 0)) == 1 and int(exp.params.get("contact", 0)) == 0
+    closed = exp.solver == "closed-form" and int(exp.params.get("contact", 0)) == 0
     if args.kernel == "batch" and not closed:
         raise HarnessInputError("--kernel", "the batch kernel is the closed form: it needs --solver closed-form and the "
                                 "linear contact law (contact = 0)")

@@ -21,7 +21,7 @@ from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 
 from mapcheck.exact import forcing_amplitude_phase
-from tests.fmu_support import FMU3_PATH, FMU_PATH, LoggedSlave
+from tests.support.fmu import FMU3_PATH, FMU_PATH, LoggedSlave
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112, Gamma=10.0)
 UNDER = dict(nu=0.196, Omega=7.368, Gamma=1000.0)

@@ -17,7 +17,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi2 import FMU2Model
 from fmpy.fmi3 import FMU3Model
 
-from tests.fmu_support import FMU3_PATH, FMU_PATH
+from tests.support.fmu import FMU3_PATH, FMU_PATH
 
 FIG9 = dict(nu=4.605170185988091, Omega=0.3059238689620112, sigma=0.2)
 

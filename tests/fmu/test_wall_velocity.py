@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from mapcheck.inputs_reference import InputsReference, Piece, RefState
-from tests.fmu_support import FMU3_PATH, WALLS, LoggedSlave
+from tests.support.fmu import FMU3_PATH, WALLS, LoggedSlave
 
 UNDERDAMPED = dict(nu=0.196, Omega=7.368)
 #: (wall, sigma, r, Gamma, u_wall at 0, v_wall, start): impacts on a moving wall in every period

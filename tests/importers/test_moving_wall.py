@@ -17,8 +17,8 @@ import pytest
 from fmpy import simulate_fmu
 
 from mapcheck.inputs_reference import InputsReference, Piece, RefState
-from tests.fmu_support import FMU3_PATH, FMU_PATH
-from tests.importer_support import at_periods, fmusim
+from tests.support.fmu import FMU3_PATH, FMU_PATH
+from tests.support.importers import at_periods, fmusim
 
 #: README example 3
 START = {"nu": 0.8, "Omega": 2.5, "r": 0.8, "wall": 2, "sigma": 1.7}

@@ -153,6 +153,16 @@ def _parameters(problem: WindowProblem, st: WindowSettings, shoot: dict[str, Any
     }
 
 
+def _coincident_edges(ctx: Context, rows: list[dict[str, Any]]) -> Any:
+    """Edges theory says coincide, located once (one point, not two): with CVODE each location
+    carries its orbits' error (~1e-9 in sigma), so ten times one period's accuracy is the floor
+    of agreement."""
+    from ...dynamics.maps.periodic_map import map_accuracy
+    from .edge_coincidence import reconcile
+
+    return reconcile(rows, 10.0 * map_accuracy(ctx.params(), 1))
+
+
 def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
                 predicted: dict[str, dict] | None = None) -> tuple[dict[str, Any], str]:
     """The comparison: the ODE's windows (scans over the whole range, each attractor shot to its
@@ -189,20 +199,12 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
     scan = {d: sweep_windows(grid, ds["period"].sel(direction=d).values, ds["orbit_impacts"].sel(direction=d).values)
             for d in ("up", "down")}
     variants = {k: windows[k] for k in VARIANT_KEYS if applies[k] is None}
+    from .plots import labels_for, plot_all
     from .summary import coexistence, summary_lines
-    from .plots import labels_for
 
     best, score = best_variant(ode, variants) if variants and any(w is not None for w in ode.values()) else (None, {})
-    from .edge_coincidence import reconcile
-
-    from ...dynamics.maps.periodic_map import map_accuracy
-
-    # before the figures and the coexistence: one point, not two; with CVODE each location carries
-    # its orbits' error (~1e-9 in sigma), ten times one period's accuracy is the floor of agreement
-    coincident = reconcile(shoot["all"], 10.0 * map_accuracy(ctx.params(), 1))
+    coincident = _coincident_edges(ctx, shoot["all"])  # before the figures and the coexistence
     t1 = time.perf_counter()
-    from .plots import plot_all
-
     files = plot_all(ctx, problem, st, ds, windows, applies, shoot["all"])
     timings["plots"] = time.perf_counter() - t1
     files.append(_write_scans(ctx, ds))

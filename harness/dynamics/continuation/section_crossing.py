@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...config.defaults import WALLS
 from .arclength import ArclengthCorrector, BranchPoint
 from ..maps.periodic_map import PeriodMap, refine_orbit
 
@@ -84,7 +85,7 @@ def section_crossing(cont: ArclengthCorrector, good: BranchPoint) -> BranchPoint
     if abs(z0[0] - u_wall) > SECTION_WALL_TOL * size:
         return None
     r = float(pmap.params.get("r", 1.0))
-    rigid = int(pmap.params.get("wall", 0)) == 2
+    rigid = int(pmap.params.get("wall", 0)) == WALLS["rigid"]
     vs = (-r * z0[1], -z0[1] / r) if rigid else (r * z0[1], z0[1] / r)
     ahead = float(np.sign(good.tangent[2])) or 1.0
     n_old = int(good.ev.contacts.sum())

@@ -20,7 +20,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from .jacobian import free_propagator, resolve_method
-from ...config.defaults import WALLS
+from ...config.defaults import SOLVERS, WALLS
 from ...errors import FmuRejectedInput, HarnessInputError
 from ...fmu.simulator import Simulator
 
@@ -43,7 +43,7 @@ def map_accuracy(params: Mapping[str, Any], M: int = 1) -> float:
     """The residual max |F^M(w) - w| the FMU's map resolves with the solver in ``params``: 0 for the
     closed form (exact up to rounding: the callers' own tolerances apply), M periods of CVODE's
     error at its ``rtol`` otherwise (the FMU's default solver is CVODE)."""
-    if int(params.get("solver", 0)) == 1:
+    if int(params.get("solver", 0)) == SOLVERS["closed-form"]:
         return 0.0
     return CVODE_ERROR_PER_RTOL * max(1, int(M)) * float(params.get("rtol", 1e-12))
 

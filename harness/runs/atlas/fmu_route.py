@@ -14,6 +14,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from ...config.defaults import WALLS
 from ...dynamics.maps.classify import classify_orbit
 from ...dynamics.maps.lyapunov import lyapunov_continued, period_jacobians
 from ...dynamics.maps.sampling import sample_periods
@@ -35,7 +36,7 @@ def _one_start(sim: Any, params: dict[str, Any], plane: AtlasPlane, z0: tuple[fl
     """(status, period, impacts, periods run, sticks, exponent, points (m_max, 2))."""
     r = plane.run
     pts = np.full((r.m_max, 2), np.nan)
-    if int(params.get("wall", 1)) == 2 and (z0[0] > 0 or (z0[0] == 0 and z0[1] > 0)):
+    if int(params.get("wall", 1)) == WALLS["rigid"] and (z0[0] > 0 or (z0[0] == 0 and z0[1] > 0)):
         return ak.INVALID, 0, 0, 0, False, np.nan, pts
     n_samples = 4 * r.m_max
     with tracking_derivatives(sim, True):

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from ...config.defaults import WALLS
 from ...errors import HarnessInputError
 
 #: Second parameters of an atlas: the model's physical parameters besides sigma.
@@ -122,7 +123,7 @@ def pixel_starts(plane: AtlasPlane, rows: slice) -> tuple[np.ndarray, np.ndarray
     n_rows = rows.stop - rows.start
     n_pix = n_rows * plane.sigma.size
     A = np.abs(1.0 + np.tile(plane.sigma, n_rows))[:, None]
-    rigid = int(plane.params.get("wall", 1)) == 2
+    rigid = int(plane.params.get("wall", 1)) == WALLS["rigid"]
     k = plane.starts
     g = (k + 1) // 2
     nu_ = max(1, int(round(math.sqrt(g))))
