@@ -41,10 +41,13 @@ def test_huge_runs_are_refused_before_they_start(tmp_path: Path, capsys, argv, f
 
 def test_refusal_allocates_nothing_in_a_real_process(tmp_path: Path) -> None:
     """`sweep --num 1e9` grew to 6 GB before it said anything; now the process stays small.  The
-    peak is the command's own (read by the process itself as it exits), not that of earlier
-    children of this test worker."""
-    own_peak = ("import resource, runpy, sys\ntry:\n    runpy.run_module('harness', run_name='__main__')\n"
-                "finally:\n    print('MAXRSS', resource.getrusage(resource.RUSAGE_SELF).ru_maxrss, file=sys.stderr)")
+    peak is the command's own (read by the process itself as it exits from /proc/self/status),
+    not that of earlier children of this test worker."""
+    # VmHWM: the peak of this process's own memory (ru_maxrss would keep the forking worker's
+    # peak across exec)
+    own_peak = ("import runpy, sys\ntry:\n    runpy.run_module('harness', run_name='__main__')\nfinally:\n"
+                "    hwm = [l.split()[1] for l in open('/proc/self/status') if l.startswith('VmHWM')][0]\n"
+                "    print('MAXRSS', hwm, file=sys.stderr)")
     res = subprocess.run([sys.executable, "-c", own_peak, "sweep", "--num", "1e9", "--out", str(tmp_path / "x.nc")],
                          capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert res.returncode == 2 and "TiB of memory" in res.stderr, res.stderr
