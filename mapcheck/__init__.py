@@ -8,6 +8,7 @@ Modules, by concern:
 * :mod:`mapcheck.maps`     -- the maps: L (26)-(30), (31)/(32), (33)-(35), (37)/(38), (1)/(2), (54)-(56)
 * :mod:`mapcheck.exact`    -- closed-form solution of the ODE and the exact pre-impact map
 * :mod:`mapcheck.segments` -- one linear regime in closed form and its first wall crossing
+* :mod:`mapcheck.resonant_grazing` -- the single-impact fold of a rigid wall at grazing in closed form (resonant grazing)
 * :mod:`mapcheck.exact_flow` -- the exact flow strobed: periodic orbits, multipliers, largest u
 * :mod:`mapcheck.windows`  -- ``window_1d(M)`` (64); maximal period-M orbits and their windows
 * :mod:`mapcheck.bifurcation` -- vectorized iteration over sigma/rho grids (fresh, up, down)

@@ -18,7 +18,7 @@ import math
 import numpy as np
 import pytest
 
-from mapcheck.linear import propagator
+from mapcheck.resonant_grazing import fold as resonant_fold
 from tests.support.edges import ExactFlow
 
 NU, R = 0.2, 0.8
@@ -31,16 +31,7 @@ def resonance(M: int, n: int = 1) -> float:
 
 def fold(Omega: float, M: int = 1) -> tuple[float, float, float]:
     """(sigma_SN, impact time t_i, impact velocity v) of the single-impact period-M orbit."""
-    P = propagator(float(M), NU, Omega)
-    B = np.eye(2) - P
-    q = np.array([R * P[0, 1], 1 + R * P[1, 1]])
-    K0 = q[1] * B[0, 0] - q[0] * B[1, 0]
-    K2 = 2 * math.pi * (q[1] * B[0, 1] - q[0] * B[1, 1])
-    A = abs(K0) / math.hypot(K0, K2)
-    t = ((math.atan2(K2, -K0) + (math.pi if K0 > 0 else 0.0)) / (2 * math.pi)) % 1.0
-    t = t - 1.0 if t > 0.5 else t
-    w = np.array([1 - A * math.cos(2 * math.pi * t), 2 * math.pi * A * math.sin(2 * math.pi * t)])
-    return A - 1.0, t, float(-(B @ w) @ q / (q @ q))
+    return resonant_fold(NU, R, Omega, M)
 
 
 def _exact_orbit(Omega: float, M: int, sigma: float, t: float, v: float):
