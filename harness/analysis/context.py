@@ -38,10 +38,13 @@ class Context:
         general integrator solves it) or "closed-form".
     command : str
         The command line that reproduces this run (the report's footer).
+    figures : bool
+        Whether the figures are drawn (False: the JSON, the report and the data only, for a
+        caller that reads numbers: drawing is a tenth of a quick run).
     """
 
     def __init__(self, target: str, out: str | Path, quick: bool = False, run: Any = None,
-                 command: str | None = None) -> None:
+                 command: str | None = None, figures: bool = True) -> None:
         from ..runs.experiment import Experiment
 
         self.target = target
@@ -49,6 +52,7 @@ class Context:
         self.out = Path(out)
         self.out.mkdir(parents=True, exist_ok=True)
         self.quick = bool(quick)
+        self.figures = bool(figures)
         self.workers = self.run.run.workers if self.run.given("run", "workers") else None
         self.progress = self.run.run.progress
         self.fmu = self.run.model

@@ -64,6 +64,8 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     o.add_argument("--workers", "-j", dest="run__workers", type=count, metavar="N",
                    help="worker processes (default: up to 2)")
     o.add_argument("--no-progress", action="store_true", help="no progress bars")
+    o.add_argument("--no-figures", action="store_true", help="no PNG figures: the report, the JSON and the scans' "
+                   "NetCDF only")
     p.set_defaults(func=cmd_windows)
 
 
@@ -103,7 +105,8 @@ def cmd_windows(args: argparse.Namespace) -> int:
                           wall=wall_name(run.params["wall"]), Gamma=run.params["Gamma"], M_max=args.M_max, quick=args.quick, out=args.out,
                           map_wall=args.map_wall, branch=args.branch, sigma_range=args.sigma_range, xtol=args.xtol,
                           theta=args.theta, global_starts=args.global_starts,
-                          global_path=args.global_path, run=run, command=command_line(args))
+                          global_path=args.global_path, run=run, command=command_line(args),
+                          figures=not args.no_figures)
     for line in res["summary"]:
         print(line)
     print(markdown_window_table(res["windows"], na=res["map_applicability"]))

@@ -197,11 +197,11 @@ def impact_sequences(osc: Oscillator, sigma: float, z0: tuple[float, float], per
 
 def windows_report(osc: Oscillator, sigma_range: tuple[float, float], out, solver: str = "closed-form",
                    M_max: int = 3) -> dict:
-    """``windows`` of the oscillator over ``sigma_range`` (quick, one worker): its result."""
+    """``windows`` of the oscillator over ``sigma_range`` (quick, one worker, no figures): its result."""
     from harness.analysis.windows.compare_windows import compare_windows
 
     return compare_windows(nu=osc.nu, Omega=osc.Omega, r=osc.r, wall=osc.wall, Gamma=osc.Gamma, M_max=M_max,
-                           quick=True, out=out, workers=1, solver=solver, sigma_range=sigma_range)
+                           quick=True, out=out, workers=1, solver=solver, sigma_range=sigma_range, figures=False)
 
 
 def rows_of(res: dict) -> list[dict]:

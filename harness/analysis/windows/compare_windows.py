@@ -205,7 +205,7 @@ def run_windows(ctx: Context, problem: WindowProblem, st: WindowSettings,
     best, score = best_variant(ode, variants) if variants and any(w is not None for w in ode.values()) else (None, {})
     coincident = _coincident_edges(ctx, shoot["all"])  # before the figures and the coexistence
     t1 = time.perf_counter()
-    files = plot_all(ctx, problem, st, ds, windows, applies, shoot["all"])
+    files = plot_all(ctx, problem, st, ds, windows, applies, shoot["all"]) if ctx.figures else []
     timings["plots"] = time.perf_counter() - t1
     files.append(_write_scans(ctx, ds))
     result = {
@@ -259,7 +259,8 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
                     solver: str | None = None, map_wall: str = "auto", branch: int | None = None,
                     sigma_range: tuple[float, float] | None = None, xtol: float | None = None,
                     theta: float = SECTION_PHASE, global_starts: int | None = None,
-                    global_path: str = "auto", run: Any = None, command: str | None = None) -> dict[str, Any]:
+                    global_path: str = "auto", run: Any = None, command: str | None = None,
+                    figures: bool = True) -> dict[str, Any]:
     """Window edges of the maps and of the ODE (FMU) for one parameter set.
 
     Give either (``alpha``, ``gamma``) of the map (9) or (``nu``, ``Omega``) of the ODE.
@@ -281,6 +282,7 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     workers, progress and any other FMU parameter) the command line built from its layers;
     without it one is built from ``fmu_path``, ``solver``, ``workers`` and ``progress``, with the
     same defaults and checks.  ``command``: the command line recorded in the report.
+    ``figures=False``: no PNG (the JSON, report and NetCDF only).
 
     A worker pool is used for the scans and the shooting: call it from a script under
     ``if __name__ == "__main__":`` (the workers re-import the main module).
@@ -299,7 +301,7 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     rng = None if sigma_range is None else (_real(sigma_range[0], "sigma_range"), _real(sigma_range[1], "sigma_range"))
     settings = default_settings(problem, quick, rng, xtol)
     settings.global_starts, settings.global_path = _global_options(global_starts, global_path)
-    ctx = Context("windows", out, quick, run, command or _python_call(problem, quick, out, rng, xtol))
+    ctx = Context("windows", out, quick, run, command or _python_call(problem, quick, out, rng, xtol), figures)
     result, text = run_windows(ctx, problem, settings)
     write_outputs(ctx, result, text)
     return result
