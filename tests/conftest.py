@@ -41,12 +41,22 @@ def pytest_configure(config) -> None:
 
 
 def pytest_collection_modifyitems(config, items) -> None:
-    """Files with slow tests first (in their collection order), then the others, most tests first:
-    whole files go to the workers in this order, so the files that take long start early and the
-    many short ones fill the end evenly on both cores."""
+    """Files with slow tests first (those marked ``spread`` first of all, in their collection
+    order), then the others, most tests first.  A file goes to one worker whole (its module
+    fixtures run once; some build into fixed folders under build/), unless it is marked ``spread``:
+    then each of its tests goes to whichever worker is free (``--dist=loadgroup``), so that a file
+    of many long independent tests (random oscillators, the two solvers' reports) keeps both cores
+    busy instead of one.  The files start early in this order, and the many short ones fill the
+    end evenly on both cores."""
     files: dict = {}
     for item in items:
         files.setdefault(item.path, []).append(item)
     slow = {path: any(i.get_closest_marker("slow") for i in its) for path, its in files.items()}
-    order = sorted(files, key=lambda path: (not slow[path], 0 if slow[path] else -len(files[path])))
+    spread = {path: any(i.get_closest_marker("spread") for i in its) for path, its in files.items()}
+    order = sorted(files, key=lambda path: (not slow[path], not spread[path],
+                                            0 if slow[path] else -len(files[path])))
     items[:] = [item for path in order for item in files[path]]
+    root = config.rootpath
+    for item in items:
+        if not spread[item.path]:
+            item.add_marker(pytest.mark.xdist_group(str(item.path.relative_to(root))))

@@ -45,6 +45,9 @@ def register(sub: Any, parents: dict[str, argparse.ArgumentParser]) -> None:
     xtol_option(s, "1e-4 x the window's sigma, 1e-3 with --quick; with a --sigma-range reaching sigma <= 0: "
                    "1e-8 x its width, 1e-6 quick")
     theta_option(s)
+    s.add_argument("--scan-points", type=count, default=None, metavar="N",
+                   help="points of the scan grid over the range (default: 121 with --quick, 401 without on an even "
+                   "grid, i.e. a --sigma-range reaching sigma <= 0; 24 or 80 per decade on a geometric one)")
     s.add_argument("--global-starts", type=int, default=None, metavar="N",
                    help="fresh starts of the global search at every sigma of the scan grid (a grid plus random "
                    "starts over the region the attractors occupy, iterated to their attractors with early stopping; "
@@ -106,7 +109,7 @@ def cmd_windows(args: argparse.Namespace) -> int:
                           map_wall=args.map_wall, branch=args.branch, sigma_range=args.sigma_range, xtol=args.xtol,
                           theta=args.theta, global_starts=args.global_starts,
                           global_path=args.global_path, run=run, command=command_line(args),
-                          figures=not args.no_figures)
+                          figures=not args.no_figures, scan_points=args.scan_points)
     for line in res["summary"]:
         print(line)
     print(markdown_window_table(res["windows"], na=res["map_applicability"]))

@@ -195,13 +195,23 @@ def impact_sequences(osc: Oscillator, sigma: float, z0: tuple[float, float], per
     return out
 
 
+#: The tests' scan grid: 41 points over the range (the command's --quick has 121 on an even grid):
+#: every fourth of the range, where brute force looks, is a grid point, searched afresh there.
+SCAN_POINTS = 41
+#: The tests' global search: 400 fresh starts per sigma (the command's default 1000), more than
+#: the 150 of the brute force it is checked against.
+GLOBAL_STARTS = 400
+
+
 def windows_report(osc: Oscillator, sigma_range: tuple[float, float], out, solver: str = "closed-form",
                    M_max: int = 3) -> dict:
-    """``windows`` of the oscillator over ``sigma_range`` (quick, one worker, no figures): its result."""
+    """``windows`` of the oscillator over ``sigma_range`` (quick, one worker, no figures,
+    :data:`SCAN_POINTS` and :data:`GLOBAL_STARTS`): its result."""
     from harness.analysis.windows.compare_windows import compare_windows
 
     return compare_windows(nu=osc.nu, Omega=osc.Omega, r=osc.r, wall=osc.wall, Gamma=osc.Gamma, M_max=M_max,
-                           quick=True, out=out, workers=1, solver=solver, sigma_range=sigma_range, figures=False)
+                           quick=True, out=out, workers=1, solver=solver, sigma_range=sigma_range, figures=False,
+                           scan_points=SCAN_POINTS, global_starts=GLOBAL_STARTS)
 
 
 def rows_of(res: dict) -> list[dict]:

@@ -260,7 +260,7 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
                     sigma_range: tuple[float, float] | None = None, xtol: float | None = None,
                     theta: float = SECTION_PHASE, global_starts: int | None = None,
                     global_path: str = "auto", run: Any = None, command: str | None = None,
-                    figures: bool = True) -> dict[str, Any]:
+                    figures: bool = True, scan_points: int | None = None) -> dict[str, Any]:
     """Window edges of the maps and of the ODE (FMU) for one parameter set.
 
     Give either (``alpha``, ``gamma``) of the map (9) or (``nu``, ``Omega``) of the ODE.
@@ -282,7 +282,9 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
     workers, progress and any other FMU parameter) the command line built from its layers;
     without it one is built from ``fmu_path``, ``solver``, ``workers`` and ``progress``, with the
     same defaults and checks.  ``command``: the command line recorded in the report.
-    ``figures=False``: no PNG (the JSON, report and NetCDF only).
+    ``figures=False``: no PNG (the JSON, report and NetCDF only).  ``scan_points``: the scan grid's
+    points over the range (default: 121 quick and 401 full on an even grid, 24 and 80 per decade on
+    a geometric one).
 
     A worker pool is used for the scans and the shooting: call it from a script under
     ``if __name__ == "__main__":`` (the workers re-import the main module).
@@ -299,7 +301,7 @@ def compare_windows(alpha: float | None = None, gamma: float | None = None, *, n
 
         run = Experiment.for_python(fmu_path, solver, workers, progress)
     rng = None if sigma_range is None else (_real(sigma_range[0], "sigma_range"), _real(sigma_range[1], "sigma_range"))
-    settings = default_settings(problem, quick, rng, xtol)
+    settings = default_settings(problem, quick, rng, xtol, scan_points)
     settings.global_starts, settings.global_path = _global_options(global_starts, global_path)
     ctx = Context("windows", out, quick, run, command or _python_call(problem, quick, out, rng, xtol), figures)
     result, text = run_windows(ctx, problem, settings)

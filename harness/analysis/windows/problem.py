@@ -175,8 +175,12 @@ def map_guide(problem: WindowProblem, M_max: int) -> tuple[Coefficients | None, 
         return None, str(exc)
 
 
+#: Most scan points one run may ask for (each is two runs of the FMU and a global search).
+MAX_SCAN_POINTS = 20001
+
+
 def default_settings(problem: WindowProblem, quick: bool, sigma_range: tuple[float, float] | None = None,
-                     xtol: float | None = None) -> WindowSettings:
+                     xtol: float | None = None, scan_points: int | None = None) -> WindowSettings:
     """Grids and tolerances: the ODE is scanned over :data:`BASE_RANGE`, widened to hold the
     maps' windows where the maps give finite ones, on a geometric grid (24 points per decade
     quick, 80 full); the shooting may follow an orbit beyond the grid, a decade below and a factor
@@ -186,8 +190,12 @@ def default_settings(problem: WindowProblem, quick: bool, sigma_range: tuple[flo
     [lo, hi], on a geometric grid when lo > 0, else on an even grid (120 points quick, 400 full)
     with even marching steps: sigma <= 0 included (the wall-free orbit, which grazes at sigma =
     0).  ``xtol``: an absolute bisection tolerance in sigma instead of the relative one (on an
-    even grid the default is 1e-6 (quick) or 1e-8 (full) of hi - lo).
+    even grid the default is 1e-6 (quick) or 1e-8 (full) of hi - lo).  ``scan_points``: the scan
+    grid's points over the range instead (even or geometric as above; at least 3).
     """
+    if scan_points is not None and (isinstance(scan_points, bool) or not isinstance(scan_points, (int, np.integer))
+                                    or not 3 <= scan_points <= MAX_SCAN_POINTS):
+        raise HarnessInputError("scan_points", f"must be an integer from 3 to {MAX_SCAN_POINTS}, got {scan_points!r}")
     table_grid, (lo, hi) = _map_range(problem)
     if sigma_range is not None:
         lo, hi = sigma_range
@@ -202,13 +210,13 @@ def default_settings(problem: WindowProblem, quick: bool, sigma_range: tuple[flo
     st = dict(transient=200 if quick else 300, samples=24 if quick else 40, sigma_range=search, xtol_rel=rel,
               far_start=sigma_range is not None)
     if lo <= 0:  # an even grid: a geometric one cannot reach sigma <= 0
-        grid = np.linspace(lo, hi, 121 if quick else 401)
+        grid = np.linspace(lo, hi, scan_points or (121 if quick else 401))
         return WindowSettings(scan_grid=grid, xtol=xtol if xtol is not None else (1e-6 if quick else 1e-8) * (hi - lo),
                               table_grid=table_grid, log_sigma=False, **st)
     # the maps are cheap: search them over the ODE's whole range too
     table_grid = np.geomspace(min(table_grid[0], 0.01 * lo), max(table_grid[-1], 4.0 * hi), 16001)
     per_decade = 24 if quick else 80
-    grid = np.geomspace(lo, hi, int(math.ceil(per_decade * math.log10(hi / lo))) + 1)
+    grid = np.geomspace(lo, hi, scan_points or int(math.ceil(per_decade * math.log10(hi / lo))) + 1)
     return WindowSettings(scan_grid=grid, xtol=xtol, table_grid=table_grid, log_sigma=True, **st)
 
 
