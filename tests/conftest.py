@@ -33,7 +33,7 @@ def _same_working_directory():
 
 def pytest_configure(config) -> None:
     """Keep the file order below: pytest-xdist (3.6+) otherwise hands out whole files
-    (--dist=loadfile) by their number of tests, most first, which left the long files with few
+    (each file one group of --dist=loadgroup) by their number of tests, most first, which left the long files with few
     tests (the charts, the benchmark smoke tests) for last, one core busy with them and the other
     idle."""
     if hasattr(config.option, "loadscopereorder"):
