@@ -40,6 +40,7 @@ def pytest_configure(config) -> None:
         config.option.loadscopereorder = False
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist reads the groups into the node ids
 def pytest_collection_modifyitems(config, items) -> None:
     """Files with slow tests first (those marked ``spread`` first of all, in their collection
     order), then the others, most tests first.  A file goes to one worker whole (its module
