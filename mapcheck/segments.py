@@ -23,7 +23,7 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from .linear import propagator_minus_identity, propagator_minus_identity_scalar, spectral_rate
+from .linear import _SERIES_D, _SERIES_RATE_T, propagator_minus_identity_entries, spectral_rate
 
 TWO_PI = 2.0 * math.pi
 _GRID_POINTS_PER_CHUNK = 48
@@ -53,6 +53,46 @@ class Mode:
         rate = max(2.0 * math.pi, math.sqrt(k2), nu)
         self.h = 0.1 / rate  # grid step: well below every time scale of the solution
         self.rate = spectral_rate(nu, k2)
+        self.amp_2pi = self.amp * TWO_PI
+        # constants of the scalar closed form (mapcheck.linear._scalar_damped_c_and_s)
+        self.b = 0.5 * nu
+        self.d = self.b * self.b - k2
+        self.sq = math.sqrt(abs(self.d))
+
+    def minus_identity(self, t: float) -> tuple[float, float, float, float]:
+        """The entries of P(t) - I at one time, in pure Python (for root finding): the series
+        where rate |t| <= 0.05, summed until the next term is below 1e-18 of the sum, else
+        the closed form (as :func:`mapcheck.linear.propagator_minus_identity`)."""
+        nu, k2 = self.nu, self.k2
+        if self.rate * abs(t) <= _SERIES_RATE_T:
+            A = B = 0.0
+            a_k, b_k, fac = 1.0, 0.0, t
+            for k in range(1, 13):
+                A += a_k * fac
+                B += b_k * fac
+                a_k, b_k = -nu * a_k + b_k, -k2 * a_k
+                fac = fac * t / (k + 1)
+                if abs(fac) * (abs(a_k) + abs(b_k)) < 1e-18 * (abs(A) + abs(B)):
+                    break
+            return B, A, -k2 * A, B - nu * A
+        b, d = self.b, self.d
+        z = d * t * t
+        E = math.exp(-b * t)
+        if abs(z) <= _SERIES_D:
+            c = 1.0 + z * (1.0 / 2 + z * (1.0 / 24 + z / 720))
+            eC, eS = E * c, E * (1.0 + z * (1.0 / 6 + z * (1.0 / 120 + z / 5040))) * t
+        elif d > 0:
+            q = self.sq
+            if abs(q * t) > 30.0:
+                ep, em = math.exp((q - b) * t), math.exp(-(q + b) * t)
+                eC, eS = 0.5 * (ep + em), 0.5 * (ep - em) / q
+            else:
+                eC, eS = E * math.cosh(q * t), E * math.sinh(q * t) / q
+        else:
+            w = self.sq
+            eC, eS = E * math.cos(w * t), E * math.sin(w * t) / w
+        bS = b * eS
+        return eC + bS - 1.0, eS, -k2 * eS, eC - bS - 1.0
 
     def q(self, th: float) -> tuple[float, float]:
         c, s = math.cos(th), math.sin(th)
@@ -77,17 +117,20 @@ class Segment:
     def delta(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(u(t_a + tau) - u_a, v(t_a + tau) - v_a), accurate for small tau."""
         m = self.m
-        E = propagator_minus_identity(tau, m.nu, m.k2)
-        half = math.pi * tau  # delta/2 with delta = 2 pi tau
+        tau = np.asarray(tau, dtype=float)
+        shape = tau.shape
+        t = tau.reshape(-1)
+        e11, e12, e21, e22 = propagator_minus_identity_entries(t, m.nu, m.k2, m.rate)
+        half = math.pi * t  # delta/2 with delta = 2 pi tau
         s_half = np.sin(half)
         mid = self.th_a + half
         dcos = -2.0 * s_half * np.sin(mid)
         dsin = 2.0 * s_half * np.cos(mid)
         dqu = m.amp * (m.gr * dcos - m.gi * dsin)
-        dqv = m.amp * TWO_PI * (-m.gr * dsin - m.gi * dcos)
-        du = E[..., 0, 0] * self.wu + E[..., 0, 1] * self.wv + dqu
-        dv = E[..., 1, 0] * self.wu + E[..., 1, 1] * self.wv + dqv
-        return du, dv
+        dqv = m.amp_2pi * (-m.gr * dsin - m.gi * dcos)
+        du = e11 * self.wu + e12 * self.wv + dqu
+        dv = e21 * self.wu + e22 * self.wv + dqv
+        return du.reshape(shape), dv.reshape(shape)
 
     def state(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         du, dv = self.delta(tau)
@@ -100,14 +143,14 @@ class Segment:
     # scalar helpers for brentq (pure Python: called ~10 times per root)
     def scalar_state(self, tau: float) -> tuple[float, float]:
         m = self.m
-        e11, e12, e21, e22 = propagator_minus_identity_scalar(tau, m.nu, m.k2, m.rate)
+        e11, e12, e21, e22 = m.minus_identity(tau)
         half = math.pi * tau
         s_half = math.sin(half)
         mid = self.th_a + half
         dcos = -2.0 * s_half * math.sin(mid)
         dsin = 2.0 * s_half * math.cos(mid)
         du = e11 * self.wu + e12 * self.wv + m.amp * (m.gr * dcos - m.gi * dsin)
-        dv = e21 * self.wu + e22 * self.wv + m.amp * TWO_PI * (-m.gr * dsin - m.gi * dcos)
+        dv = e21 * self.wu + e22 * self.wv + m.amp_2pi * (-m.gr * dsin - m.gi * dcos)
         return self.u_a + du, self.v_a + dv
 
     def u_at(self, tau: float) -> float:
@@ -134,6 +177,30 @@ def refine(tau: np.ndarray, vals: np.ndarray, f) -> list[float]:
     return [_root(f, tau[i], tau[i + 1]) for i in idx]
 
 
+def _with_points(seg: Segment, pts: np.ndarray, u: np.ndarray, v: np.ndarray,
+                 new: list[float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The sorted union of ``pts`` (with its states u, v) and the roots ``new``, and the states
+    on it.  The usual case -- ``pts`` strictly increasing, each new point strictly inside an
+    interval of its own and past the series range of P - I -- inserts the new points with their
+    states from :meth:`Segment.scalar_state` (there the same arithmetic as :meth:`Segment.state`,
+    point by point); otherwise the states of the union are computed afresh."""
+    increasing = bool((pts[1:] > pts[:-1]).all())
+    if not new:
+        if increasing:
+            return pts, u, v
+        pts = np.unique(pts)
+        return (pts, *seg.state(pts))
+    x = np.array(new)
+    idx = np.searchsorted(pts, x)
+    if (increasing and 0 < idx.min() and idx.max() < pts.size and (idx[1:] > idx[:-1]).all()
+            and (pts[idx - 1] < x).all() and (x < pts[idx]).all()
+            and seg.m.rate * float(np.abs(x).min()) > _SERIES_RATE_T):
+        su, sv = zip(*(seg.scalar_state(t) for t in new))
+        return np.insert(pts, idx, x), np.insert(u, idx, su), np.insert(v, idx, sv)
+    pts = np.unique(np.concatenate([pts, x]))
+    return (pts, *seg.state(pts))
+
+
 def first_crossing(seg: Segment, sgn: float, tau_end: float) -> float | None:
     """Smallest tau in [0, tau_end] where sgn*u becomes > 0, or None.
 
@@ -152,13 +219,11 @@ def first_crossing(seg: Segment, sgn: float, tau_end: float) -> float | None:
         u, v = seg.state(tau)
         a = seg.accel(tau, u, v)
         # split at inflection points, so that v is monotone between points ...
-        pts = np.unique(np.array(list(tau) + refine(tau, a, seg.a_at)))
-        u, v = seg.state(pts)
+        pts, u, v = _with_points(seg, tau, u, v, refine(tau, a, seg.a_at))
         # ... then at turning points, so that u is monotone between points
         extra = refine(pts, v, seg.v_at)
         if extra:
-            pts = np.unique(np.concatenate([pts, extra]))
-            u, v = seg.state(pts)
+            pts, u, v = _with_points(seg, pts, u, v, extra)
         g = sgn * u
         first = tau_s == 0.0
         if first:
