@@ -175,15 +175,14 @@ class ExactOscillator:
             if tau is None:
                 if tau_end <= 0.0:
                     return st
-                u, v = seg.state(np.array([tau_end]))
-                return _State(T, float(u[0]), float(v[0]), st.mode)
+                u, v = seg.point_state(tau_end)
+                return _State(T, u, v, st.mode)
             st = self._cross(st, seg, tau, events)
 
     def _cross(self, st: _State, seg: Segment, tau: float, events: list) -> _State:
         """The state just after the wall event found at st.t + tau on seg (appended to events)."""
         t_c = st.t + tau
-        _, v = seg.state(np.array([tau]))
-        vc = float(v[0])
+        vc = seg.point_state(tau)[1]
         if self.wall == "rigid":
             return self._impact(_State(t_c, 0.0, vc, "out"), events)
         if st.mode == "in":

@@ -159,7 +159,7 @@ def propagator_minus_identity(t, nu: float, k2: float) -> np.ndarray:
     return out.reshape(shape + (2, 2))
 
 
-def _series_terms(x: float) -> int:
+def series_terms(x: float) -> int:
     """Number of terms of the P - I series for points with rate * |t| <= x: until the bound
     x^k / k! on the k-th term is below 1e-17 x (all 12 when x = 0)."""
     bound = x
@@ -187,14 +187,19 @@ def _series_entries(ts: np.ndarray, nu: float, k2: float, n_terms: int) -> tuple
     A = np.empty_like(ts)
     B = np.empty_like(ts)
     for i, t in enumerate(ts.tolist()):
-        Ai = Bi = 0.0
-        a_k, b_k, fac = 1.0, 0.0, t
-        for k in range(1, n_terms + 1):
-            Ai += a_k * fac
-            Bi += b_k * fac
-            a_k, b_k = -nu * a_k + b_k, -k2 * a_k
-            fac = fac * t / (k + 1)
-        A[i], B[i] = Ai, Bi
+        A[i], B[i] = series_point(t, nu, k2, n_terms)
+    return A, B
+
+
+def series_point(t: float, nu: float, k2: float, n_terms: int) -> tuple[float, float]:
+    """A(t), B(t) of :func:`_series_entries` at one point, in pure Python (the same operations)."""
+    A = B = 0.0
+    a_k, b_k, fac = 1.0, 0.0, t
+    for k in range(1, n_terms + 1):
+        A += a_k * fac
+        B += b_k * fac
+        a_k, b_k = -nu * a_k + b_k, -k2 * a_k
+        fac = fac * t / (k + 1)
     return A, B
 
 
@@ -220,7 +225,7 @@ def propagator_minus_identity_entries(t: np.ndarray, nu: float, k2: float,
         e11[big], e12[big], e21[big], e22[big] = eC + bS - 1.0, eS, -k2 * eS, eC - bS - 1.0
     ts = t[small]
     # terms are bounded by x^k / k!, x = rate * max|t|: sum until that is < 1e-17 relative
-    A, B = _series_entries(ts, nu, k2, _series_terms(rate * float(np.max(np.abs(ts)))))
+    A, B = _series_entries(ts, nu, k2, series_terms(rate * float(np.max(np.abs(ts)))))
     e11[small], e12[small], e21[small], e22[small] = B, A, -k2 * A, B - nu * A
     return e11, e12, e21, e22
 

@@ -23,11 +23,13 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from .linear import _SERIES_D, _SERIES_RATE_T, propagator_minus_identity_entries, spectral_rate
+from .linear import (_SERIES_D, _SERIES_RATE_T, propagator_minus_identity_entries, series_point, series_terms,
+                     spectral_rate)
 
 TWO_PI = 2.0 * math.pi
 _GRID_POINTS_PER_CHUNK = 48
 _RTOL = 4.0 * np.finfo(float).eps
+_GRID_CACHE = 256  # chunk grids kept per mode (~3 kB each)
 
 
 def forcing_amplitude_phase(nu: float, Omega: float) -> tuple[float, float]:
@@ -58,6 +60,27 @@ class Mode:
         self.b = 0.5 * nu
         self.d = self.b * self.b - k2
         self.sq = math.sqrt(abs(self.d))
+        self._grids: dict = {}
+
+    def factors(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
+        """What the state at the times ``t`` (1-D) needs of t alone: the entries of P(t) - I,
+        pi t and sin(pi t)."""
+        half = math.pi * t
+        return (*propagator_minus_identity_entries(t, self.nu, self.k2, self.rate), half, np.sin(half))
+
+    def grid(self, tau_s: float, tau_e: float, n: int) -> tuple[np.ndarray, tuple]:
+        """linspace(tau_s, tau_e, n + 1) and its :meth:`factors`, kept for full chunks of the
+        crossing search (the same chunks recur in every segment of this mode); read-only."""
+        key = (tau_s, tau_e, n)
+        hit = self._grids.get(key)
+        if hit is None:
+            tau = np.linspace(tau_s, tau_e, n + 1)
+            hit = (tau, self.factors(tau))
+            for a in (tau, *hit[1]):
+                a.flags.writeable = False
+            if len(self._grids) < _GRID_CACHE:
+                self._grids[key] = hit
+        return hit
 
     def minus_identity(self, t: float) -> tuple[float, float, float, float]:
         """The entries of P(t) - I at one time, in pure Python (for root finding): the series
@@ -116,13 +139,14 @@ class Segment:
 
     def delta(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(u(t_a + tau) - u_a, v(t_a + tau) - v_a), accurate for small tau."""
-        m = self.m
         tau = np.asarray(tau, dtype=float)
-        shape = tau.shape
-        t = tau.reshape(-1)
-        e11, e12, e21, e22 = propagator_minus_identity_entries(t, m.nu, m.k2, m.rate)
-        half = math.pi * t  # delta/2 with delta = 2 pi tau
-        s_half = np.sin(half)
+        du, dv = self.delta_from(self.m.factors(tau.reshape(-1)))
+        return du.reshape(tau.shape), dv.reshape(tau.shape)
+
+    def delta_from(self, factors: tuple) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`delta` from the :meth:`Mode.factors` of the times."""
+        m = self.m
+        e11, e12, e21, e22, half, s_half = factors  # half = delta/2 with delta = 2 pi tau
         mid = self.th_a + half
         dcos = -2.0 * s_half * np.sin(mid)
         dsin = 2.0 * s_half * np.cos(mid)
@@ -130,11 +154,21 @@ class Segment:
         dqv = m.amp_2pi * (-m.gr * dsin - m.gi * dcos)
         du = e11 * self.wu + e12 * self.wv + dqu
         dv = e21 * self.wu + e22 * self.wv + dqv
-        return du.reshape(shape), dv.reshape(shape)
+        return du, dv
 
     def state(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         du, dv = self.delta(tau)
         return self.u_a + du, self.v_a + dv
+
+    def point_state(self, tau: float) -> tuple[float, float]:
+        """:meth:`state` at one time, in pure Python with the same operations (in the series
+        range of P - I too, unlike :meth:`scalar_state`)."""
+        m = self.m
+        x = m.rate * abs(tau)
+        if x <= _SERIES_RATE_T:
+            A, B = series_point(tau, m.nu, m.k2, series_terms(x))
+            return self._compose(tau, B, A, -m.k2 * A, B - m.nu * A)
+        return self._compose(tau, *m.minus_identity(tau))
 
     def accel(self, tau, u, v) -> np.ndarray:
         m = self.m
@@ -142,8 +176,11 @@ class Segment:
 
     # scalar helpers for brentq (pure Python: called ~10 times per root)
     def scalar_state(self, tau: float) -> tuple[float, float]:
+        return self._compose(tau, *self.m.minus_identity(tau))
+
+    def _compose(self, tau: float, e11: float, e12: float, e21: float, e22: float) -> tuple[float, float]:
+        """The state at tau from the entries of P(tau) - I (the arithmetic of :meth:`delta_from`)."""
         m = self.m
-        e11, e12, e21, e22 = m.minus_identity(tau)
         half = math.pi * tau
         s_half = math.sin(half)
         mid = self.th_a + half
@@ -195,8 +232,13 @@ def _with_points(seg: Segment, pts: np.ndarray, u: np.ndarray, v: np.ndarray,
     if (increasing and 0 < idx.min() and idx.max() < pts.size and (idx[1:] > idx[:-1]).all()
             and (pts[idx - 1] < x).all() and (x < pts[idx]).all()
             and seg.m.rate * float(np.abs(x).min()) > _SERIES_RATE_T):
-        su, sv = zip(*(seg.scalar_state(t) for t in new))
-        return np.insert(pts, idx, x), np.insert(u, idx, su), np.insert(v, idx, sv)
+        pos = idx + np.arange(idx.size)  # where the new points land in the union
+        keep = np.ones(pts.size + idx.size, dtype=bool)
+        keep[pos] = False
+        out = np.empty((3, keep.size))
+        out[:, keep] = pts, u, v
+        out[:, pos] = x, *zip(*(seg.scalar_state(t) for t in new))
+        return out[0], out[1], out[2]
     pts = np.unique(np.concatenate([pts, x]))
     return (pts, *seg.state(pts))
 
@@ -215,8 +257,13 @@ def first_crossing(seg: Segment, sgn: float, tau_end: float) -> float | None:
     while tau_s < tau_end:
         tau_e = min(tau_end, tau_s + _GRID_POINTS_PER_CHUNK * h)
         n = max(2, int(math.ceil((tau_e - tau_s) / h)))
-        tau = np.linspace(tau_s, tau_e, n + 1)
-        u, v = seg.state(tau)
+        if tau_e < tau_end:
+            tau, factors = seg.m.grid(tau_s, tau_e, n)
+        else:
+            tau = np.linspace(tau_s, tau_e, n + 1)
+            factors = seg.m.factors(tau)
+        du, dv = seg.delta_from(factors)
+        u, v = seg.u_a + du, seg.v_a + dv
         a = seg.accel(tau, u, v)
         # split at inflection points, so that v is monotone between points ...
         pts, u, v = _with_points(seg, tau, u, v, refine(tau, a, seg.a_at))
