@@ -18,6 +18,7 @@ strings segments together across the wall events.
 """
 from __future__ import annotations
 
+import bisect
 import math
 
 import numpy as np
@@ -160,13 +161,14 @@ class Segment:
         du, dv = self.delta(tau)
         return self.u_a + du, self.v_a + dv
 
-    def point_state(self, tau: float) -> tuple[float, float]:
+    def point_state(self, tau: float, x_series: float | None = None) -> tuple[float, float]:
         """:meth:`state` at one time, in pure Python with the same operations (in the series
-        range of P - I too, unlike :meth:`scalar_state`)."""
+        range of P - I too, unlike :meth:`scalar_state`).  ``x_series``: rate * the largest |tau|
+        in the series range of the times this one is evaluated with (default: this one)."""
         m = self.m
         x = m.rate * abs(tau)
         if x <= _SERIES_RATE_T:
-            A, B = series_point(tau, m.nu, m.k2, series_terms(x))
+            A, B = series_point(tau, m.nu, m.k2, series_terms(x if x_series is None else x_series))
             return self._compose(tau, B, A, -m.k2 * A, B - m.nu * A)
         return self._compose(tau, *m.minus_identity(tau))
 
@@ -208,39 +210,65 @@ def _root(f, lo: float, hi: float) -> float:
     return brentq(f, lo, hi, xtol=max(1e-16 * (hi - lo), 1e-300), rtol=_RTOL, maxiter=200)
 
 
-def refine(tau: np.ndarray, vals: np.ndarray, f) -> list[float]:
-    """Roots of f in every grid interval where ``vals`` changes sign strictly."""
-    idx = np.nonzero(vals[:-1] * vals[1:] < 0)[0]
-    return [_root(f, tau[i], tau[i + 1]) for i in idx]
+def refine(tau, vals, f) -> list[float]:
+    """Roots of f in every grid interval where ``vals`` changes sign strictly (sequences of floats)."""
+    return [_root(f, tau[i], tau[i + 1]) for i in range(len(vals) - 1) if vals[i] * vals[i + 1] < 0]
 
 
-def _with_points(seg: Segment, pts: np.ndarray, u: np.ndarray, v: np.ndarray,
-                 new: list[float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The sorted union of ``pts`` (with its states u, v) and the roots ``new``, and the states
-    on it.  The usual case -- ``pts`` strictly increasing, each new point strictly inside an
-    interval of its own and past the series range of P - I -- inserts the new points with their
-    states from :meth:`Segment.scalar_state` (there the same arithmetic as :meth:`Segment.state`,
-    point by point); otherwise the states of the union are computed afresh."""
-    increasing = bool((pts[1:] > pts[:-1]).all())
-    if not new:
-        if increasing:
-            return pts, u, v
-        pts = np.unique(pts)
-        return (pts, *seg.state(pts))
-    x = np.array(new)
-    idx = np.searchsorted(pts, x)
-    if (increasing and 0 < idx.min() and idx.max() < pts.size and (idx[1:] > idx[:-1]).all()
-            and (pts[idx - 1] < x).all() and (x < pts[idx]).all()
-            and seg.m.rate * float(np.abs(x).min()) > _SERIES_RATE_T):
-        pos = idx + np.arange(idx.size)  # where the new points land in the union
-        keep = np.ones(pts.size + idx.size, dtype=bool)
-        keep[pos] = False
-        out = np.empty((3, keep.size))
-        out[:, keep] = pts, u, v
-        out[:, pos] = x, *zip(*(seg.scalar_state(t) for t in new))
-        return out[0], out[1], out[2]
-    pts = np.unique(np.concatenate([pts, x]))
-    return (pts, *seg.state(pts))
+def _insert(seg: Segment, P: list, U: list, V: list, new: list[float]) -> bool:
+    """Insert the roots ``new`` (ascending) with their states into the strictly increasing times
+    P and their states U, V, where that gives what :meth:`Segment.state` gives on the union:
+    each new point strictly inside an interval of its own and, in the series range of P - I,
+    below an old point of that range (the series length is set by the largest such point).
+    Returns False, leaving the lists alone, where it does not."""
+    m = seg.m
+    at, prev = [], 0
+    for x in new:
+        i = bisect.bisect_left(P, x)
+        if not (prev < i < len(P) and P[i - 1] < x < P[i]):
+            return False
+        at.append(i)
+        prev = i
+    x_series = None
+    if m.rate * min(abs(x) for x in new) <= _SERIES_RATE_T:
+        x_series = max(m.rate * abs(p) for p in P if m.rate * abs(p) <= _SERIES_RATE_T)
+        if x_series <= m.rate * max(abs(x) for x in new if m.rate * abs(x) <= _SERIES_RATE_T):
+            return False
+    for i, x in zip(reversed(at), reversed(new)):
+        u, v = seg.point_state(x, x_series)
+        P.insert(i, x)
+        U.insert(i, u)
+        V.insert(i, v)
+    return True
+
+
+def _with_points(seg: Segment, P: list, U: list, V: list, new: list[float]) -> tuple[list, list, list]:
+    """The sorted union of the strictly increasing times P (states U, V) and the roots ``new``,
+    and the states on it: inserted (:func:`_insert`) or else computed afresh."""
+    if new and not _insert(seg, P, U, V, new):
+        pts = np.unique(np.array(P + new))
+        u, v = seg.state(pts)
+        return pts.tolist(), u.tolist(), v.tolist()
+    return P, U, V
+
+
+def _grid_states(seg: Segment, tau_s: float, tau_e: float, tau_end: float) -> tuple[list, list, list, list]:
+    """The chunk's grid (about one point per h), strictly increasing, the states and the
+    acceleration there, as lists."""
+    n = max(2, int(math.ceil((tau_e - tau_s) / seg.m.h)))
+    if tau_e < tau_end:
+        tau, factors = seg.m.grid(tau_s, tau_e, n)
+    else:
+        tau = np.linspace(tau_s, tau_e, n + 1)
+        factors = seg.m.factors(tau)
+    du, dv = seg.delta_from(factors)
+    u, v = seg.u_a + du, seg.v_a + dv
+    a = seg.accel(tau, u, v)
+    if not (tau[1:] > tau[:-1]).all():  # a chunk narrower than a few ulp: drop the repeats
+        tau = np.unique(tau)
+        u, v = seg.state(tau)
+        a = seg.accel(tau, u, v)
+    return tau.tolist(), u.tolist(), v.tolist(), a.tolist()
 
 
 def first_crossing(seg: Segment, sgn: float, tau_end: float) -> float | None:
@@ -256,38 +284,28 @@ def first_crossing(seg: Segment, sgn: float, tau_end: float) -> float | None:
     tau_s = 0.0
     while tau_s < tau_end:
         tau_e = min(tau_end, tau_s + _GRID_POINTS_PER_CHUNK * h)
-        n = max(2, int(math.ceil((tau_e - tau_s) / h)))
-        if tau_e < tau_end:
-            tau, factors = seg.m.grid(tau_s, tau_e, n)
-        else:
-            tau = np.linspace(tau_s, tau_e, n + 1)
-            factors = seg.m.factors(tau)
-        du, dv = seg.delta_from(factors)
-        u, v = seg.u_a + du, seg.v_a + dv
-        a = seg.accel(tau, u, v)
+        pts, u, v, a = _grid_states(seg, tau_s, tau_e, tau_end)
         # split at inflection points, so that v is monotone between points ...
-        pts, u, v = _with_points(seg, tau, u, v, refine(tau, a, seg.a_at))
+        pts, u, v = _with_points(seg, pts, u, v, refine(pts, a, seg.a_at))
         # ... then at turning points, so that u is monotone between points
-        extra = refine(pts, v, seg.v_at)
-        if extra:
-            pts, u, v = _with_points(seg, pts, u, v, extra)
-        g = sgn * u
+        pts, u, v = _with_points(seg, pts, u, v, refine(pts, v, seg.v_at))
+        g = [sgn * x for x in u]
         first = tau_s == 0.0
         if first:
             g[0] = min(sgn * seg.u_a, 0.0)
-        hits = np.nonzero((g[:-1] <= 0.0) & (g[1:] > 0.0))[0]
+        hits = [i for i in range(len(g) - 1) if g[i] <= 0.0 and g[i + 1] > 0.0]
         if released:
             # after a release from sticking u ~ -|jerk| tau^3/6 is below rounding noise for
             # a while; the net force pulls away for at least half a period (it is
             # F - Omega^2 with Omega^2 > 0), so no real contact occurs within one grid step.
-            hits = hits[pts[hits + 1] > h]
+            hits = [i for i in hits if pts[i + 1] > h]
         for i in hits:
             if g[i] == 0.0:
                 if first and i == 0:
                     if sgn * seg.v_a > 0.0:
                         return 0.0
                     continue  # on the wall but heading away: rounding noise in g[1]
-                return float(pts[i])
+                return pts[i]
             return _root(lambda x: sgn * seg.u_at(x), pts[i], pts[i + 1])
         tau_s = tau_e
     return None
