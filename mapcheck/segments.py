@@ -15,6 +15,12 @@ acceleration and then of the velocity (``brentq``), so that u is monotone betwee
 points; a sign change of u between such points is then bracketed and solved by ``brentq``.  A
 contact only 1e-9 deep is therefore never missed.  :class:`mapcheck.exact.ExactOscillator`
 strings segments together across the wall events.
+
+The grids are short (<= 49 points), so numpy's cost per call, not per point, sets the speed: a
+chunk's grid and what the state needs of tau alone (the entries of P - I, sin(pi tau)) are kept per
+mode, the closed form is evaluated once per chunk on arrays, and the refinement points are inserted
+with their states computed point by point in pure Python (the same floating-point operations, so the
+same numbers as evaluating the whole union again: tests/mapcheck/test_exact_fast_paths.py).
 """
 from __future__ import annotations
 
