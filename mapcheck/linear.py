@@ -217,6 +217,19 @@ def propagator_minus_identity_entries(t: np.ndarray, nu: float, k2: float,
         eC, eS = _damped_c_and_s(t, nu, k2)
         bS = b * eS
         return eC + bS - 1.0, eS, -k2 * eS, eC - bS - 1.0
+    at = np.flatnonzero(small).tolist()
+    if len(at) <= 8:
+        # a few points in the series range (a search's first chunk: tau = 0 alone): the closed
+        # form everywhere, then the series at those points (the values elsewhere are per point)
+        eC, eS = _damped_c_and_s(t, nu, k2)
+        bS = b * eS
+        e11, e12, e21, e22 = eC + bS - 1.0, eS, -k2 * eS, eC - bS - 1.0
+        ts = [float(t[i]) for i in at]
+        n_terms = series_terms(rate * max(abs(x) for x in ts))
+        for i, x in zip(at, ts):
+            A, B = series_point(x, nu, k2, n_terms)
+            e11[i], e12[i], e21[i], e22[i] = B, A, -k2 * A, B - nu * A
+        return e11, e12, e21, e22
     e11, e12, e21, e22 = (np.empty_like(t) for _ in range(4))
     big = ~small
     if big.any():

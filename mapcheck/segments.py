@@ -225,7 +225,8 @@ def _insert(seg: Segment, P: list, U: list, V: list, new: list[float]) -> bool:
     """Insert the roots ``new`` (ascending) with their states into the strictly increasing times
     P and their states U, V, where that gives what :meth:`Segment.state` gives on the union:
     each new point strictly inside an interval of its own and, in the series range of P - I,
-    below an old point of that range (the series length is set by the largest such point).
+    below an old point of that range, or the old points there all at tau = 0 (the series length
+    is set by the largest point in the range; at tau = 0 the sums vanish at any length).
     Returns False, leaving the lists alone, where it does not."""
     m = seg.m
     at, prev = [], 0
@@ -237,9 +238,11 @@ def _insert(seg: Segment, P: list, U: list, V: list, new: list[float]) -> bool:
         prev = i
     x_series = None
     if m.rate * min(abs(x) for x in new) <= _SERIES_RATE_T:
-        x_series = max(m.rate * abs(p) for p in P if m.rate * abs(p) <= _SERIES_RATE_T)
-        if x_series <= m.rate * max(abs(x) for x in new if m.rate * abs(x) <= _SERIES_RATE_T):
-            return False
+        x_old = max((m.rate * abs(p) for p in P if m.rate * abs(p) <= _SERIES_RATE_T), default=0.0)
+        x_new = max(m.rate * abs(x) for x in new if m.rate * abs(x) <= _SERIES_RATE_T)
+        if x_new > x_old > 0.0:
+            return False  # the old points' series would get more terms
+        x_series = max(x_old, x_new)
     for i, x in zip(reversed(at), reversed(new)):
         u, v = seg.point_state(x, x_series)
         P.insert(i, x)

@@ -213,3 +213,32 @@ def test_first_crossing_matches_the_plain_search(seed: int) -> None:
             assert (fast is None) == (plain is None)
             if fast is not None:
                 assert abs(fast - plain) <= (0.0 if POINT_RTOL == 0.0 else 1e-14)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_p_minus_i_entries_are_the_matrix_form(seed: int) -> None:
+    """propagator_minus_identity_entries (four arrays; the series per point when few points are in
+    its range, on arrays when many) against P(t) - I from propagator_k2 past the series range, and
+    against the series summed on arrays inside it -- with as many terms (set by the largest point)."""
+    from mapcheck.linear import propagator_minus_identity_entries, series_terms
+
+    def plain_series(ts: np.ndarray, n_terms: int) -> tuple[np.ndarray, np.ndarray]:
+        A, B, a_k, b_k, fac = np.zeros_like(ts), np.zeros_like(ts), 1.0, 0.0, ts.copy()
+        for k in range(1, n_terms + 1):
+            A, B = A + a_k * fac, B + b_k * fac
+            a_k, b_k = -m.nu * a_k + b_k, -m.k2 * a_k
+            fac = fac * ts / (k + 1)
+        return A, B
+
+    rng = np.random.default_rng(3000 + seed)
+    m, _ = _random_mode(rng)
+    rate = spectral_rate(m.nu, m.k2)
+    for n_small in (1, 3, 20):
+        t = np.concatenate([np.sort(rng.uniform(0.0, 0.05 / rate, n_small)), rng.uniform(0.05 / rate, 3.0, 30)])
+        t[0] = 0.0 if seed % 2 else t[0]
+        e = np.stack(propagator_minus_identity_entries(t, m.nu, m.k2, rate), axis=-1)
+        small = rate * t <= 0.05
+        P = propagator_k2(t[~small], m.nu, m.k2) - np.eye(2)
+        assert np.array_equal(e[~small], P.reshape(-1, 4))
+        A, B = plain_series(t[small], series_terms(rate * float(np.max(t[small]))))
+        assert np.array_equal(e[small], np.stack([B, A, -m.k2 * A, B - m.nu * A], axis=-1))
