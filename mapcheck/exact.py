@@ -98,6 +98,7 @@ class ExactOscillator:
         self.F_g, self.phi = forcing_amplitude_phase(self.nu, self.Omega)
         Om2 = self.Omega ** 2
         self._free = Mode(self.nu, self.Omega, self.sigma, Om2)
+        self._legs: dict = {}
         self._wall = Mode(self.nu, self.Omega, self.sigma, Om2 * (1.0 + self.Gamma))
 
     # ------------------------------------------------------------------ helpers
@@ -175,15 +176,14 @@ class ExactOscillator:
             if tau is None:
                 if tau_end <= 0.0:
                     return st
-                u, v = seg.state(np.array([tau_end]))
-                return _State(T, float(u[0]), float(v[0]), st.mode)
+                u, v = seg.point_state(tau_end)
+                return _State(T, u, v, st.mode)
             st = self._cross(st, seg, tau, events)
 
     def _cross(self, st: _State, seg: Segment, tau: float, events: list) -> _State:
         """The state just after the wall event found at st.t + tau on seg (appended to events)."""
         t_c = st.t + tau
-        _, v = seg.state(np.array([tau]))
-        vc = float(v[0])
+        vc = seg.point_state(tau)[1]
         if self.wall == "rigid":
             return self._impact(_State(t_c, 0.0, vc, "out"), events)
         if st.mode == "in":
@@ -232,7 +232,7 @@ class ExactOscillator:
         if self._inner is not None:
             return self._through_scaling(self._inner.strobe, u0, v0, times, t0)
         times = np.asarray(times, dtype=float).reshape(-1)
-        if times.size and (np.any(np.diff(times) < 0) or times[0] < t0):
+        if times.size and (times[0] < t0 or (times.size > 1 and np.any(np.diff(times) < 0))):
             raise ValueError("times must be sorted and >= t0")
         events: list = []
         st, events = self._initial_state(float(u0), float(v0), float(t0))
@@ -318,6 +318,16 @@ class ExactOscillator:
         s, c = self.strobe(u0, v0, [t1], t0)
         return float(s[0, 0]), float(s[0, 1]), int(c[0])
 
+    def _virtual_legs(self, n: int) -> tuple[np.ndarray, ...]:
+        """P(-1/2), P(1/2) and p at n, n - 1/2, n + 1/2, n + 1 for :meth:`pre_impact_map`
+        (kept per n: a Newton solve maps many points at one n)."""
+        legs = self._legs
+        if n not in legs:
+            legs[n] = (propagator_k2(-0.5, self.nu, self.Omega ** 2),
+                       propagator_k2(0.5, self.nu, self.Omega ** 2),
+                       *(np.array(self.wall_free_orbit(t)) for t in (float(n), n - 0.5, n + 0.5, float(n + 1))))
+        return legs[n]
+
     def pre_impact_map(self, u, v, n: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Exact counterpart of the near-grazing maps (31)/(32) (docs/theory.md section 3).
 
@@ -344,12 +354,7 @@ class ExactOscillator:
         u, v = np.broadcast_arrays(np.asarray(u, dtype=float), np.asarray(v, dtype=float))
         shape = u.shape
         u, v = u.reshape(-1), v.reshape(-1)
-        Pb = propagator_k2(-0.5, self.nu, self.Omega ** 2)
-        Pf = propagator_k2(0.5, self.nu, self.Omega ** 2)
-        pn = np.array(self.wall_free_orbit(float(n)))
-        pm = np.array(self.wall_free_orbit(n - 0.5))
-        pp = np.array(self.wall_free_orbit(n + 0.5))
-        p1 = np.array(self.wall_free_orbit(float(n + 1)))
+        Pb, Pf, pn, pm, pp, p1 = self._virtual_legs(n)
         out_u, out_v = np.empty(u.size), np.empty(u.size)
         counts = np.empty(u.size, dtype=int)
         for k in range(u.size):

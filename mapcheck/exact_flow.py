@@ -52,11 +52,12 @@ class ExactFlow:
         h and 2h (h = 1e-5 x the Newton scale), Richardson-extrapolated.  The orbit's own ones
         (h = 1e-6 x scale) carry ~1e-8 of rounding, too much to tell which side of -1 a multiplier
         is 1e-8 from a flip (slope d mu / d sigma ~ 1)."""
-        from .orbits import _jacobian
+        from .orbits import _jacobian, _orbit
 
         h, step = 1e-5 * NEWTON["scale"], self.step_of(sigma)
         z = np.asarray(z0, dtype=float)
-        J1, J2 = _jacobian(step, z, M, h), _jacobian(step, z, M, 2.0 * h)
+        base = _orbit(step, z, M)[1]
+        J1, J2 = _jacobian(step, z, M, h, base), _jacobian(step, z, M, 2.0 * h, base)
         return np.linalg.eigvals(J1 + (J1 - J2) / 3.0)
 
     def settle(self, sigma: float, M: int, n: int = 100) -> PeriodicOrbit:

@@ -55,38 +55,44 @@ def _damped_c_and_s(t: np.ndarray, nu: float, k2: float) -> tuple[np.ndarray, np
     d < 0 (both accurate to a few ulp, also for small sqrt(|d|) t); a short Taylor series
     in d t^2 only where |d| t^2 <= 1e-6 (there sqrt(d) may vanish: critical damping); and
     for sqrt(d) t > 30 the exponentials are combined, (e^{(q-b)t} +- e^{-(q+b)t})/2, so
-    that nothing overflows at large t.
+    that nothing overflows at large t.  ``t`` is a 1-D float array; every value is computed
+    elementwise, so a point's result does not depend on the other points passed with it.
     """
     b = 0.5 * nu
     d = b * b - k2
-    z = d * t * t
     E = np.exp(-b * t)
     if d > 0:
         q = math.sqrt(d)
         qt = q * t
-        with np.errstate(over="ignore", invalid="ignore"):
-            eC = E * np.cosh(qt)
-            eS = E * np.sinh(qt) / q
         far = np.abs(qt) > 30.0
-        if np.any(far):
+        if far.any():
+            with np.errstate(over="ignore", invalid="ignore"):
+                eC = E * np.cosh(qt)
+                eS = E * np.sinh(qt) / q
             tf = t[far]
             ep, em = np.exp((q - b) * tf), np.exp(-(q + b) * tf)
             eC[far] = 0.5 * (ep + em)
             eS[far] = 0.5 * (ep - em) / q
+        else:
+            eC = E * np.cosh(qt)
+            eS = E * np.sinh(qt) / q
     elif d < 0:
         w = math.sqrt(-d)
-        eC = E * np.cos(w * t)
-        eS = E * np.sin(w * t) / w
+        wt = w * t
+        eC = E * np.cos(wt)
+        eS = E * np.sin(wt) / w
     else:
-        eC, eS = E, E * t
+        return E, E * t
+    z = d * t * t
     tiny = np.abs(z) <= _SERIES_D
-    if d != 0 and np.any(tiny):
+    if tiny.any():
         zs = z[tiny]
         # C = 1 + z/2 + z^2/24 + z^3/720, S/t = 1 + z/6 + z^2/120 + z^3/5040: error < z^4/8!
         c = 1.0 + zs * (1.0 / 2 + zs * (1.0 / 24 + zs / 720))
         sv = 1.0 + zs * (1.0 / 6 + zs * (1.0 / 120 + zs / 5040))
-        eC[tiny] = E[tiny] * c
-        eS[tiny] = E[tiny] * sv * t[tiny]
+        Et = E[tiny]
+        eC[tiny] = Et * c
+        eS[tiny] = Et * sv * t[tiny]
     return eC, eS
 
 
@@ -147,39 +153,94 @@ def propagator_minus_identity(t, nu: float, k2: float) -> np.ndarray:
     """
     t = np.asarray(t, dtype=float)
     shape = t.shape
-    t = t.reshape(-1)
-    out = np.empty(t.shape + (2, 2))
-    # spectral radius of M bounds the growth of the series terms
-    rate = spectral_rate(nu, k2)
-    small = rate * np.abs(t) <= _SERIES_RATE_T
-    big = ~small
-    if np.any(big):
-        P = propagator_k2(t[big], nu, k2)
-        P[:, 0, 0] -= 1.0
-        P[:, 1, 1] -= 1.0
-        out[big] = P
-    if np.any(small):
-        ts = t[small]
+    e11, e12, e21, e22 = propagator_minus_identity_entries(t.reshape(-1), nu, k2, spectral_rate(nu, k2))
+    out = np.empty(e11.shape + (2, 2))
+    out[:, 0, 0], out[:, 0, 1], out[:, 1, 0], out[:, 1, 1] = e11, e12, e21, e22
+    return out.reshape(shape + (2, 2))
+
+
+def series_terms(x: float) -> int:
+    """Number of terms of the P - I series for points with rate * |t| <= x: until the bound
+    x^k / k! on the k-th term is below 1e-17 x (all 12 when x = 0)."""
+    bound = x
+    for k in range(1, _N_SERIES_RATE_T):
+        bound *= x / (k + 1)
+        if bound < 1e-17 * x:
+            return k
+    return _N_SERIES_RATE_T - 1
+
+
+def _series_entries(ts: np.ndarray, nu: float, k2: float, n_terms: int) -> tuple[np.ndarray, np.ndarray]:
+    """A(t), B(t) of P(t) - I = A M + B I: the first ``n_terms`` terms of the series."""
+    if ts.size > 8:
         A = np.zeros_like(ts)
         B = np.zeros_like(ts)
         a_k, b_k = 1.0, 0.0
         fac = ts.copy()  # t^k / k!
-        # terms are bounded by x^k / k!, x = rate * max|t|: sum until that is < 1e-17 relative
-        x = rate * float(np.max(np.abs(ts)))
-        bound = x
-        for k in range(1, _N_SERIES_RATE_T):
+        for k in range(1, n_terms + 1):
             A += a_k * fac
             B += b_k * fac
             a_k, b_k = -nu * a_k + b_k, -k2 * a_k
             fac = fac * ts / (k + 1)
-            bound *= x / (k + 1)
-            if bound < 1e-17 * x:
-                break
-        out[small, 0, 0] = B
-        out[small, 0, 1] = A
-        out[small, 1, 0] = -k2 * A
-        out[small, 1, 1] = B - nu * A
-    return out.reshape(shape + (2, 2))
+        return A, B
+    # a few points (the usual case: tau = 0 of a search's first chunk): the same sums per point
+    A = np.empty_like(ts)
+    B = np.empty_like(ts)
+    for i, t in enumerate(ts.tolist()):
+        A[i], B[i] = series_point(t, nu, k2, n_terms)
+    return A, B
+
+
+def series_point(t: float, nu: float, k2: float, n_terms: int) -> tuple[float, float]:
+    """A(t), B(t) of :func:`_series_entries` at one point, in pure Python (the same operations)."""
+    A = B = 0.0
+    a_k, b_k, fac = 1.0, 0.0, t
+    for k in range(1, n_terms + 1):
+        A += a_k * fac
+        B += b_k * fac
+        a_k, b_k = -nu * a_k + b_k, -k2 * a_k
+        fac = fac * t / (k + 1)
+    return A, B
+
+
+def propagator_minus_identity_entries(t: np.ndarray, nu: float, k2: float,
+                                      rate: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The entries (E11, E12, E21, E22) of :func:`propagator_minus_identity` for a 1-D float
+    array ``t``, as four arrays (no (n, 2, 2) array is built); ``rate`` = spectral_rate(nu, k2).
+
+    The series covers the points with ``rate * |t| <= 0.05``; its number of terms is set by
+    the largest of them (all points of one call share it), the closed form covers the rest.
+    """
+    b = 0.5 * nu
+    small = rate * np.abs(t) <= _SERIES_RATE_T
+    if not small.any():
+        eC, eS = _damped_c_and_s(t, nu, k2)
+        bS = b * eS
+        return eC + bS - 1.0, eS, -k2 * eS, eC - bS - 1.0
+    at = np.flatnonzero(small).tolist()
+    if len(at) <= 8:
+        # a few points in the series range (a search's first chunk: tau = 0 alone): the closed
+        # form everywhere, then the series at those points (the values elsewhere are per point)
+        eC, eS = _damped_c_and_s(t, nu, k2)
+        bS = b * eS
+        e11, e12, e21, e22 = eC + bS - 1.0, eS, -k2 * eS, eC - bS - 1.0
+        ts = [float(t[i]) for i in at]
+        n_terms = series_terms(rate * max(abs(x) for x in ts))
+        for i, x in zip(at, ts):
+            A, B = series_point(x, nu, k2, n_terms)
+            e11[i], e12[i], e21[i], e22[i] = B, A, -k2 * A, B - nu * A
+        return e11, e12, e21, e22
+    e11, e12, e21, e22 = (np.empty_like(t) for _ in range(4))
+    big = ~small
+    if big.any():
+        eC, eS = _damped_c_and_s(t[big], nu, k2)
+        bS = b * eS
+        e11[big], e12[big], e21[big], e22[big] = eC + bS - 1.0, eS, -k2 * eS, eC - bS - 1.0
+    ts = t[small]
+    # terms are bounded by x^k / k!, x = rate * max|t|: sum until that is < 1e-17 relative
+    A, B = _series_entries(ts, nu, k2, series_terms(rate * float(np.max(np.abs(ts)))))
+    e11[small], e12[small], e21[small], e22[small] = B, A, -k2 * A, B - nu * A
+    return e11, e12, e21, e22
 
 
 def alpha_gamma(nu: float, Omega: float) -> tuple[float, float]:

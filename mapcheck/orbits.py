@@ -95,11 +95,13 @@ def _orbit_with_jacobian(dstep: DerivativeStep, z: np.ndarray, M: int) -> tuple[
     return pts, cont, J
 
 
-def _jacobian(step: Step, z: np.ndarray, M: int, h: np.ndarray) -> np.ndarray:
+def _jacobian(step: Step, z: np.ndarray, M: int, h: np.ndarray, base: np.ndarray | None = None) -> np.ndarray:
     """Central differences of F^M.  If a perturbed orbit changes its contact pattern (the
     orbit is within h of grazing, where the map has a square-root singularity) the step is
-    shrunk, down to 1e-6 of the original, so that both stencil points stay on one branch."""
-    base = _orbit(step, z, M)[1]
+    shrunk, down to 1e-6 of the original, so that both stencil points stay on one branch.
+    ``base``: the contacts of the orbit from z, where the caller has them already."""
+    if base is None:
+        base = _orbit(step, z, M)[1]
     for shrink in (1.0, 1e-2, 1e-4, 1e-6):
         J = np.empty((2, 2))
         same = True
@@ -152,13 +154,13 @@ def solve_periodic_orbit(step: Step, z0, M: int, *, tol: float = 1e-12, max_iter
         if dstep is not None:
             pts, cont, DF = _orbit_with_jacobian(dstep, z, M)
         else:
-            pts, _ = _orbit(step, z, M)
+            pts, cont = _orbit(step, z, M)
         g = pts[-1] - z
         res = float(np.max(np.abs(g)))
         if res < tol * float(np.max(sc)):
             converged = True
             break
-        J = (DF if DF is not None else _jacobian(step, z, M, h)) - np.eye(2)
+        J = (DF if DF is not None else _jacobian(step, z, M, h, cont)) - np.eye(2)
         try:
             dz = np.linalg.solve(J, -g)
         except np.linalg.LinAlgError:
@@ -176,8 +178,9 @@ def solve_periodic_orbit(step: Step, z0, M: int, *, tol: float = 1e-12, max_iter
             pts, cont, DF = _orbit_with_jacobian(dstep, z, M)
         mult = np.linalg.eigvals(DF)
     else:
-        pts, cont = _orbit(step, z, M)
-        mult = np.linalg.eigvals(_jacobian(step, z, M, h))
+        if not converged:  # converged: the last pass was at this very z, reuse it
+            pts, cont = _orbit(step, z, M)
+        mult = np.linalg.eigvals(_jacobian(step, z, M, h, cont))
     return PeriodicOrbit(pts[:-1], cont, mult.astype(complex), converged, res)
 
 

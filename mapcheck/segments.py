@@ -15,19 +15,28 @@ acceleration and then of the velocity (``brentq``), so that u is monotone betwee
 points; a sign change of u between such points is then bracketed and solved by ``brentq``.  A
 contact only 1e-9 deep is therefore never missed.  :class:`mapcheck.exact.ExactOscillator`
 strings segments together across the wall events.
+
+The grids are short (<= 49 points), so numpy's cost per call, not per point, sets the speed: a
+chunk's grid and what the state needs of tau alone (the entries of P - I, sin(pi tau)) are kept per
+mode, the closed form is evaluated once per chunk on arrays, and the refinement points are inserted
+with their states computed point by point in pure Python (the same floating-point operations, so the
+same numbers as evaluating the whole union again: tests/mapcheck/test_exact_fast_paths.py).
 """
 from __future__ import annotations
 
+import bisect
 import math
 
 import numpy as np
 from scipy.optimize import brentq
 
-from .linear import propagator_minus_identity, propagator_minus_identity_scalar, spectral_rate
+from .linear import (_SERIES_D, _SERIES_RATE_T, propagator_minus_identity_entries, series_point, series_terms,
+                     spectral_rate)
 
 TWO_PI = 2.0 * math.pi
 _GRID_POINTS_PER_CHUNK = 48
 _RTOL = 4.0 * np.finfo(float).eps
+_GRID_CACHE = 256  # chunk grids kept per mode (~3 kB each)
 
 
 def forcing_amplitude_phase(nu: float, Omega: float) -> tuple[float, float]:
@@ -53,6 +62,67 @@ class Mode:
         rate = max(2.0 * math.pi, math.sqrt(k2), nu)
         self.h = 0.1 / rate  # grid step: well below every time scale of the solution
         self.rate = spectral_rate(nu, k2)
+        self.amp_2pi = self.amp * TWO_PI
+        # constants of the scalar closed form (mapcheck.linear._scalar_damped_c_and_s)
+        self.b = 0.5 * nu
+        self.d = self.b * self.b - k2
+        self.sq = math.sqrt(abs(self.d))
+        self._grids: dict = {}
+
+    def factors(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
+        """What the state at the times ``t`` (1-D) needs of t alone: the entries of P(t) - I,
+        pi t and sin(pi t)."""
+        half = math.pi * t
+        return (*propagator_minus_identity_entries(t, self.nu, self.k2, self.rate), half, np.sin(half))
+
+    def grid(self, tau_s: float, tau_e: float, n: int) -> tuple[np.ndarray, tuple]:
+        """linspace(tau_s, tau_e, n + 1) and its :meth:`factors`, kept for full chunks of the
+        crossing search (the same chunks recur in every segment of this mode); read-only."""
+        key = (tau_s, tau_e, n)
+        hit = self._grids.get(key)
+        if hit is None:
+            tau = np.linspace(tau_s, tau_e, n + 1)
+            hit = (tau, self.factors(tau))
+            for a in (tau, *hit[1]):
+                a.flags.writeable = False
+            if len(self._grids) < _GRID_CACHE:
+                self._grids[key] = hit
+        return hit
+
+    def minus_identity(self, t: float) -> tuple[float, float, float, float]:
+        """The entries of P(t) - I at one time, in pure Python (for root finding): the series
+        where rate |t| <= 0.05, summed until the next term is below 1e-18 of the sum, else
+        the closed form (as :func:`mapcheck.linear.propagator_minus_identity`)."""
+        nu, k2 = self.nu, self.k2
+        if self.rate * abs(t) <= _SERIES_RATE_T:
+            A = B = 0.0
+            a_k, b_k, fac = 1.0, 0.0, t
+            for k in range(1, 13):
+                A += a_k * fac
+                B += b_k * fac
+                a_k, b_k = -nu * a_k + b_k, -k2 * a_k
+                fac = fac * t / (k + 1)
+                if abs(fac) * (abs(a_k) + abs(b_k)) < 1e-18 * (abs(A) + abs(B)):
+                    break
+            return B, A, -k2 * A, B - nu * A
+        b, d = self.b, self.d
+        z = d * t * t
+        E = math.exp(-b * t)
+        if abs(z) <= _SERIES_D:
+            c = 1.0 + z * (1.0 / 2 + z * (1.0 / 24 + z / 720))
+            eC, eS = E * c, E * (1.0 + z * (1.0 / 6 + z * (1.0 / 120 + z / 5040))) * t
+        elif d > 0:
+            q = self.sq
+            if abs(q * t) > 30.0:
+                ep, em = math.exp((q - b) * t), math.exp(-(q + b) * t)
+                eC, eS = 0.5 * (ep + em), 0.5 * (ep - em) / q
+            else:
+                eC, eS = E * math.cosh(q * t), E * math.sinh(q * t) / q
+        else:
+            w = self.sq
+            eC, eS = E * math.cos(w * t), E * math.sin(w * t) / w
+        bS = b * eS
+        return eC + bS - 1.0, eS, -k2 * eS, eC - bS - 1.0
 
     def q(self, th: float) -> tuple[float, float]:
         c, s = math.cos(th), math.sin(th)
@@ -76,22 +146,37 @@ class Segment:
 
     def delta(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(u(t_a + tau) - u_a, v(t_a + tau) - v_a), accurate for small tau."""
+        tau = np.asarray(tau, dtype=float)
+        du, dv = self.delta_from(self.m.factors(tau.reshape(-1)))
+        return du.reshape(tau.shape), dv.reshape(tau.shape)
+
+    def delta_from(self, factors: tuple) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`delta` from the :meth:`Mode.factors` of the times."""
         m = self.m
-        E = propagator_minus_identity(tau, m.nu, m.k2)
-        half = math.pi * tau  # delta/2 with delta = 2 pi tau
-        s_half = np.sin(half)
+        e11, e12, e21, e22, half, s_half = factors  # half = delta/2 with delta = 2 pi tau
         mid = self.th_a + half
         dcos = -2.0 * s_half * np.sin(mid)
         dsin = 2.0 * s_half * np.cos(mid)
         dqu = m.amp * (m.gr * dcos - m.gi * dsin)
-        dqv = m.amp * TWO_PI * (-m.gr * dsin - m.gi * dcos)
-        du = E[..., 0, 0] * self.wu + E[..., 0, 1] * self.wv + dqu
-        dv = E[..., 1, 0] * self.wu + E[..., 1, 1] * self.wv + dqv
+        dqv = m.amp_2pi * (-m.gr * dsin - m.gi * dcos)
+        du = e11 * self.wu + e12 * self.wv + dqu
+        dv = e21 * self.wu + e22 * self.wv + dqv
         return du, dv
 
     def state(self, tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         du, dv = self.delta(tau)
         return self.u_a + du, self.v_a + dv
+
+    def point_state(self, tau: float, x_series: float | None = None) -> tuple[float, float]:
+        """:meth:`state` at one time, in pure Python with the same operations (in the series
+        range of P - I too, unlike :meth:`scalar_state`).  ``x_series``: rate * the largest |tau|
+        in the series range of the times this one is evaluated with (default: this one)."""
+        m = self.m
+        x = m.rate * abs(tau)
+        if x <= _SERIES_RATE_T:
+            A, B = series_point(tau, m.nu, m.k2, series_terms(x if x_series is None else x_series))
+            return self._compose(tau, B, A, -m.k2 * A, B - m.nu * A)
+        return self._compose(tau, *m.minus_identity(tau))
 
     def accel(self, tau, u, v) -> np.ndarray:
         m = self.m
@@ -99,15 +184,18 @@ class Segment:
 
     # scalar helpers for brentq (pure Python: called ~10 times per root)
     def scalar_state(self, tau: float) -> tuple[float, float]:
+        return self._compose(tau, *self.m.minus_identity(tau))
+
+    def _compose(self, tau: float, e11: float, e12: float, e21: float, e22: float) -> tuple[float, float]:
+        """The state at tau from the entries of P(tau) - I (the arithmetic of :meth:`delta_from`)."""
         m = self.m
-        e11, e12, e21, e22 = propagator_minus_identity_scalar(tau, m.nu, m.k2, m.rate)
         half = math.pi * tau
         s_half = math.sin(half)
         mid = self.th_a + half
         dcos = -2.0 * s_half * math.sin(mid)
         dsin = 2.0 * s_half * math.cos(mid)
         du = e11 * self.wu + e12 * self.wv + m.amp * (m.gr * dcos - m.gi * dsin)
-        dv = e21 * self.wu + e22 * self.wv + m.amp * TWO_PI * (-m.gr * dsin - m.gi * dcos)
+        dv = e21 * self.wu + e22 * self.wv + m.amp_2pi * (-m.gr * dsin - m.gi * dcos)
         return self.u_a + du, self.v_a + dv
 
     def u_at(self, tau: float) -> float:
@@ -128,10 +216,68 @@ def _root(f, lo: float, hi: float) -> float:
     return brentq(f, lo, hi, xtol=max(1e-16 * (hi - lo), 1e-300), rtol=_RTOL, maxiter=200)
 
 
-def refine(tau: np.ndarray, vals: np.ndarray, f) -> list[float]:
-    """Roots of f in every grid interval where ``vals`` changes sign strictly."""
-    idx = np.nonzero(vals[:-1] * vals[1:] < 0)[0]
-    return [_root(f, tau[i], tau[i + 1]) for i in idx]
+def refine(tau, vals, f) -> list[float]:
+    """Roots of f in every grid interval where ``vals`` changes sign strictly (sequences of floats)."""
+    return [_root(f, tau[i], tau[i + 1]) for i in range(len(vals) - 1) if vals[i] * vals[i + 1] < 0]
+
+
+def _insert(seg: Segment, P: list, U: list, V: list, new: list[float]) -> bool:
+    """Insert the roots ``new`` (ascending) with their states into the strictly increasing times
+    P and their states U, V, where that gives what :meth:`Segment.state` gives on the union:
+    each new point strictly inside an interval of its own and, in the series range of P - I,
+    below an old point of that range, or the old points there all at tau = 0 (the series length
+    is set by the largest point in the range; at tau = 0 the sums vanish at any length).
+    Returns False, leaving the lists alone, where it does not."""
+    m = seg.m
+    at, prev = [], 0
+    for x in new:
+        i = bisect.bisect_left(P, x)
+        if not (prev < i < len(P) and P[i - 1] < x < P[i]):
+            return False
+        at.append(i)
+        prev = i
+    x_series = None
+    if m.rate * min(abs(x) for x in new) <= _SERIES_RATE_T:
+        x_old = max((m.rate * abs(p) for p in P if m.rate * abs(p) <= _SERIES_RATE_T), default=0.0)
+        x_new = max(m.rate * abs(x) for x in new if m.rate * abs(x) <= _SERIES_RATE_T)
+        if x_new > x_old > 0.0:
+            return False  # the old points' series would get more terms
+        x_series = max(x_old, x_new)
+    for i, x in zip(reversed(at), reversed(new)):
+        u, v = seg.point_state(x, x_series)
+        P.insert(i, x)
+        U.insert(i, u)
+        V.insert(i, v)
+    return True
+
+
+def _with_points(seg: Segment, P: list, U: list, V: list, new: list[float]) -> tuple[list, list, list]:
+    """The sorted union of the strictly increasing times P (states U, V) and the roots ``new``,
+    and the states on it: inserted (:func:`_insert`) or else computed afresh."""
+    if new and not _insert(seg, P, U, V, new):
+        pts = np.unique(np.array(P + new))
+        u, v = seg.state(pts)
+        return pts.tolist(), u.tolist(), v.tolist()
+    return P, U, V
+
+
+def _grid_states(seg: Segment, tau_s: float, tau_e: float, tau_end: float) -> tuple[list, list, list, list]:
+    """The chunk's grid (about one point per h), strictly increasing, the states and the
+    acceleration there, as lists."""
+    n = max(2, int(math.ceil((tau_e - tau_s) / seg.m.h)))
+    if tau_e < tau_end:
+        tau, factors = seg.m.grid(tau_s, tau_e, n)
+    else:
+        tau = np.linspace(tau_s, tau_e, n + 1)
+        factors = seg.m.factors(tau)
+    du, dv = seg.delta_from(factors)
+    u, v = seg.u_a + du, seg.v_a + dv
+    a = seg.accel(tau, u, v)
+    if not (tau[1:] > tau[:-1]).all():  # a chunk narrower than a few ulp: drop the repeats
+        tau = np.unique(tau)
+        u, v = seg.state(tau)
+        a = seg.accel(tau, u, v)
+    return tau.tolist(), u.tolist(), v.tolist(), a.tolist()
 
 
 def first_crossing(seg: Segment, sgn: float, tau_end: float) -> float | None:
@@ -147,35 +293,28 @@ def first_crossing(seg: Segment, sgn: float, tau_end: float) -> float | None:
     tau_s = 0.0
     while tau_s < tau_end:
         tau_e = min(tau_end, tau_s + _GRID_POINTS_PER_CHUNK * h)
-        n = max(2, int(math.ceil((tau_e - tau_s) / h)))
-        tau = np.linspace(tau_s, tau_e, n + 1)
-        u, v = seg.state(tau)
-        a = seg.accel(tau, u, v)
+        pts, u, v, a = _grid_states(seg, tau_s, tau_e, tau_end)
         # split at inflection points, so that v is monotone between points ...
-        pts = np.unique(np.array(list(tau) + refine(tau, a, seg.a_at)))
-        u, v = seg.state(pts)
+        pts, u, v = _with_points(seg, pts, u, v, refine(pts, a, seg.a_at))
         # ... then at turning points, so that u is monotone between points
-        extra = refine(pts, v, seg.v_at)
-        if extra:
-            pts = np.unique(np.concatenate([pts, extra]))
-            u, v = seg.state(pts)
-        g = sgn * u
+        pts, u, v = _with_points(seg, pts, u, v, refine(pts, v, seg.v_at))
+        g = [sgn * x for x in u]
         first = tau_s == 0.0
         if first:
             g[0] = min(sgn * seg.u_a, 0.0)
-        hits = np.nonzero((g[:-1] <= 0.0) & (g[1:] > 0.0))[0]
+        hits = [i for i in range(len(g) - 1) if g[i] <= 0.0 and g[i + 1] > 0.0]
         if released:
             # after a release from sticking u ~ -|jerk| tau^3/6 is below rounding noise for
             # a while; the net force pulls away for at least half a period (it is
             # F - Omega^2 with Omega^2 > 0), so no real contact occurs within one grid step.
-            hits = hits[pts[hits + 1] > h]
+            hits = [i for i in hits if pts[i + 1] > h]
         for i in hits:
             if g[i] == 0.0:
                 if first and i == 0:
                     if sgn * seg.v_a > 0.0:
                         return 0.0
                     continue  # on the wall but heading away: rounding noise in g[1]
-                return float(pts[i])
+                return pts[i]
             return _root(lambda x: sgn * seg.u_at(x), pts[i], pts[i + 1])
         tau_s = tau_e
     return None
