@@ -10,6 +10,7 @@ side of it with the mode unchanged (as an importer's trial state between events)
 """
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -110,6 +111,7 @@ def _law(params: dict, d: float, dv: float) -> tuple[float, float]:
     return 1.5 * k2 * math.sqrt(d) * (1 + a * dv), k2 * d ** 1.5 * a
 
 
+@functools.lru_cache(maxsize=None)  # one matrix logarithm per regime, not one per grid point
 def _generator(nu: float, k2: float) -> np.ndarray:
     """The closed form's generator matrix: log P(t) / t of the exact propagator (the paper's (7))."""
     t = 0.5 / math.sqrt(k2 + nu * nu)  # a rotation angle below pi: the principal logarithm
