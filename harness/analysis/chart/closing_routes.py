@@ -163,6 +163,7 @@ def bisect_closing(sim: Any, params: Mapping[str, Any], param2: str, theta: floa
     low = at(p_lo, orbit_lo)
     if low is None or low["rho"] >= 1.0:
         return {"status": "no stable orbit", "p2": p_lo, "bracket": [p_lo, p_lo], "evaluations": n[0],
+                "note": f"no orbit of the window with radius below 1 found along sigma at {p_lo:.8g}, where it starts",
                 "rho_lo": None if low is None else low["rho"], "sigma": float(orbit_lo["sigma"])}
     hi_p = max(p_hi, p_lo * (1.0 + BISECT_TOL))
     while True:
