@@ -216,7 +216,8 @@ def chart_report(res: dict[str, Any], problem: ChartProblem, command: str) -> st
              f"{problem.param2}): flip/fold/NS on the extended system (orbit + test function, pseudo-arclength), "
              "grazes stepped along the curve and located across it (bisection, then secant steps on the gap). "
              "A window closes at the first candidate (an edge curve's turning point, a flip meeting the graze, its lower "
-             "edge leaving the sigma range upward) that direct shooting confirms on both sides (below).", "",
+             "edge leaving the sigma range upward) that direct shooting confirms on both sides (below) and no flip/fold/NS "
+             "edge curve of the window passes in p2 (every point of one has stable orbits of the window beside it).", "",
              f"| M | window at {problem.param2} = {problem.values[0]:g} | closes at {problem.param2} | sigma there | how |",
              "|---|---|---|---|---|"]
     lines += _closing_table(res, problem)

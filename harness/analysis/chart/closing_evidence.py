@@ -63,6 +63,11 @@ def boundary_features(w: Mapping[str, Any]) -> list[dict[str, Any]]:
             elif t["side"] == "loses":
                 out.append({"p2": float(t["p2"]), "sigma": float(t["sigma"]),
                             "kind": f"the grazing orbit on the {side} graze edge loses stability"})
+        i = int(np.argmax(c["p2"]))
+        if c["kind"] != "graze" and 0 < i < len(c["p2"]) - 1 and not any(
+                t["side"] == "max" and abs(t["p2"] - c["p2"][i]) <= 1e-6 * c["p2"][i] for t in c.get("turns", [])):
+            out.append({"p2": float(c["p2"][i]), "sigma": float(c["sigma"][i]),
+                        "kind": f"largest p2 of the {side} {c['kind']} edge (a turn between two of its points)"})
         if c["end"].get("reason") == "graze":
             out.append({"p2": float(c["end"]["p2"]), "sigma": float(c["end"]["sigma"]),
                         "kind": f"the {side} {c['kind']} edge ends on the graze"})

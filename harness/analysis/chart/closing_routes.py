@@ -40,6 +40,9 @@ FEATURE_TOL = 2e-3
 BISECT_TOL = 1e-6
 #: Values of sigma on the local grid along the branch.
 BRANCH_GRID = 17
+#: An asymptote's one-parameter route evaluates the branch this many times beyond the edge's last charted sigma,
+#: at most at :data:`FAR_MAX` (the FMU takes states up to 1e6, the orbit's u reaches ~2 (1 + sigma)).
+FAR, FAR_MAX = 2.0, 1e5
 #: Growth of p2 per step while looking for a p2 where the window is gone above the evidence.
 MARCH = 1.02
 
@@ -160,6 +163,7 @@ def bisect_closing(sim: Any, params: Mapping[str, Any], param2: str, theta: floa
     low = at(p_lo, orbit_lo)
     if low is None or low["rho"] >= 1.0:
         return {"status": "no stable orbit", "p2": p_lo, "bracket": [p_lo, p_lo], "evaluations": n[0],
+                "note": f"no orbit of the window with radius below 1 found along sigma at {p_lo:.8g}, where it starts",
                 "rho_lo": None if low is None else low["rho"], "sigma": float(orbit_lo["sigma"])}
     hi_p = max(p_hi, p_lo * (1.0 + BISECT_TOL))
     while True:
@@ -211,8 +215,7 @@ def _reconcile(sim: Any, problem: Any, w: Mapping[str, Any], cl: dict[str, Any],
     top = max(evidence, key=lambda e: e["p2"])
     start = max(seeded, key=lambda e: e["p2"])
     if "asymptote" in str(cl.get("kind", "")):
-        return {"status": "not checked", "note": "an asymptote (the edge runs off to sigma -> infinity): no branch "
-                "minimum to bisect", "evidence_top": top}
+        return _asymptote_route(sim, problem, w, cl, top)
     p_lo = start["p2"]
     p_hi = reported * (1.0 + 1e-3) if reported is not None and reported > p_lo else p_lo * MARCH
     p_max = float(problem.values[-1])
@@ -232,6 +235,53 @@ def _reconcile(sim: Any, problem: Any, w: Mapping[str, Any], cl: dict[str, Any],
     res["feature"] = near
     res["status"] = "resolved" if near is not None and abs(near["p2"] - pb) <= FEATURE_TOL * pb else "unresolved"
     return res
+
+
+def _asymptote_route(sim: Any, problem: Any, w: Mapping[str, Any], cl: Mapping[str, Any],
+                     top: Mapping[str, Any]) -> dict[str, Any]:
+    """The one-parameter route to a closing where the lower edge runs off to sigma -> infinity: the
+    window then lies above that edge, and as sigma grows the oscillator becomes scale-invariant (the
+    wall's offset negligible beside the forcing amplitude), so the branch's radius at a sigma
+    :data:`FAR` times the edge's last charted one is near its limit; bisected in ln p2 from the orbit shot
+    below the candidate, scaled there, it reaches 1 at the asymptote (within c / sigma of it)."""
+    from ...dynamics.maps.periodic_map import PeriodMap, wall_free_offset
+
+    o = ((cl.get("confirmation") or {}).get("below") or {}).get("orbit")
+    if not o:
+        return {"status": "not checked", "note": "an asymptote, and no orbit shot below it", "evidence_top": top}
+    s_far = min(FAR * float(cl["sigma"]), FAR_MAX)
+    p_lo = float(cl["confirmation"]["below"]["p2"])
+    M = int(w["M"])
+    w_far = _walk_up(PeriodMap(sim, {**problem.params, problem.param2: p_lo}, "sigma", problem.theta), M,
+                     norm_seed(o["point"], float(o["sigma"]), problem.theta), float(o["sigma"]), s_far)
+    if w_far is None:
+        return {"status": "not checked", "note": f"an asymptote, and its orbit not followed to sigma = {s_far:.3g}",
+                "evidence_top": top}
+    far = {"sigma": s_far, "point": (w_far + wall_free_offset(s_far, problem.theta)).tolist()}
+    res = bisect_closing(sim, problem.params, problem.param2, problem.theta, M, 1, p_lo, far,
+                         float(cl["closes"]) * (1.0 + 1e-3), float(problem.values[-1]), 0.02)
+    res["from"] = {"p2": p_lo, "sigma": s_far, "route": "shooting below the candidate closing, scaled to large sigma"}
+    res["evidence_top"] = {k: top[k] for k in ("p2", "sigma", "route")}
+    if res["status"] != "bisected":
+        return res
+    near = {"p2": float(cl["closes"]), "sigma": float(cl["sigma"]),
+            "kind": "asymptote of the lower edge running off to sigma -> infinity"}
+    res["feature"] = near
+    res["status"] = "resolved" if abs(near["p2"] - res["p2"]) <= FEATURE_TOL * res["p2"] else "unresolved"
+    return res
+
+
+def _walk_up(pmap: Any, M: int, shape: np.ndarray, s_from: float, s_to: float) -> np.ndarray | None:
+    """The window's orbit followed from ``s_from`` to ``s_to`` (w at ``s_to``) in steps of at most 3x in
+    sigma, each from the last orbit's shape (which settles like 1 / sigma: each step's guess is off by
+    a bounded amount, within Newton's damped steps)."""
+    n = max(1, int(math.ceil(math.log(max(s_to / s_from, 1.0)) / math.log(3.0))))
+    for s in np.geomspace(s_from, s_to, n + 1)[1:]:
+        got = _orbit(pmap, shape * (1.0 + s), float(s), M, 1)
+        if got is None:
+            return None
+        shape = got[0] / (1.0 + s)
+    return shape * (1.0 + s_to)
 
 
 def _agreeing(cl: Mapping[str, Any], r: Mapping[str, Any], reported: float | None) -> list[str]:

@@ -220,7 +220,7 @@ def contradictions(source: Any, problem: Any, windows: Sequence[Mapping[str, Any
     n_pres = n_edge = 0
     for res in per_value:
         v = float(res["value"])
-        cont_all = continued_intervals(windows, v, closes, g1)
+        cont_all = continued_intervals(windows, v, closes, g1, g0)
         for key in keys:
             M, impacts = (1, 0) if key == WALL_FREE else (int(key), 1)
             cont = [c for c in cont_all if c["M"] == M and c["impacts"] == impacts and _in_grid(c["lo"], c["hi"], g0, g1)]

@@ -32,7 +32,7 @@ import numpy as np
 from ...dynamics.continuation.window_branch import EDGE_KINDS, first_edge  # noqa: F401  (EDGE_KINDS: one list, there)
 from ...errors import FmuError
 
-__all__ = ["windows_at", "widened", "continue_window", "window_closing", "chart_curves", "scan_check", "edge_check"]
+__all__ = ["windows_at", "widened", "continue_window", "window_closing", "smooth_top", "chart_curves", "scan_check", "edge_check"]
 
 
 def _edge(branch: Any) -> dict[str, Any] | None:
@@ -151,12 +151,15 @@ def window_closing(curves: Mapping[str, Any], p2_range: Sequence[float], sigma_r
         if end.get("reason") == "graze":
             cands.append((end["p2"], end["sigma"], f"the {side} {c['kind']} edge ends on the orbit's graze curve "
                           f"(approximate: {end['note']})"))
-        turned = any(t["side"] == "max" for t in c["turns"])  # after a turn the curve is the upper edge
-        if side == "lower" and not turned and end.get("reason") == "range" and end["sigma"] >= 0.99 * sigma_range[1]:
+        if side == "lower" and _heads_up(c) and end.get("reason") == "range" and end["sigma"] >= 0.99 * sigma_range[1]:
             g_inf = _asymptote(c["sigma"], c["p2"])
             cands.append((g_inf, end["sigma"], f"the lower {c['kind']} edge runs off to large sigma: it leaves the "
                           f"charted sigma range at p2 = {end['p2']:.8g} (sigma = {end['sigma']:.4g}); the value given is "
                           "its asymptote, p2 = p* - c / sigma through the last two points (not two edges meeting)"))
+    top = smooth_top(curves)
+    if top is not None and top["interior"] and not any(x[0] >= top["p2"] for x in cands):
+        cands.append((top["p2"], top["sigma"], f"the {top['side']} {top['kind']} edge reaches its largest p2 between "
+                      "two of its points (a turn its continuation did not locate): the window's edges meet there"))
     if not cands:
         reasons = {s: (curves[s] or {}).get("end", {}).get("note", "no edge") if curves.get(s) and "failed" not in curves[s]
                    else (curves[s] or {}).get("failed", "no edge (unbounded in the sigma range)") for s in ("lower", "upper")}
@@ -173,6 +176,32 @@ def window_closing(curves: Mapping[str, Any], p2_range: Sequence[float], sigma_r
     p2, sigma, how = cands[0]
     return {"closes": p2, "sigma": sigma, "how": how, "searched": list(p2_range),
             "other_candidates": [{"p2": a, "sigma": b, "how": c} for a, b, c in cands[1:]]}
+
+
+def _heads_up(c: Mapping[str, Any]) -> bool:
+    """Whether a lower edge curve runs off to large sigma with p2 growing: its last located turn, if
+    any, is a minimum (after a maximum alone it returns to large sigma as p2 falls: the window's upper
+    edge, bounding it from above, whose asymptote closes nothing)."""
+    ext = [t["side"] for t in c["turns"] if t["side"] in ("max", "min")]
+    # and its end is its largest p2 (to the noise that significant_turns filters: a turn it dropped
+    # leaves a curve returning with p2 falling)
+    return (not ext or ext[-1] == "min") and c["p2"][-1] >= max(c["p2"]) * (1.0 - 1e-3)
+
+
+def smooth_top(curves: Mapping[str, Any]) -> dict[str, Any] | None:
+    """The largest p2 reached by a point of a smooth (flip, fold, NS) edge curve: ``{"p2", "sigma",
+    "side", "kind", "interior"}`` (``interior``: neither end of its curve).  Every such point has
+    stable orbits of the window next to it on one side (the other multiplier of a dissipative map is
+    inside the unit circle; the edge check confirms it point by point), so no closing lies below it."""
+    best = None
+    for side, c in curves.items():
+        if not c or "failed" in c or c.get("kind") not in ("flip", "fold", "ns") or not c.get("p2"):
+            continue
+        i = int(np.argmax(c["p2"]))
+        if best is None or c["p2"][i] > best["p2"]:
+            best = {"p2": float(c["p2"][i]), "sigma": float(c["sigma"][i]), "side": side, "kind": c["kind"],
+                    "interior": 0 < i < len(c["p2"]) - 1}
+    return best
 
 
 def _asymptote(sigma: Sequence[float], p2: Sequence[float]) -> float:

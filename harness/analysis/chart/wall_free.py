@@ -149,13 +149,15 @@ def closing_of(w: Mapping[str, Any], windows: Sequence[Mapping[str, Any]],
 
 def continued_intervals(windows: Sequence[Mapping[str, Any]], v: float,
                         closes: Mapping[str, Any] | None = None,
-                        sigma_top: float | None = None) -> list[dict[str, Any]]:
+                        sigma_top: float | None = None, sigma_bottom: float | None = None) -> list[dict[str, Any]]:
     """The continued windows at ``v``: ``{"M", "impacts", "lo", "hi", "window"}`` (an edge None: open,
     the branch left the range stable) for each window whose edges exist there, before its closing
     (:func:`closing_of`).  A window whose edge curve does not reach ``v`` (failed, ended, turned) is
     not there by this route, except an upper edge whose curve left the range upward, above
     ``sigma_top``, before ``v``: the window is open above there (Figure 9's period 2 past
-    Gamma = 1102, where its graze edge runs off to large sigma)."""
+    Gamma = 1102, where its graze edge runs off to large sigma); likewise a lower edge whose curve
+    left the range downward, below ``sigma_bottom``: open below (a fold below grazing reaching
+    further down than the chart's sigma range as Omega grows, at a resonant grazing)."""
     out = []
     for w in windows:
         closes_at = closing_of(w, windows, closes)
@@ -168,7 +170,8 @@ def continued_intervals(windows: Sequence[Mapping[str, Any]], v: float,
                 ends.append(None)  # open: no edge in the range at the start, none later
                 continue
             s = _edge_at_end(curves.get(side), v)
-            if s is None and side == "upper" and _left_upward(curves.get(side), v, sigma_top):
+            if s is None and _left_range(curves.get(side), v, sigma_top if side == "upper" else sigma_bottom,
+                                         side == "upper"):
                 ends.append(None)
                 continue
             ends.append(s if s is not None else "missing")
@@ -178,13 +181,13 @@ def continued_intervals(windows: Sequence[Mapping[str, Any]], v: float,
     return out
 
 
-def _left_upward(curve: Mapping[str, Any] | None, v: float, sigma_top: float | None) -> bool:
-    """The curve ran monotonically (no turning point) out of the sigma range upward, above
-    ``sigma_top``, before reaching ``v``."""
-    if sigma_top is None or not curve or "failed" in curve or len(curve.get("p2", ())) < 2:
+def _left_range(curve: Mapping[str, Any] | None, v: float, bound: float | None, upward: bool) -> bool:
+    """The curve ran monotonically (no turning point) out of the sigma range, above ``bound``
+    (``upward``) or below it, before reaching ``v``."""
+    if bound is None or not curve or "failed" in curve or len(curve.get("p2", ())) < 2:
         return False
     end, p2 = curve["end"], curve["p2"]
-    if end.get("reason") != "range" or float(end["sigma"]) <= sigma_top:
+    if end.get("reason") != "range" or (float(end["sigma"]) <= bound if upward else float(end["sigma"]) >= bound):
         return False
     if any(t.get("side") in ("max", "min") for t in curve.get("turns", [])):
         return False
@@ -252,7 +255,8 @@ def coexistence_by_value(values: Sequence[float], per_value: Sequence[Mapping[st
     out = []
     for v, res in zip(values, per_value):
         scans = coexistence([e for e in res["all"] if e.get("resolved")], search)
-        cont = coexistence([{**c, "resolved": True} for c in continued_intervals(windows, float(v), closes, search[1])], search)
+        cont = coexistence([{**c, "resolved": True}
+                            for c in continued_intervals(windows, float(v), closes, search[1], search[0])], search)
         for c in scans:
             twin = next((d for d in cont if d["keys"] == c["keys"] and _overlap(c, d)), None)
             out.append({"p2": float(v), **c, "routes": ["scans"] + (["continuation"] if twin else []),

@@ -59,7 +59,7 @@ def closing_kind(how: str) -> str:
     if "ends on the orbit's graze" in how:
         return "smooth edge meets graze (flip/fold curve ends on the graze)"
     for kind in ("graze", "flip", "fold", "ns"):
-        if f"{kind} edge turns back" in how:
+        if f"{kind} edge turns back" in how or f"{kind} edge reaches its largest" in how:
             return f"{kind} curve turns (maximum in p2)"
     return "other"
 
@@ -250,8 +250,9 @@ def follow_window(sim: Any, params: Mapping[str, Any], window: dict[str, Any], p
                 cand = _bisect_closing(sim, params, param2, M, _impacts(curves), seen, conf["below"], curves, theta)
                 conf = confirm_candidate(sim, params, param2, M, _impacts(curves), curves, cand, theta)
             kind = closing_kind(cand["how"])
-            tested.append({**cand, "kind": kind, "verdict": conf["verdict"]})
-            if conf["verdict"] == "confirmed":
+            top = _above_candidate(curves, cand) if conf["verdict"] == "confirmed" else None
+            tested.append({**cand, "kind": kind, "verdict": conf["verdict"] if top is None else top})
+            if conf["verdict"] == "confirmed" and top is None:
                 if "asymptote" not in kind and "bisection" not in kind:  # neither is a codimension-two point
                     codim2.append({"kind": kind, "p2": cand["p2"], "sigma": cand["sigma"], "closes_window": True})
                 return {"closes": cand["p2"], "sigma": cand["sigma"], "how": cand["how"], "kind": kind,
@@ -278,6 +279,19 @@ def follow_window(sim: Any, params: Mapping[str, Any], window: dict[str, Any], p
             tested.append({"p2": start, "sigma": None, "how": failed, "kind": "new edges not found",
                            "verdict": "the edges before the hand-over are followed on"})
         curves = before if failed else new
+
+
+def _above_candidate(curves: Mapping[str, Any], cand: Mapping[str, Any]) -> str | None:
+    """Why a candidate confirmed by the shots around it is still not the closing: a smooth edge curve
+    of the window reaches a larger p2 (a flip curve that turns back and, past a minimum, runs off to
+    large sigma beyond its first turn: the window goes on there, outside the shots' interval)."""
+    from .edge_curves import smooth_top
+
+    top = smooth_top(curves)
+    if top is None or top["p2"] <= float(cand["p2"]) * (1.0 + 1e-9):
+        return None
+    return (f"confirmed by the shots around it, but the {top['side']} {top['kind']} edge reaches "
+            f"{top['p2']:.8g} (sigma = {top['sigma']:.5g}), stable orbits of the window beside it: not the closing")
 
 
 def _bisect_closing(sim: Any, params: Mapping[str, Any], param2: str, M: int, impacts: int, seen: Mapping[str, Any],

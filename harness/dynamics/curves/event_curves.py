@@ -259,7 +259,9 @@ def continue_event(sim: Simulator, params: Mapping[str, Any], kind: str, M: int,
     turns: list[dict[str, Any]] = []
     control = StepControl(abs(ds), ds_min, ds_max, max_points)
     while control.budget_left:
-        if not (lo2 - tol2 <= a.p2 <= hi2 + tol2 and sigma_range[0] <= a.sigma <= sigma_range[1]):
+        # the start counts as inside: its corrector, orthogonal to the tangent, moves p2 too, and where
+        # the curve is steep in sigma that can be off the range's end by far more than rounding
+        if not ((a is pts[0] or lo2 - tol2 <= a.p2 <= hi2 + tol2) and sigma_range[0] <= a.sigma <= sigma_range[1]):
             control.stop("range", f"left {param2} in [{lo2:g}, {hi2:g}] or sigma in "
                          f"[{sigma_range[0]:g}, {sigma_range[1]:g}]")
             break
