@@ -27,6 +27,8 @@ from harness.analysis.chart.edge_curves import window_closing
 from harness.cli.main import main
 from tests.support.edges import ExactFlow
 
+pytestmark = pytest.mark.spread  # the charts are independent of each other
+
 #: A lower flip edge turning back at p2 = 100 (sigma 1), a minimum at 99 (sigma 3), then running off
 #: to large sigma with p2 growing towards 101 (p2 = 101 - 8 / sigma).
 _S_UP = np.geomspace(3.0, 4000.0, 30)
@@ -62,11 +64,11 @@ def test_a_turn_the_continuation_did_not_keep_is_still_a_candidate() -> None:
     assert cl["closes"] == 99.95 and not cl["other_candidates"]
 
 
-# (nu, Omega, r, Gamma range, where it closes): the first two past a minimum of the flip curve at the
-# asymptote above the tip (the atlas: stable period-2 pixels up to 409.55 and 243.04, tips 401.85 and
-# 242.78), the third at its tip (its flip curve returns with Gamma falling)
-CASES = [(8.0, 1.0, 0.7, "300:500", "asymptote"), (6.0, 1.0, 0.7, "200:300", "asymptote"),
-         (4.0, 1.0, 0.7, "100:200", "tip")]
+# (nu, Omega, r, Gamma range, where it closes): the first past a minimum of the flip curve at the
+# asymptote above the tip (the atlas: stable period-2 pixels up to 409.55, tip 401.85), the second at
+# its tip (its flip curve returns with Gamma falling).  docs/theory.md section 11 has six such cases
+# measured against the one-parameter route and the atlas; two of them here keep the suite's time.
+CASES = [(8.0, 1.0, 0.7, "300:500", "asymptote"), (4.0, 1.0, 0.7, "100:200", "tip")]
 
 
 def _chart(tmp_path, nu: float, Om: float, r: float, rng: str) -> dict:
