@@ -16,7 +16,7 @@ import pytest
 from harness.cli.main import main
 from tests.support.edges import ExactFlow
 
-pytestmark = [pytest.mark.slow, pytest.mark.spread]  # two charts, each with its continuations and checks on the exact flow
+pytestmark = pytest.mark.slow  # two charts, each with its continuations and checks on the exact flow
 
 
 def test_a_chart_below_grazing_continues_the_flip_of_the_coexisting_orbit_on_the_exact_flow(tmp_path) -> None:

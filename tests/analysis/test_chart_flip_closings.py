@@ -27,8 +27,6 @@ from harness.analysis.chart.edge_curves import window_closing
 from harness.cli.main import main
 from tests.support.edges import ExactFlow
 
-pytestmark = pytest.mark.spread  # the charts are independent of each other
-
 #: A lower flip edge turning back at p2 = 100 (sigma 1), a minimum at 99 (sigma 3), then running off
 #: to large sigma with p2 growing towards 101 (p2 = 101 - 8 / sigma).
 _S_UP = np.geomspace(3.0, 4000.0, 30)

@@ -18,7 +18,7 @@ import pytest
 
 from harness.cli.main import main
 
-pytestmark = [pytest.mark.slow, pytest.mark.spread]
+pytestmark = pytest.mark.slow
 
 
 def _case(seed: int) -> list[str]:

@@ -27,8 +27,6 @@ FIG9 = {"nu": 4.605170185988091, "Omega": 0.3059238689620112, "r": 0.9, "wall": 
 #: from the wall-free orbit settles on it (at the scan's 0.12298 it settles elsewhere).
 SEEDS = {2: 0.49048930523597334, 3: 0.2080083823051904, 4: 0.1236}
 
-pytestmark = pytest.mark.spread  # each period on its own: the module holds no fixture of its own
-
 
 def _exact_gap(flow: ExactFlow, sigma: float, M: int, z0: np.ndarray, tol: float = 1e-13) -> tuple[float, np.ndarray]:
     """The exact flow's period-M orbit at ``sigma`` (Newton to ``tol`` from ``z0``) and the gap of its

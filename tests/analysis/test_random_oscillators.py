@@ -19,8 +19,6 @@ import pytest
 from tests.support.random_oscillators import (FAST_SEEDS, brute_force, duplicate_rows, edge_confirmed,
                                               random_oscillator, row_containing, slow_seeds, windows_report)
 
-pytestmark = pytest.mark.spread  # each seed or case is independent of the others
-
 M_MAX = 3
 WIDTH = 0.3
 

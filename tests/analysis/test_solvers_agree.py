@@ -13,8 +13,6 @@ import pytest
 from harness.dynamics.maps.periodic_map import map_accuracy
 from tests.support.random_oscillators import Oscillator, duplicate_rows, random_oscillator, windows_report
 
-pytestmark = pytest.mark.spread  # each seed or case is independent of the others
-
 #: Edges of the two solvers agree to this (CVODE locates an edge to ~1e-9 in sigma).
 EDGE_TOL = 1e-7
 
