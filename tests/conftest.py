@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import signal
 
 import pytest
 
@@ -37,6 +38,11 @@ def pytest_configure(config) -> None:
     benchmark smoke tests) for last, one core busy with them and the other idle."""
     if hasattr(config.option, "loadscopereorder"):
         config.option.loadscopereorder = False
+    # A run started in the background by a non-interactive shell ignores SIGINT, and the CLI
+    # processes the tests interrupt would inherit that (exit 0 where an interrupt means 130): give
+    # this process a handler, which its children start from as the default.
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
 
 
 #: Files of many long tests that share no fixture wider than a test (the session's FMU aside): their
