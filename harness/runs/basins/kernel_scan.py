@@ -42,9 +42,11 @@ SEED_MIN, SEED_MAX, SEED_SHARE = 32, 400, 1.0 / 64.0
 #: Starts per tile (a tile's samples: tile_size x samples x 21 bytes).
 DEFAULT_TILE = 32768
 #: The seed of :func:`run_starts` stops a start once its samples repeat to this fraction of the
-#: periodicity tolerance (a period-M orbit near a flip, its 2M-shift converged to it, passes the
-#: M-shift at the tolerance itself unless its multiplier is within ~1e-3 of -1).
-SEED_RECUR = 1e-3
+#: periodicity tolerance (1e-12 of the orbit's size for the global search's 1e-6): converged to
+#: the digits the rest of its transient would give, so that the orbit's points, and what is shot
+#: and continued from them, are those of the whole run (at 1e-3 of the tolerance the shooting
+#: from a period-10 orbit's points missed the branch switching at its flip).
+SEED_RECUR = 1e-6
 
 
 def _shooter(model: Any, params: Mapping[str, Any], theta: float) -> Any:
@@ -82,8 +84,8 @@ def _seed(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: Sampling
 def run_starts(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: SamplingSpec, threads: int,
                match_tol: float, n_seed: int, tile_sampling: SamplingSpec | None = None) -> tuple[np.ndarray, Registry]:
     """Labels of any starts (not a grid): ``n_seed`` of them (spread over the list) run until their
-    samples repeat (:data:`SEED_RECUR` x the periodicity tolerance: converged far below the
-    classification's own test) or in full, the others as one tile early-stopped on the seed's
+    samples repeat (:data:`SEED_RECUR` x the periodicity tolerance: converged to the digits the
+    whole transient gives) or in full, the others as one tile early-stopped on the seed's
     attractors with the strict rule, two rounds of each attractor's own orbit (the balls' check
     costs more than it saves on one tile); returns (labels: registry indices or the negative
     codes, the registry).  No Newton shooting: the caller shoots what it keeps.
