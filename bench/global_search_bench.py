@@ -91,9 +91,12 @@ def main() -> None:
         "|---|---|---|---|---|---|---|---|---|",
         *rows,
         "",
-        "The search's cost is the batch kernel's periods: a start that settles on an attractor the seed found stops "
-        "after two rounds of its orbit, one that does not (a chaotic stretch, as Figure 9 below sigma ~ 0.17; a slowly "
-        "contracting lightly damped oscillator) runs a quarter of the transient plus the samples. Fewer starts "
+        "The search's cost is the batch kernel's periods: a seed start stops once its samples repeat (to 1e-6 of "
+        "the periodicity tolerance), a start that settles on an attractor the seed found stops after two rounds of "
+        "that attractor's orbit, one that does not (a chaotic stretch, as Figure 9 below sigma ~ 0.17, where a few "
+        "starts reach a long-period orbit only after 50 periods; a slowly contracting lightly damped oscillator, "
+        "whose deviation from its period-8 orbit grows and shrinks within each round) runs a quarter of the "
+        "transient plus the samples: docs/basins.md says where the periods go. Fewer starts "
         "(`--global-starts 300`) cost proportionally less; the lightly damped case's period-10 orbit, which no scan "
         "reaches, is found either way.",
         "<!-- global-search:end -->",
