@@ -96,7 +96,7 @@ def main() -> None:
         *rows,
         "",
         "The search's cost is the batch kernel's periods: a seed start stops once its samples repeat (to 1e-6 of "
-        "the periodicity tolerance), a start that settles on an attractor the seed found stops after two rounds of "
+        "the periodicity tolerance; the one that registers an attractor runs again in full for its points), a start that settles on an attractor the seed found stops after two rounds of "
         "that attractor's orbit, one that does not (a chaotic stretch, as Figure 9 below sigma ~ 0.17, where a few "
         "starts reach a long-period orbit only after 50 periods; a slowly contracting lightly damped oscillator, "
         "whose deviation from its period-8 orbit grows and shrinks within each round) runs a quarter of the "
