@@ -15,6 +15,14 @@
  * period, for that attractor's `confirm` periods in a row, is labelled with it and stops. Any other start runs the whole transient and its
  * samples come back to the caller, which classifies them (and so finds new attractors).
  *
+ * Early stopping on recurrence (recur_tol > 0, for starts run without known attractors): after
+ * every period from n_samples on, a start whose last n_samples states repeat with a shift
+ * M <= max_period -- the caller's periodicity test (harness classify_orbit: max norm, threshold
+ * recur_tol (1 + the largest peak-to-peak range of u and v over them), the same wall entries) --
+ * stops, and those states come back as its samples. The caller passes recur_tol well below its
+ * own tolerance: the samples then pass its test too, converged far enough that a smaller period
+ * still settling (a multiplier near -1 seen as period 2M first) passes it as well.
+ *
  * Starts are independent: OpenMP spreads them over `threads` threads (dynamic schedule: early
  * stops make their costs uneven); ctypes releases the GIL while it runs.
  *
@@ -24,6 +32,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stddef.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "batch.h"
@@ -129,9 +138,39 @@ typedef struct {
     int label, periods, status;
 } Outcome;
 
+/* The recurrence stop (file comment): its tolerance (0: off), largest shift, and the ring of the
+ * last n states (slot k % n holds period k's). */
+typedef struct {
+    double tol;
+    int max_period, n;
+    double *u, *v;
+    int *imp;
+    unsigned char *stuck;
+} Recur;
+
+/* Whether the last r->n states, the newest at period k, repeat with some shift M <= max_period. */
+static int recurs(const Recur *r, int k) {
+    const int n = r->n;
+    double ulo = INFINITY, uhi = -INFINITY, vlo = INFINITY, vhi = -INFINITY;
+    for (int i = 0; i < n; ++i) {
+        ulo = fmin(ulo, r->u[i]), uhi = fmax(uhi, r->u[i]);
+        vlo = fmin(vlo, r->v[i]), vhi = fmax(vhi, r->v[i]);
+    }
+    const double thr = r->tol * (1.0 + fmax(uhi - ulo, vhi - vlo));
+    for (int M = 1; M <= r->max_period; ++M) {
+        int ok = 1;
+        for (int j = 0; j + M < n && ok; ++j) { /* newest pairs first: a start far from it fails at once */
+            const int a = (k - j) % n, b = (k - j - M) % n;
+            ok = fabs(r->u[a] - r->u[b]) <= thr && fabs(r->v[a] - r->v[b]) <= thr && r->imp[a] == r->imp[b];
+        }
+        if (ok) return 1;
+    }
+    return 0;
+}
+
 /* One start: the FMU's initialisation and doStep sequence (file comment), with the early stop. */
 static Outcome run_start(const ModelData *m0, double u0, double v0, double theta, int n_transient,
-                         int n_samples, const Known *known, double *us, double *vs, int *imp,
+                         int n_samples, const Known *known, Recur *rec, double *us, double *vs, int *imp,
                          unsigned char *stuck, char *err, int errlen) {
     Outcome o = {-1, 0, BATCH_RAN};
     ModelData m = *m0;
@@ -175,6 +214,19 @@ static Outcome run_start(const ModelData *m0, double u0, double v0, double theta
             imp[s] = entries;
             stuck[s] = m.mode == MODE_STICK;
         }
+        if (rec->tol > 0.0) {
+            const int slot = k % rec->n;
+            rec->u[slot] = m.u, rec->v[slot] = m.v, rec->imp[slot] = entries;
+            rec->stuck[slot] = m.mode == MODE_STICK;
+            if (k >= rec->n && k < total && recurs(rec, k)) { /* its last n_samples states, oldest first */
+                for (int s = 0; s < n_samples; ++s) {
+                    const int slot_s = (k - n_samples + 1 + s) % rec->n;
+                    us[s] = rec->u[slot_s], vs[s] = rec->v[slot_s];
+                    imp[s] = rec->imp[slot_s], stuck[s] = rec->stuck[slot_s];
+                }
+                break;
+            }
+        }
         if (known->n == 0) continue;
         if (cand >= 0 && next_point(known, cand, cj, m.u, m.v, entries)) {
             cj = (cj + 1) % known->period[cand];
@@ -207,7 +259,8 @@ BATCH_EXPORT int impact_batch_threads(void) {
 /*
  * Runs n starts (u0[i], v0[i]) at t = theta for n_transient + n_samples periods each, or until
  * recognised as one of the n_known attractors (file comment; n_known = 0: no early stop;
- * confirm[a] < 1 counts as 1).
+ * confirm[a] < 1 counts as 1), or until their last n_samples states repeat (recur_tol > 0, shifts
+ * up to max_period, at most n_samples - 1; file comment).
  * Outputs per start: label (the attractor, or -1), periods run, status (BATCH_*), and the
  * samples of the last n_samples periods (u, v, wall entries, sticking at the sample), left as
  * they were for periods not reached. Returns 0, or -1 with err set: the parameters are refused
@@ -217,14 +270,16 @@ BATCH_EXPORT int impact_batch_run(int n_params, const char *const *names, const 
                                   long n, const double *u0, const double *v0, double theta,
                                   int n_transient, int n_samples, int n_known, int width,
                                   const int *known_period, const double *known_points,
-                                  const int *known_entries, double tol, const int *confirm, int threads,
-                                  int *label, int *periods, int *status, double *u_out,
-                                  double *v_out, int *imp_out, unsigned char *stuck_out, char *err,
-                                  int errlen) {
+                                  const int *known_entries, double tol, const int *confirm,
+                                  double recur_tol, int max_period, int threads, int *label,
+                                  int *periods, int *status, double *u_out, double *v_out,
+                                  int *imp_out, unsigned char *stuck_out, char *err, int errlen) {
     ModelData m0;
     err[0] = '\0';
     if (batch_build_model(&m0, n_params, names, values, err, errlen) != 0) return -1;
     const Known known = {n_known, width, known_period, known_points, known_entries, tol, confirm};
+    if (max_period > n_samples - 1) max_period = n_samples - 1;
+    if (max_period < 1 || n_samples < 2) recur_tol = 0.0;
     int failed = 0;
 #ifdef _OPENMP
 #pragma omp parallel for schedule(dynamic, 8) num_threads(threads > 0 ? threads : 1)
@@ -235,9 +290,19 @@ BATCH_EXPORT int impact_batch_run(int n_params, const char *const *names, const 
         char msg[600];
         msg[0] = '\0';
         const size_t off = (size_t)i * (size_t)n_samples;
-        const Outcome o = run_start(&m0, u0[i], v0[i], theta, n_transient, n_samples, &known,
+        Recur rec = {0.0, max_period, n_samples, NULL, NULL, NULL, NULL};
+        void *ring = recur_tol > 0.0 ? malloc((size_t)n_samples * (2 * sizeof(double) + sizeof(int) + 1)) : NULL;
+        if (ring) {
+            rec.tol = recur_tol;
+            rec.u = ring;
+            rec.v = rec.u + n_samples;
+            rec.imp = (int *)(rec.v + n_samples);
+            rec.stuck = (unsigned char *)(rec.imp + n_samples);
+        }
+        const Outcome o = run_start(&m0, u0[i], v0[i], theta, n_transient, n_samples, &known, &rec,
                                     u_out + off, v_out + off, imp_out + off, stuck_out + off, msg,
                                     (int)sizeof msg);
+        free(ring);
         label[i] = o.label;
         periods[i] = o.periods;
         status[i] = o.status;

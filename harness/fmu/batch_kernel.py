@@ -22,7 +22,7 @@ from ..config.defaults import WALLS
 #: Per-start status codes of the kernel (``fmu_src/batch.c``).
 RAN, MATCHED, INVALID, FAILED, ESCAPED = 0, 1, 2, 3, 4
 LIBRARY_NAME = "libimpact_batch.so"
-_VERSION = 3
+_VERSION = 4
 _LIBS: dict[str, ctypes.CDLL] = {}
 
 
@@ -45,13 +45,17 @@ def load_library(path: str | Path | None = None) -> ctypes.CDLL:
         return _LIBS[key]
     if not p.exists():
         raise HarnessInputError("kernel", f"the batch kernel {p} is not built (cmake --build build/fmu)")
+    # idle OpenMP threads sleep rather than spin: between the kernel's calls the process runs
+    # Python on one core, and a spinning thread would burn the other cores' time (read once,
+    # when the OpenMP runtime loads; a value the user set is kept)
+    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
     lib = ctypes.CDLL(str(p))
     if lib.impact_batch_version() != _VERSION:
         raise HarnessInputError("kernel", f"{p} is a stale build of the batch kernel (cmake --build build/fmu)")
     i32, f64, ptr = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
     lib.impact_batch_run.restype = i32
     lib.impact_batch_run.argtypes = [i32, ptr, ptr, ctypes.c_long, ptr, ptr, f64, i32, i32, i32, i32, ptr, ptr, ptr,
-                                     f64, ptr, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, ctypes.c_char_p, i32]
+                                     f64, ptr, f64, i32, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, ctypes.c_char_p, i32]
     _LIBS[key] = lib
     return lib
 
@@ -128,7 +132,7 @@ def default_threads() -> int:
 
 def run_batch(params: Mapping[str, Any], u0: np.ndarray, v0: np.ndarray, theta: float, n_transient: int,
               n_samples: int, known: KnownAttractors | None = None, threads: int | None = None,
-              library: str | Path | None = None) -> BatchResult:
+              library: str | Path | None = None, recur_tol: float = 0.0, max_period: int | None = None) -> BatchResult:
     """Run every start (u0[i], v0[i]) at t = theta through the closed form.
 
     Parameters
@@ -145,6 +149,12 @@ def run_batch(params: Mapping[str, Any], u0: np.ndarray, v0: np.ndarray, theta: 
         The early stop's attractors (none: every start runs in full).
     threads : int, optional
         OpenMP threads (default: this process's cores).
+    recur_tol : float
+        > 0: a start also stops once its last ``n_samples`` states repeat with a shift up to
+        ``max_period`` (default ``n_samples // 2``) to this tolerance, relative to 1 + their
+        largest peak-to-peak range (the test of
+        :func:`harness.dynamics.maps.classify.classify_orbit`); those states are its samples
+        (status :data:`RAN`, ``periods`` says when it stopped).
 
     Raises
     ------
@@ -170,7 +180,8 @@ def run_batch(params: Mapping[str, Any], u0: np.ndarray, v0: np.ndarray, theta: 
     a = lambda x: x.ctypes.data  # noqa: E731 - the arrays outlive the call
     rc = lib.impact_batch_run(len(names), c_names, a(c_values), n, a(u0), a(v0), float(theta), int(n_transient),
                               int(n_samples), per.size, pts.shape[1], a(per), a(pts), a(ent), float(known.tol),
-                              a(confirm), int(threads or default_threads()), a(out.label), a(out.periods),
+                              a(confirm), float(recur_tol), int(max_period or n_samples // 2),
+                              int(threads or default_threads()), a(out.label), a(out.periods),
                               a(out.status), a(out.u), a(out.v), a(out.impacts), a(out.stuck), err, len(err))
     out.error = err.value.decode(errors="replace")
     if rc != 0 and not np.any(out.status == FAILED):

@@ -6,9 +6,9 @@ grazing that takes 99 % of the basin, next to the wall-free orbit a scan started
 each parameter set, fresh starts spread over the state region the attractors occupy
 (:class:`Region`: a grid plus random starts, :data:`DEFAULT_STARTS` by default) are iterated to
 their attractors with the basin scans' machinery (:mod:`.kernel_scan`, :mod:`.registry`): a seed
-run in full, the attractors it finds told apart by their stroboscopic point sets
-(:func:`harness.dynamics.attractors.identity.hausdorff`), their tolerance balls run, then the
-starts with the early stop (docs/basins.md).  Each attractor found comes back with its basin
+run until its samples repeat or in full, the attractors it finds told apart by their stroboscopic
+point sets (:func:`harness.dynamics.attractors.identity.hausdorff`), then the other starts with the
+early stop on them, two rounds of each orbit (docs/basins.md).  Each attractor found comes back with its basin
 share: the fraction of the starts that reached it.
 
 Two paths, as in ``basins``:

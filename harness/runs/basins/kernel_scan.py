@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import time
+from dataclasses import replace
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -30,9 +31,9 @@ from ...dynamics.attractors.identity import Attractor, orbit_points
 from ...errors import HarnessInputError
 from ...fmu import batch_kernel as bk
 from .ball import ball_checker
-from .registry import Registry, TileCheckpoint, fingerprint
+from .registry import CONFIRM_ROUNDS, MIN_CONFIRM, Registry, TileCheckpoint, fingerprint
 from .scan import MATCH_FACTOR, check_grid, with_attractors
-from .tiles import BasinTile, label_result, run_tile
+from .tiles import CANDIDATE, BasinTile, label_result, run_tile
 from ..tasks import run_test_hook
 
 #: Starts of the seed run (spread over the grid): SEED_SHARE of the grid, between SEED_MIN and
@@ -40,6 +41,12 @@ from ..tasks import run_test_hook
 SEED_MIN, SEED_MAX, SEED_SHARE = 32, 400, 1.0 / 64.0
 #: Starts per tile (a tile's samples: tile_size x samples x 21 bytes).
 DEFAULT_TILE = 32768
+#: The seed of :func:`run_starts` stops a start once its samples repeat to this fraction of the
+#: periodicity tolerance (1e-12 of the orbit's size for the global search's 1e-6): converged to
+#: the digits the rest of its transient would give, so that the orbit's points, and what is shot
+#: and continued from them, are those of the whole run (at 1e-3 of the tolerance the shooting
+#: from a period-10 orbit's points missed the branch switching at its flip).
+SEED_RECUR = 1e-6
 
 
 def _shooter(model: Any, params: Mapping[str, Any], theta: float) -> Any:
@@ -76,23 +83,49 @@ def _seed(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: Sampling
 
 def run_starts(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: SamplingSpec, threads: int,
                match_tol: float, n_seed: int, tile_sampling: SamplingSpec | None = None) -> tuple[np.ndarray, Registry]:
-    """Labels of any starts (not a grid): ``n_seed`` of them (spread over the list) run in full,
-    the others as one tile early-stopped on the seed's attractors with the strict rule (two
-    rounds on the orbit: the balls' check costs more than it saves on one tile); returns (labels:
-    registry indices or the negative codes, the registry).  No Newton shooting: the caller shoots
-    what it keeps.  ``tile_sampling``: the other starts' sampling (default ``s``; a shorter
-    transient is cheaper where starts do not settle, and a start that reaches a seed's attractor
-    stops anyway)."""
+    """Labels of any starts (not a grid): ``n_seed`` of them (spread over the list) run until their
+    samples repeat (:data:`SEED_RECUR` x the periodicity tolerance: converged to the digits the
+    whole transient gives) or in full, the others as one tile early-stopped on the seed's
+    attractors with the strict rule, two rounds of each attractor's own orbit (the balls' check
+    costs more than it saves on one tile); returns (labels: registry indices or the negative
+    codes, the registry).  No Newton shooting: the caller shoots what it keeps.
+    ``tile_sampling``: the other starts' sampling (default ``s``; a shorter transient is cheaper
+    where starts do not settle, and a start that reaches a seed's attractor stops anyway)."""
     idx = np.unique(np.linspace(0, us.size - 1, min(us.size, n_seed)).round().astype(int))
     reg = Registry(match_tol)
-    seed = bk.run_batch(params, us[idx], vs[idx], s.theta, s.n_transient, s.n_samples, None, threads)
+    seed = bk.run_batch(params, us[idx], vs[idx], s.theta, s.n_transient, s.n_samples, None, threads,
+                        recur_tol=SEED_RECUR * s.tol, max_period=s.max_period)
     labels = np.empty(us.size, dtype=np.int32)
     labels[idx] = reg.merge(label_result(seed, s, reg.known()))
+    _full_points(params, us[idx], vs[idx], labels[idx], s, reg, threads)
     rest = np.setdiff1d(np.arange(us.size), idx)
     if rest.size:
-        res = run_tile(BasinTile(0, us[rest], vs[rest], dict(params), tile_sampling or s, reg.known(), threads))
-        labels[rest] = reg.merge(res)
+        known = reg.known(strict=True)
+        known = replace(known, confirm=np.maximum(MIN_CONFIRM, CONFIRM_ROUNDS * known.period).astype(np.int32))
+        ts = tile_sampling or s
+        res = bk.run_batch(params, us[rest], vs[rest], ts.theta, ts.n_transient, ts.n_samples, known, threads)
+        labels[rest] = reg.merge(label_result(res, ts, known))
     return labels, reg
+
+
+def _full_points(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, labels: np.ndarray, s: SamplingSpec,
+                 reg: Registry, threads: int) -> None:
+    """Each attractor's points as the whole transient gives them: the seed start that registered it
+    (the first labelled with it) run again in full.  What ``windows`` shoots and continues from
+    an attractor's points is sensitive far below the periodicity tolerance (from points converged
+    to 1e-12 instead of the whole run's, a period-2 orbit's edge came out 0.02 off), and one start
+    per attractor costs little beside the seed's periods saved."""
+    first = [int(np.flatnonzero(labels == j)[0]) for j in range(len(reg.found)) if np.any(labels == j)]
+    if not first:
+        return
+    full = bk.run_batch(params, us[first], vs[first], s.theta, s.n_transient, s.n_samples, None, threads)
+    lab = label_result(full, s, bk.KnownAttractors.none(reg.tol))
+    for k, i in enumerate(first):
+        j = int(labels[i])
+        c = lab["candidates"][CANDIDATE - int(lab["label"][k])] if lab["label"][k] <= CANDIDATE else None
+        f = reg.found[j]
+        if c is not None and (c.period, c.impacts) == (f.period, f.impacts):
+            f.points, f.entries, f.stuck = c.points.tolist(), [int(x) for x in c.entries], c.stuck
 
 
 def _tiles(us: np.ndarray, vs: np.ndarray, size: int) -> list[tuple[int, slice]]:

@@ -136,8 +136,9 @@ def label_result(res: bk.BatchResult, s: SamplingSpec, known: bk.KnownAttractors
     candidates: list[Candidate] = []
     ran = np.flatnonzero(res.status == bk.RAN)
     hope = may_be_periodic(res.u[ran], res.v[ran], s)
-    for i in ran[~hope]:  # no shift repeats to the tolerance: classify_start's verdict, without its loop
-        label[i] = STICKING if np.any(res.stuck[i]) or int(np.max(res.impacts[i])) >= CHATTER_ENTRIES else NOT_PERIODIC
+    never = ran[~hope]  # no shift repeats to the tolerance: classify_start's verdict, for all at once
+    slow = np.any(res.stuck[never], axis=1) | (np.max(res.impacts[never], axis=1, initial=-1) >= CHATTER_ENTRIES)
+    label[never] = np.where(slow, STICKING, NOT_PERIODIC)
     for i in ran[hope]:
         code, cand = classify_start(res, int(i), s)
         if cand is None:
