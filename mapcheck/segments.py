@@ -30,8 +30,8 @@ import math
 import numpy as np
 from scipy.optimize import brentq
 
-from .linear import (_SERIES_D, _SERIES_RATE_T, propagator_minus_identity_entries, series_point, series_terms,
-                     spectral_rate)
+from .linear import (_SERIES_D, _SERIES_RATE_T, propagator_minus_identity_entries, propagator_minus_identity_scalar,
+                     series_point, series_terms, spectral_rate)
 
 TWO_PI = 2.0 * math.pi
 _GRID_POINTS_PER_CHUNK = 48
@@ -94,17 +94,8 @@ class Mode:
         where rate |t| <= 0.05, summed until the next term is below 1e-18 of the sum, else
         the closed form (as :func:`mapcheck.linear.propagator_minus_identity`)."""
         nu, k2 = self.nu, self.k2
-        if self.rate * abs(t) <= _SERIES_RATE_T:
-            A = B = 0.0
-            a_k, b_k, fac = 1.0, 0.0, t
-            for k in range(1, 13):
-                A += a_k * fac
-                B += b_k * fac
-                a_k, b_k = -nu * a_k + b_k, -k2 * a_k
-                fac = fac * t / (k + 1)
-                if abs(fac) * (abs(a_k) + abs(b_k)) < 1e-18 * (abs(A) + abs(B)):
-                    break
-            return B, A, -k2 * A, B - nu * A
+        if self.rate * abs(t) <= _SERIES_RATE_T:  # the series, written once in mapcheck.linear
+            return propagator_minus_identity_scalar(t, nu, k2, self.rate)
         b, d = self.b, self.d
         z = d * t * t
         E = math.exp(-b * t)
