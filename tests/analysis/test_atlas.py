@@ -14,7 +14,7 @@ import pytest
 
 from harness.runs.atlas.plane import AtlasPlane, RunLength
 from harness.runs.atlas.scan import run_atlas_plane
-from harness.runs.atlas.tiles import CHAOTIC, PERIODIC
+from harness.runs.atlas.tiles import APERIODIC, CHAOTIC, PERIODIC, STICKING, start_kinds
 from mapcheck.exact import ExactOscillator
 from tests.support.cli import run_main
 from tests.support.edges import ExactFlow
@@ -202,3 +202,19 @@ def test_cli_bad_input_is_one_line(tmp_path, capsys, bad: list[str], flag: str, 
     code, _, err = run_main([*argv, *bad], capsys)
     assert code == 2, err
     assert flag in err and what in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_start_recurring_on_an_orbit_that_is_not_stable_has_not_settled() -> None:
+    """A class is stable at a pixel only where a start reached an attractor of it: a start the kernel
+    found recurring on a period-2 orbit with a non-negative exponent (a saddle next to a flip, +0.002
+    at Gamma 122.15 on nu = 4, Omega = 1, r = 0.7) counts as aperiodic, not as that orbit; a stable
+    orbit, a sticking one (its exponent is that of the sliding) and a chaotic start keep their kinds."""
+    from harness.fmu import atlas_kernel as ak
+
+    n = 5
+    status = np.array([[ak.PERIODIC, ak.PERIODIC, ak.PERIODIC, ak.PERIODIC, ak.APERIODIC]])
+    lyap = np.array([[-0.3, 0.002, 0.0, 0.5, 0.4]])
+    sticks = np.array([[False, False, False, True, False]])
+    b = ak.AtlasBatch(np.ones(1, bool), status, np.full((1, n), 2), np.ones((1, n), int), np.full((1, n), 100),
+                      sticks, lyap, np.zeros((1, n, 2, 2)), "")
+    assert start_kinds(b).tolist() == [[PERIODIC, APERIODIC, APERIODIC, STICKING, CHAOTIC]]

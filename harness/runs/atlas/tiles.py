@@ -72,11 +72,16 @@ def run_tile(tile: AtlasTile, source: Any = None, progress: Any = None) -> dict[
 
 
 def start_kinds(b: ak.AtlasBatch) -> np.ndarray:
-    """The kind code of every start (n_pix, k)."""
+    """The kind code of every start (n_pix, k).  A start that recurred on an orbit whose exponent
+    is not negative did not reach an attractor: it sat, within the recurrence tolerance, on a
+    saddle (next to a flip, where the doubled orbit lies within ~sqrt of the distance) and is
+    aperiodic (not settled), not a pixel where that orbit is stable."""
     kind = np.full(b.status.shape, FAILED, dtype=np.int8)
-    kind[b.status == ak.PERIODIC] = PERIODIC
-    kind[(b.status == ak.PERIODIC) & b.sticks] = STICKING
-    aper = b.status == ak.APERIODIC
+    periodic = b.status == ak.PERIODIC
+    unstable = periodic & ~b.sticks & np.isfinite(b.lyapunov) & (b.lyapunov >= 0.0)
+    kind[periodic] = PERIODIC
+    kind[periodic & b.sticks] = STICKING
+    aper = (b.status == ak.APERIODIC) | unstable
     kind[aper] = APERIODIC
     kind[aper & (b.lyapunov > CHAOS_LYAPUNOV)] = CHAOTIC
     kind[b.status == ak.ESCAPED] = ESCAPED
