@@ -148,6 +148,19 @@ typedef struct {
     unsigned char *stuck;
 } Recur;
 
+void batch_start_at(Stepper *st, ModelData *m, const ModelData *m0, double u, double v, double t) {
+    *m = *m0;
+    m->u0 = u;
+    m->v0 = v;
+    memset(st, 0, sizeof *st);
+    st->ops = &STEPPER_CLOSED_FORM;
+    st->ops->create(st, m);
+    stepper_start(st, t);
+    m->origin = st->clk.origin;
+    m->in_tau = st->clk.tau;
+    model_initialize_state(m, st->clk.tau);
+}
+
 /* Whether the last r->n states, the newest at period k, repeat with some shift M <= max_period. */
 static int recurs(const Recur *r, int k) {
     const int n = r->n;
@@ -173,21 +186,13 @@ static Outcome run_start(const ModelData *m0, double u0, double v0, double theta
                          int n_samples, const Known *known, Recur *rec, double *us, double *vs, int *imp,
                          unsigned char *stuck, char *err, int errlen) {
     Outcome o = {-1, 0, BATCH_RAN};
-    ModelData m = *m0;
-    m.u0 = u0;
-    m.v0 = v0;
-    if (m.wall == WALL_RIGID && (u0 > m.u_wall || (u0 == m.u_wall && v0 > 0.0))) {
+    if (m0->wall == WALL_RIGID && (u0 > m0->u_wall || (u0 == m0->u_wall && v0 > 0.0))) {
         o.status = BATCH_INVALID; /* the FMU refuses a start inside a rigid wall */
         return o;
     }
+    ModelData m;
     Stepper st;
-    memset(&st, 0, sizeof st);
-    st.ops = &STEPPER_CLOSED_FORM;
-    st.ops->create(&st, &m);
-    stepper_start(&st, theta);
-    m.origin = st.clk.origin;
-    m.in_tau = st.clk.tau;
-    model_initialize_state(&m, st.clk.tau);
+    batch_start_at(&st, &m, m0, u0, v0, theta);
     double t = theta;
     int before = 0, cand = -1, cj = 0, run = 0;
     const int total = n_transient + n_samples;

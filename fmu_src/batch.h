@@ -7,6 +7,7 @@
 #define IMPACT_BATCH_H
 
 #include "model.h"
+#include "stepper.h"
 
 #define BATCH_EXPORT __attribute__((visibility("default")))
 
@@ -28,5 +29,9 @@ int batch_build_model(ModelData *m, int n_params, const char *const *names, cons
  * 0, or -1 with err naming what is refused. */
 int batch_finish_model(ModelData *m, int n_params, const char *const *names, const double *values,
                        char *err, int errlen);
+
+/* A start (u, v) at time t as the FMU makes one: m from m0 with those start values, a fresh
+ * closed-form stepper started at t, and the model's state (contact mode) initialised there. */
+void batch_start_at(Stepper *st, ModelData *m, const ModelData *m0, double u, double v, double t);
 
 #endif

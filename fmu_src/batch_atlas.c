@@ -222,20 +222,6 @@ static int follow(const PixelOrbits *po, Follow *f, double u, double v, int e) {
     return -1;
 }
 
-/* A state (u, v) at the section time t as the FMU starts one there: a fresh stepper. */
-static void start_at(Stepper *st, ModelData *m, const ModelData *m0, double u, double v, double t) {
-    *m = *m0;
-    m->u0 = u;
-    m->v0 = v;
-    memset(st, 0, sizeof *st);
-    st->ops = &STEPPER_CLOSED_FORM;
-    st->ops->create(st, m);
-    stepper_start(st, t);
-    m->origin = st->clk.origin;
-    m->in_tau = st->clk.tau;
-    model_initialize_state(m, st->clk.tau);
-}
-
 /* How far the last M states are from the M before them (relative, as the tolerance; infinite
  * when the wall entries differ). */
 static double residual(const double *hu, const double *hv, const int *he, int h, int k, int M) {
@@ -283,7 +269,7 @@ static int settle(const ModelData *m0, double u, double v, int k0, const AtlasRu
     for (int it = 0; it < SETTLE_ITERATIONS; ++it) {
         Stepper st;
         ModelData m;
-        start_at(&st, &m, m0, u, v, r->theta + k0);
+        batch_start_at(&st, &m, m0, u, v, r->theta + k0);
         m.sensitivities = 1;
         double J[2][2] = {{1.0, 0.0}, {0.0, 1.0}}, t = r->theta + k0;
         int ok = 1, before = 0, imp = 0, sticks = 0;
@@ -324,21 +310,13 @@ static AtlasOutcome run_start(const ModelData *m0, double u0, double v0, const A
                               const PixelOrbits *po, double *pts, int *ents, char *err, int errlen) {
     AtlasOutcome o = {ATLAS_APERIODIC, 0, 0, 0, 0, NAN};
     for (int i = 0; i < r->m_max; ++i) pts[2 * i] = pts[2 * i + 1] = NAN, ents[i] = -1;
-    ModelData m = *m0;
-    m.u0 = u0;
-    m.v0 = v0;
-    if (m.wall == WALL_RIGID && (u0 > m.u_wall || (u0 == m.u_wall && v0 > 0.0))) {
+    if (m0->wall == WALL_RIGID && (u0 > m0->u_wall || (u0 == m0->u_wall && v0 > 0.0))) {
         o.status = ATLAS_INVALID; /* the FMU refuses a start inside a rigid wall */
         return o;
     }
+    ModelData m;
     Stepper st;
-    memset(&st, 0, sizeof st);
-    st.ops = &STEPPER_CLOSED_FORM;
-    st.ops->create(&st, &m);
-    stepper_start(&st, r->theta);
-    m.origin = st.clk.origin;
-    m.in_tau = st.clk.tau;
-    model_initialize_state(&m, st.clk.tau);
+    batch_start_at(&st, &m, m0, u0, v0, r->theta);
     const int h = 2 * r->m_max;
     double hu[2 * ATLAS_MAX_PERIOD], hv[2 * ATLAS_MAX_PERIOD];
     int he[2 * ATLAS_MAX_PERIOD], hs[2 * ATLAS_MAX_PERIOD];
