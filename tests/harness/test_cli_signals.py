@@ -50,7 +50,8 @@ def _partial_rows(path: Path) -> int:
         return 0
 
 
-def _tmp_dirs_of(pids: list[int]) -> list[Path]:
+def _tmp_dirs_of(procs: list[int | psutil.Process]) -> list[Path]:
+    pids = [p.pid if isinstance(p, psutil.Process) else p for p in procs]
     return [p for pid in pids for p in TMP.glob(f"{PREFIX}{pid}-*")]
 
 
@@ -109,7 +110,7 @@ def test_interrupted_loop_keeps_its_points_and_resumes(tmp_path: Path, model: Fm
     try:
         _wait_for(lambda: Path(str(release) + ".reached").exists() and _partial_rows(ckpt / "both.partial.npz") == 5,
                   "the loop to stop before point 5 with 5 points stored")
-        children = [c.pid for c in psutil.Process(proc.pid).children(recursive=True)]
+        children = psutil.Process(proc.pid).children(recursive=True)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=60)
     finally:
@@ -148,7 +149,7 @@ def test_interrupt_before_any_point_keeps_nothing_and_says_so(tmp_path: Path) ->
 
 
 # -- workers and temporary folders die with the run ------------------------------------------
-def _start_blocked_pool_sweep(tmp_path: Path) -> tuple[subprocess.Popen, list[int]]:
+def _start_blocked_pool_sweep(tmp_path: Path) -> tuple[subprocess.Popen, list[psutil.Process]]:
     """A CLI sweep on 2 pool workers, one of them blocked inside a task by the hook."""
     release = tmp_path / "never"
     cmd = [sys.executable, "-m", "harness", "sweep", "--values", "0.5,0.6,0.7", "--mode", "fresh", "--transient", "5",
@@ -157,7 +158,7 @@ def _start_blocked_pool_sweep(tmp_path: Path) -> tuple[subprocess.Popen, list[in
                             env={**os.environ, TEST_HOOK_ENV: f"fresh-p00002:0:block:{release}"})
     try:
         _wait_for(lambda: Path(str(release) + ".reached").exists(), "a worker to block inside its task")
-        children = [c.pid for c in psutil.Process(proc.pid).children(recursive=True)]
+        children = psutil.Process(proc.pid).children(recursive=True)
         assert len(children) >= 2  # the workers (and the resource tracker)
         _wait_for(lambda: len(_tmp_dirs_of(children)) >= 1, "the blocked worker's extraction folder")
     except BaseException:
@@ -168,8 +169,17 @@ def _start_blocked_pool_sweep(tmp_path: Path) -> tuple[subprocess.Popen, list[in
     return proc, children
 
 
-def _gone(pids: list[int]) -> bool:
-    return not any(psutil.pid_exists(p) and psutil.Process(p).status() != psutil.STATUS_ZOMBIE for p in pids)
+def _gone(procs: list[psutil.Process]) -> bool:
+    """All of ``procs`` ended (a zombie counts as ended; a process object, not a pid, so that a
+    pid reused by another process on a busy machine is not taken for the old one)."""
+    return not any(_alive(p) for p in procs)
+
+
+def _alive(proc: psutil.Process) -> bool:
+    try:
+        return proc.is_running() and proc.status() != psutil.STATUS_ZOMBIE
+    except psutil.NoSuchProcess:
+        return False
 
 
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM], ids=["SIGKILL", "SIGTERM"])
@@ -241,10 +251,41 @@ def test_other_pools_of_the_harness_die_with_their_parent(tmp_path: Path) -> Non
         "    time.sleep(600)  # hold the pool until killed\n")
     proc = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE, text=True)
     try:
-        worker = int(proc.stdout.readline())
-        assert psutil.pid_exists(worker)
+        worker = psutil.Process(int(proc.stdout.readline()))
+        assert _alive(worker)
         proc.kill()
         proc.wait(timeout=60)
         _wait_for(lambda: _gone([worker]), "the pool worker to exit", limit=60)
     finally:
         proc.kill()
+
+
+def test_a_worker_that_misses_the_death_signal_still_goes(tmp_path: Path) -> None:
+    """The death signal can come too late to be handled (the kernel closes the dead parent's
+    pipes first, and a worker already finalizing runs no Python handler): the watchdog thread
+    sees the parent gone and ends the worker without it.  Here the worker ignores SIGTERM."""
+    script = tmp_path / "parent.py"
+    script.write_text(
+        "import multiprocessing, os, signal, time\n"
+        "from harness.io.children import die_with_parent\n"
+        "def child(parent):\n"
+        "    die_with_parent(parent)\n"
+        "    signal.signal(signal.SIGTERM, signal.SIG_IGN)  # the signal is lost\n"
+        "    print(os.getpid(), flush=True)\n"
+        "    time.sleep(600)\n"
+        "if __name__ == '__main__':\n"
+        "    ctx = multiprocessing.get_context('spawn')\n"
+        "    ctx.Process(target=child, args=(os.getpid(),)).start()\n"
+        "    time.sleep(600)  # hold the child until killed\n")
+    proc = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    worker = None
+    try:
+        worker = psutil.Process(int(proc.stdout.readline()))
+        assert _alive(worker)
+        proc.kill()
+        proc.wait(timeout=60)
+        _wait_for(lambda: _gone([worker]), "the worker to exit without its death signal", limit=60)
+    finally:
+        proc.kill()
+        if worker is not None and _alive(worker):
+            worker.kill()  # a failed test leaves no process behind
