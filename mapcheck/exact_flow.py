@@ -12,9 +12,9 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .exact import ExactOscillator
+from .segments import brentq
 from .orbits import PeriodicOrbit, solve_periodic_orbit
 
 __all__ = ["ExactFlow", "NEWTON"]

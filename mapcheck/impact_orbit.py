@@ -28,9 +28,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .linear import propagator
+from .segments import brentq
 
 __all__ = ["OneImpactOrbit", "one_impact_orbit", "sigma_of_v", "fold_velocity", "flip_velocities"]
 

@@ -28,10 +28,19 @@ import bisect
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 
 from .linear import (_SERIES_D, _SERIES_RATE_T, propagator_minus_identity_entries, propagator_minus_identity_scalar,
                      series_point, series_terms, spectral_rate)
+
+
+def brentq(f, a: float, b: float, **options):
+    """scipy's ``brentq``, imported on first use: ``scipy.optimize`` takes a second or more to
+    import, and most processes that import this package (every pool worker, through
+    ``mapcheck.compare``) never locate a root."""
+    from scipy.optimize import brentq as root
+
+    return root(f, a, b, **options)
+
 
 TWO_PI = 2.0 * math.pi
 _GRID_POINTS_PER_CHUNK = 48

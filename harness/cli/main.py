@@ -30,7 +30,7 @@ COMMANDS = (simulate, strobe, sweep, jacobian, basins, continue_, reproduce, win
 
 def build_parser() -> argparse.ArgumentParser:
     """The full parser, with every subcommand."""
-    from ..io.results import project_version
+    from ..io.versions import project_version
 
     parser = OneLineParser(
         prog=PROG,

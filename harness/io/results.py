@@ -11,34 +11,13 @@ import json
 import os
 import platform
 import sys
-from importlib import metadata
 from pathlib import Path
 from typing import Any, Mapping
 
 import numpy as np
 import xarray as xr
 
-PROJECT_DISTRIBUTION = "impact-grazing"
-_LIBRARIES = ("fmpy", "numpy", "scipy", "xarray", "netCDF4", "dask", "distributed", "matplotlib")
-
-
-def project_version() -> str:
-    """This project's version (from the installed distribution's metadata)."""
-    try:
-        return metadata.version(PROJECT_DISTRIBUTION)
-    except metadata.PackageNotFoundError:  # pragma: no cover - bare checkout
-        return "0+unknown"
-
-
-def library_versions() -> dict[str, str]:
-    """Versions of Python, this project and the libraries a result depends on."""
-    out = {"python": platform.python_version()}
-    for dist in (PROJECT_DISTRIBUTION, *_LIBRARIES):
-        try:
-            out[dist] = metadata.version(dist)
-        except metadata.PackageNotFoundError:
-            out[dist] = "not installed"
-    return out
+from .versions import library_versions, project_version  # noqa: F401  (part of this module's API)
 
 
 def _attr_value(value: Any) -> Any:

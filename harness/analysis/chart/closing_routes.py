@@ -26,7 +26,6 @@ import math
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from ...dynamics.maps.sigma_search import norm_seed
 from .closing_evidence import boundary_features, curve_sets, stable_evidence
@@ -95,6 +94,8 @@ def branch_radius(pmap: Any, M: int, impacts: int, lo: float, hi: float,
 
     best = (found[i][1], float(grid[i]), found[i][0])
     if a < b:
+        from scipy.optimize import minimize_scalar  # on first use: a second or more to import
+
         r = minimize_scalar(rho, bounds=(a, b), method="bounded", options={"xatol": 1e-10 * (1.0 + abs(b))})
         got = _orbit(pmap, found[i][0], float(r.x), M, impacts)
         if got is not None and got[1] < best[0]:

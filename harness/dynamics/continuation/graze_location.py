@@ -35,7 +35,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
+from mapcheck.segments import brentq  # scipy.optimize imported on first use
 
 from .arclength import ArclengthCorrector, BranchPoint
 from ...config.defaults import WALLS
