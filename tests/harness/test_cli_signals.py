@@ -27,10 +27,14 @@ ROOT = Path(__file__).resolve().parents[2]
 TMP = Path(os.environ.get("TMPDIR", "/tmp"))
 
 
-def _wait_for(condition, what: str, limit: float = 120.0) -> None:
-    """Wait until ``condition()`` holds (a state, not a duration: the limit only stops a hang)."""
+def _wait_for(condition, what: str, limit: float = 120.0, proc: subprocess.Popen | None = None) -> None:
+    """Wait until ``condition()`` holds (a state, not a duration: the limit only stops a hang).
+    With ``proc``: fail at once, with its output, if it ends before the condition holds."""
     deadline = time.monotonic() + limit
     while not condition():
+        if proc is not None and proc.poll() is not None and not condition():
+            out, err = proc.communicate()
+            raise AssertionError(f"the process ended (status {proc.returncode}) before {what}:\n{out}\n{err}")
         assert time.monotonic() < deadline, f"timed out waiting for {what}"
         time.sleep(0.02)
 
@@ -109,7 +113,7 @@ def test_interrupted_loop_keeps_its_points_and_resumes(tmp_path: Path, model: Fm
                             preexec_fn=_default_sigint)
     try:
         _wait_for(lambda: Path(str(release) + ".reached").exists() and _partial_rows(ckpt / "both.partial.npz") == 5,
-                  "the loop to stop before point 5 with 5 points stored")
+                  "the loop to stop before point 5 with 5 points stored", proc=proc)
         children = psutil.Process(proc.pid).children(recursive=True)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=60)
@@ -157,7 +161,7 @@ def _start_blocked_pool_sweep(tmp_path: Path) -> tuple[subprocess.Popen, list[ps
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, TEST_HOOK_ENV: f"fresh-p00002:0:block:{release}"})
     try:
-        _wait_for(lambda: Path(str(release) + ".reached").exists(), "a worker to block inside its task")
+        _wait_for(lambda: Path(str(release) + ".reached").exists(), "a worker to block inside its task", proc=proc)
         children = psutil.Process(proc.pid).children(recursive=True)
         assert len(children) >= 2  # the workers (and the resource tracker)
         _wait_for(lambda: len(_tmp_dirs_of(children)) >= 1, "the blocked worker's extraction folder")
@@ -223,7 +227,7 @@ def test_folder_of_a_killed_serial_run_is_swept_by_the_next_run(tmp_path: Path) 
                              "--no-plot", "--no-progress"], cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             env={**os.environ, TEST_HOOK_ENV: f"fresh-p00000:0:block:{release}"})
     try:
-        _wait_for(lambda: Path(str(release) + ".reached").exists(), "the run to block inside its task")
+        _wait_for(lambda: Path(str(release) + ".reached").exists(), "the run to block inside its task", proc=proc)
     finally:
         proc.kill()
     proc.wait(timeout=60)
