@@ -57,6 +57,7 @@ def _workers(ctx: Context) -> int:
 def ode_scans(ctx: Context, problem: WindowProblem, st: WindowSettings):
     """Quasi-static up and down scans of the FMU over sigma (the harness's sweeps)."""
     from ...config import SamplingSpec, SweepSpec
+    from ...runs.backends import make_backend
     from ...runs.sweeps import run_sweep
 
     grid = st.scan_grid
@@ -72,15 +73,22 @@ def ode_scans(ctx: Context, problem: WindowProblem, st: WindowSettings):
     sin_th = math.sin(th) if abs(math.sin(th)) > 1e-12 else 0.0  # exactly 0 at theta = 1/2
     state0 = ((1.0 + mid) * math.cos(th) - 1.0, -2.0 * math.pi * (1.0 + mid) * sin_th)
     params = ctx.params(**problem.fmu_params())
-    ds = run_sweep(ctx.fmu, spec, params, state0, sampling, workers=_workers(ctx), progress=ctx.progress)
-    if not st.far_start:
-        return ds
+    # one backend for both scans: one pool of workers started, not two; with one worker the
+    # scans run here (a pool of one would only add a process start and the FMU's loading)
+    workers = _workers(ctx)
+    be = make_backend("serial" if workers == 1 else "processes", workers)
+    try:
+        ds = run_sweep(ctx.fmu, spec, params, state0, sampling, backend=be, progress=ctx.progress)
+        if not st.far_start:
+            return ds
+        # three times the wall-free orbit's amplitude away, at rest: it hits the wall hard and
+        # settles on an impacting attractor where one coexists with the wall-free orbit
+        far = run_sweep(ctx.fmu, spec, params, (-3.0 * (1.0 + abs(mid)) - 1.0, 0.0), sampling, backend=be,
+                        progress=ctx.progress)
+    finally:
+        be.close()
     import xarray as xr
 
-    # three times the wall-free orbit's amplitude away, at rest: it hits the wall hard and settles
-    # on an impacting attractor where one coexists with the wall-free orbit
-    far = run_sweep(ctx.fmu, spec, params, (-3.0 * (1.0 + abs(mid)) - 1.0, 0.0), sampling, workers=_workers(ctx),
-                    progress=ctx.progress)
     far = far.assign_coords(direction=[f"{d}-far" for d in far["direction"].values])
     return xr.concat([ds, far], dim="direction", combine_attrs="override")
 
