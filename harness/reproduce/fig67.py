@@ -123,11 +123,13 @@ def _scan_chain(ctx: Context, r: float, G: float, grid: np.ndarray, cfg: dict[st
     params = ctx.params(nu=NU, Omega=OMEGA, r=r, Gamma=G, wall=WALLS["compliant"])
     sampling = SamplingSpec(theta=0.5, n_transient=cfg["transient"], n_samples=cfg["samples"], tol=1e-4)
     s0 = float(grid[0])
+    # in this process: one chain is sequential, and a pool of one would add a process start per scan
     up = run_sweep(ctx.fmu, SweepSpec("sigma", grid, ("up",)), params, (-(1.0 + s0) - 1.0, 0.0), sampling,
-                   workers=1, progress=False)
+                   backend="serial", progress=False)
     last = up.sel(direction="up").isel(sigma=-1)
     state = (float(last["u"].values[-1]), float(last["v"].values[-1]))
-    down = run_sweep(ctx.fmu, SweepSpec("sigma", grid, ("down",)), params, state, sampling, workers=1, progress=False)
+    down = run_sweep(ctx.fmu, SweepSpec("sigma", grid, ("down",)), params, state, sampling, backend="serial",
+                     progress=False)
     return up, down
 
 
