@@ -3,6 +3,8 @@ of the project's source and documentation, without the environment (.venv, .git 
 folders), build outputs, results and caches."""
 from __future__ import annotations
 
+import functools
+import os
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -16,15 +18,20 @@ TEXT_SUFFIXES = {".py", ".md", ".sh", ".toml", ".txt", ".c", ".h", ".inc", ".cma
 def project_files(root: Path = ROOT, suffixes: set[str] | None = None) -> list[Path]:
     """Every file under ``root`` with one of ``suffixes`` (all files if None), sorted, outside
     hidden folders, build outputs, results and caches."""
+    return list(_project_files(root, None if suffixes is None else frozenset(suffixes)))
+
+
+@functools.lru_cache(maxsize=None)
+def _project_files(root: Path, suffixes: frozenset[str] | None) -> tuple[Path, ...]:
+    # the excluded folders are pruned, not walked (.venv, .git and build/ hold most of the files)
     found = []
-    for path in root.rglob("*"):
-        rel = path.relative_to(root).parts
-        if any(p.startswith(".") or p in NOT_SOURCE or p.endswith(".egg-info") for p in rel[:-1]):
-            continue
-        if not path.is_file() or (suffixes is not None and path.suffix not in suffixes):
-            continue
-        found.append(path)
-    return sorted(found)
+    for folder, dirs, files in os.walk(root):
+        dirs[:] = [d for d in dirs if not (d.startswith(".") or d in NOT_SOURCE or d.endswith(".egg-info"))]
+        for name in files:
+            path = Path(folder) / name
+            if (suffixes is None or path.suffix in suffixes) and path.is_file():
+                found.append(path)
+    return tuple(sorted(found))
 
 
 def python_files(root: Path = ROOT) -> list[Path]:
