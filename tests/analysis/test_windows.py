@@ -32,6 +32,7 @@ def run(tmp_path_factory):
     return out, json.loads((out / "windows.json").read_text())
 
 
+@pytest.mark.slow  # the module's windows run (Figure 9's parameters under CVODE)
 def test_outputs_in_fig9_format(run) -> None:
     out, res = run
     for name in ("report.md", "windows.json", "windows_map.png", "windows_ode.png", "windows_windows.png",
@@ -78,6 +79,7 @@ def _window_cell(cell: str) -> tuple[float | None, float | None]:
     return tuple(None if x.startswith(("above", "beyond", "none")) else float(x) for x in (lo, hi))
 
 
+@pytest.mark.slow  # the module's windows run (Figure 9's parameters under CVODE)
 def test_json_numbers_are_finite_and_the_report_shows_them(run) -> None:
     """windows.json holds only finite numbers; report.md's tables show the JSON's numbers (to the
     digits they print): the window table of every source, the scans' confirmation, the map-minus-ODE
@@ -128,6 +130,7 @@ def _recomputed_period(u: np.ndarray, v: np.ndarray, tol: float, max_period: int
     return 0
 
 
+@pytest.mark.slow  # the module's windows run (Figure 9's parameters under CVODE)
 def test_scans_netcdf_has_the_grid_dims_and_the_periods_of_its_samples(run) -> None:
     """windows_ode_scans.nc: (direction, sigma, sample) samples on the JSON's geometric grid, one
     period apart at the section phase, finite; each point's period is the one its samples show
@@ -171,6 +174,7 @@ def test_scans_netcdf_has_the_grid_dims_and_the_periods_of_its_samples(run) -> N
                     assert not (period[d, edge] == int(M) and orbit_impacts[d, edge] == 1), (direction, M)
 
 
+@pytest.mark.slow  # the module's windows run (Figure 9's parameters under CVODE)
 def test_ode_edges_measured_and_near_the_A_tilde_map(run) -> None:
     """Each ODE edge is the midpoint of its own located interval (the continuation's location, in a
     --quick run too; never the map's number): a flip's narrower than 1e-8, a graze's (the fit's
@@ -193,6 +197,7 @@ def test_ode_edges_measured_and_near_the_A_tilde_map(run) -> None:
     assert res["edge_kinds"]["ode"]["1"] == ["flip", "range"]
 
 
+@pytest.mark.slow  # the module's windows run (Figure 9's parameters under CVODE)
 def test_scans_confirm_the_shooting(run) -> None:
     """The up/down scans see each ODE window with M >= 2, inside the shooting's edges up to
     one (relative) grid step: the scans never find a stable maximal orbit where the
@@ -232,6 +237,7 @@ def exact(run):
     return flow, seeds
 
 
+@pytest.mark.slow  # the module's windows run (Figure 9's parameters under CVODE)
 @pytest.mark.parametrize("M,side", EDGES, ids=[f"M{M}-{'lower' if s == 0 else 'upper'}" for M, s in EDGES])
 def test_each_ode_edge_is_an_edge_of_the_exact_flow_of_its_kind(run, exact, M, side) -> None:
     """Every ODE edge the run reports (its interval (good, bad), located by the continuation on the

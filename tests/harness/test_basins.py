@@ -105,6 +105,7 @@ def test_second_axis_v0_starts_each_row_from_its_own_v0(model: FmuModel) -> None
             np.testing.assert_allclose(got, states, rtol=0, atol=1e-9)
 
 
+@pytest.mark.slow  # a basin scan through the FMU, each attractor shot
 def test_coexisting_attractors_of_equal_period(model: FmuModel) -> None:
     s = SamplingSpec(n_transient=300, n_samples=40)
     u0, v0 = np.linspace(-1.2, 0.0, 7), np.linspace(-8.0, 8.0, 7)

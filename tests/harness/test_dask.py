@@ -18,6 +18,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
+pytestmark = pytest.mark.slow  # a real Dask scheduler and two worker processes on loopback, one of them killed
 import xarray as xr
 
 from harness import FmuModel, SamplingSpec, SweepSpec, run_sweep

@@ -39,6 +39,7 @@ def test_unguarded_script_gets_one_line(tmp_path: Path, layout: str) -> None:
     assert res.stderr.count("Traceback") == 1 and "done" not in res.stdout  # no worker ran
 
 
+@pytest.mark.slow  # a real script with a pool of worker processes
 def test_guarded_script_runs(tmp_path: Path) -> None:
     call = CALL.format(fmu=str(ROOT / "build" / "fmu" / "ImpactOscillator.fmu"))
     res = _run(tmp_path, 'if __name__ == "__main__":\n' + textwrap.indent(call, "    ") + "\n")

@@ -117,6 +117,7 @@ def test_sweep_input_errors(model: FmuModel) -> None:
         run_sweep(model, SweepSpec("u0", np.array([0.1]), ("up",)), progress=False)
 
 
+@pytest.mark.slow  # a real CLI process interrupted, then resumed
 def test_interrupted_cli_sweep_resumes_without_recomputing(tmp_path: Path, model: FmuModel) -> None:
     """Ctrl-C a running CLI sweep, rerun the same command: finished points are not redone and
     the result equals an uninterrupted run.  The interruption lands at a known point (the

@@ -7,6 +7,8 @@ from pathlib import Path
 import pytest
 
 pytest.importorskip("ecospy", reason="ecospy is a dev extra: pip install -e '.[dev]'")
+
+pytestmark = pytest.mark.slow  # runs the co-simulation benchmark's quick mode
 ROOT = Path(__file__).resolve().parents[2]
 
 

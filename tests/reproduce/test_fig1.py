@@ -9,6 +9,8 @@ import pytest
 
 from harness.reproduce import run_target
 
+pytestmark = pytest.mark.slow  # reproduces the paper's Figure 1
+
 
 @pytest.fixture(scope="module")
 def fig1(tmp_path_factory):
