@@ -28,12 +28,13 @@
  * samples M apart with other wall entries, or farther apart than aperiodic_tol (1 + the largest
  * range of the samples so far) -- and that no known attractor can recognise any more before its
  * last period (its run, or a fresh one, would end beyond it) stops with status BATCH_APERIODIC,
- * its samples so far filled in. The caller passes aperiodic_tol a thousand times its periodicity
- * tolerance: the rest of the samples could only pass its test by spreading over a range a
- * thousand times that of the samples so far (plus one) without escaping, so the start ends not
- * periodic either way, as when run in full, but for sticking or chatter in the periods it did
- * not run (its samples so far say which), and does so from the shifts' first pairs on: a
- * quarter to a half of the sampled periods earlier (a chaotic start).
+ * its samples so far filled in. The caller (harness/runs/basins/kernel_scan.py) passes its
+ * periodicity tolerance times 1 + ten times the spread of its starts: the rest of the samples could
+ * then pass its test only by widening their range by more than ten times that spread, far beyond
+ * every orbit the starts were drawn around, so the start ends not periodic as when run in full, but
+ * for sticking, chatter or a failure in the periods it does not run (its samples so far say
+ * whether it stuck or chattered). A chaotic start stops at the first sample after max_period of
+ * them (the 13th of 24) instead of the last.
  *
  * Starts are independent: OpenMP spreads them over `threads` threads (dynamic schedule: early
  * stops make their costs uneven); ctypes releases the GIL while it runs.
