@@ -96,12 +96,14 @@ def main() -> None:
         *rows,
         "",
         "The search's cost is the batch kernel's periods: a seed start stops once its samples repeat (to 1e-6 of "
-        "the periodicity tolerance; the one that registers an attractor runs again in full for its points), a start that settles on an attractor the seed found stops after two rounds of "
+        "the periodicity tolerance; the one that registers an attractor runs again in full for its points if it "
+        "stopped early), a start that settles on an attractor the seed found stops after two rounds of "
         "that attractor's orbit, one that does not (a chaotic stretch, as Figure 9 below sigma ~ 0.17, where a few "
         "starts reach a long-period orbit only after 50 periods; a slowly contracting lightly damped oscillator, "
         "whose deviation from its period-8 orbit grows and shrinks within each round) runs a quarter of the "
-        "transient plus the samples: docs/basins.md says where the periods go. Fewer starts "
-        "(`--global-starts 300`) cost proportionally less; the lightly damped case's period-10 orbit, which no scan "
+        "transient plus the samples, or stops once its samples rule out every period and no attractor can "
+        "recognise it any more (a chaotic start at its 13th of 24 samples): docs/basins.md says where the periods "
+        "go. Fewer starts (`--global-starts 300`) cost proportionally less; the lightly damped case's period-10 orbit, which no scan "
         "reaches, is found either way.",
         "",
         f"The requirement, at most {100 * LIMIT:.0f} % more CPU with the search: "

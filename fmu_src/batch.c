@@ -23,6 +23,19 @@
  * own tolerance: the samples then pass its test too, converged far enough that a smaller period
  * still settling (a multiplier near -1 seen as period 2M first) passes it as well.
  *
+ * Early stopping when aperiodic (aperiodic_tol > 0): a start whose samples so far already rule
+ * out every shift M <= max_period of the caller's periodicity test -- for each M a pair of
+ * samples M apart with other wall entries, or farther apart than aperiodic_tol (1 + the largest
+ * range of the samples so far) -- and that no known attractor can recognise any more before its
+ * last period (its run, or a fresh one, would end beyond it) stops with status BATCH_APERIODIC,
+ * its samples so far filled in. The caller (harness/runs/basins/kernel_scan.py) passes its
+ * periodicity tolerance times 1 + ten times the spread of its starts: the rest of the samples could
+ * then pass its test only by widening their range by more than ten times that spread, far beyond
+ * every orbit the starts were drawn around, so the start ends not periodic as when run in full, but
+ * for sticking, chatter or a failure in the periods it does not run (its samples so far say
+ * whether it stuck or chattered). A chaotic start stops at the first sample after max_period of
+ * them (the 13th of 24) instead of the last.
+ *
  * Starts are independent: OpenMP spreads them over `threads` threads (dynamic schedule: early
  * stops make their costs uneven); ctypes releases the GIL while it runs.
  *
@@ -45,7 +58,8 @@
 #endif
 
 /* Per-start status (the `status` output). */
-enum { BATCH_RAN = 0, BATCH_MATCHED = 1, BATCH_INVALID = 2, BATCH_FAILED = 3, BATCH_ESCAPED = 4 };
+enum { BATCH_RAN = 0, BATCH_MATCHED = 1, BATCH_INVALID = 2, BATCH_FAILED = 3, BATCH_ESCAPED = 4,
+       BATCH_APERIODIC = 5 };
 
 /* The settable values ModelData stores, by name: generated from fmu_src/variables.py, so a
  * parameter added there is known here without an edit. */
@@ -109,6 +123,7 @@ typedef struct {
     const int *entries;    /* [n][width]: wall entries of the period that ends on the point */
     double tol;
     const int *confirm;    /* [n]: consecutive periods on the orbit that recognise a start */
+    int min_confirm;       /* the smallest of them (at least 1) */
 } Known;
 
 /* The point j of an attractor whose state z is within tol of it (with the same wall entries),
@@ -161,6 +176,38 @@ void batch_start_at(Stepper *st, ModelData *m, const ModelData *m0, double u, do
     model_initialize_state(m, st->clk.tau);
 }
 
+/* The aperiodic stop (file comment): its tolerance (0: off), the shifts tried, which of them the
+ * samples so far already rule out, how many, and the samples' ranges so far. */
+typedef struct {
+    double tol;
+    int max_period, n_out;
+    unsigned char *out; /* [max_period + 1]: shift M ruled out */
+    double ulo, uhi, vlo, vhi;
+} Aperiodic;
+
+/* With sample s (0-based) just written: whether every shift M <= max_period is ruled out, by a
+ * pair of samples M apart whose wall entries differ or whose difference exceeds the tolerance
+ * times (1 + the samples' largest range so far). */
+static int aperiodic(Aperiodic *ap, const double *us, const double *vs, const int *imp, int s) {
+    ap->ulo = fmin(ap->ulo, us[s]), ap->uhi = fmax(ap->uhi, us[s]);
+    ap->vlo = fmin(ap->vlo, vs[s]), ap->vhi = fmax(ap->vhi, vs[s]);
+    const double thr = ap->tol * (1.0 + fmax(ap->uhi - ap->ulo, ap->vhi - ap->vlo));
+    for (int M = 1; M <= ap->max_period && M <= s; ++M)
+        if (!ap->out[M] && (imp[s] != imp[s - M] || fabs(us[s] - us[s - M]) > thr || fabs(vs[s] - vs[s - M]) > thr)) {
+            ap->out[M] = 1;
+            ++ap->n_out;
+        }
+    return ap->n_out >= ap->max_period;
+}
+
+/* Whether a known attractor may still recognise the start by the end of its run (period `total`),
+ * at period k with the run `run` on attractor `cand` (-1: none). */
+static int may_confirm(const Known *k, int cand, int run, int at, int total) {
+    if (k->n == 0) return 0;
+    if (cand >= 0 && at + (k->confirm[cand] < 1 ? 1 : k->confirm[cand]) - run <= total) return 1;
+    return at + k->min_confirm <= total;
+}
+
 /* Whether the last r->n states, the newest at period k, repeat with some shift M <= max_period. */
 static int recurs(const Recur *r, int k) {
     const int n = r->n;
@@ -183,8 +230,8 @@ static int recurs(const Recur *r, int k) {
 
 /* One start: the FMU's initialisation and doStep sequence (file comment), with the early stop. */
 static Outcome run_start(const ModelData *m0, double u0, double v0, double theta, int n_transient,
-                         int n_samples, const Known *known, Recur *rec, double *us, double *vs, int *imp,
-                         unsigned char *stuck, char *err, int errlen) {
+                         int n_samples, const Known *known, Recur *rec, Aperiodic *ap, double *us, double *vs,
+                         int *imp, unsigned char *stuck, char *err, int errlen) {
     Outcome o = {-1, 0, BATCH_RAN};
     if (m0->wall == WALL_RIGID && (u0 > m0->u_wall || (u0 == m0->u_wall && v0 > 0.0))) {
         o.status = BATCH_INVALID; /* the FMU refuses a start inside a rigid wall */
@@ -232,17 +279,23 @@ static Outcome run_start(const ModelData *m0, double u0, double v0, double theta
                 break;
             }
         }
-        if (known->n == 0) continue;
-        if (cand >= 0 && next_point(known, cand, cj, m.u, m.v, entries)) {
-            cj = (cj + 1) % known->period[cand];
-            ++run;
-        } else {
-            cand = find_point(known, m.u, m.v, entries, &cj);
-            run = cand >= 0;
+        if (known->n > 0) {
+            if (cand >= 0 && next_point(known, cand, cj, m.u, m.v, entries)) {
+                cj = (cj + 1) % known->period[cand];
+                ++run;
+            } else {
+                cand = find_point(known, m.u, m.v, entries, &cj);
+                run = cand >= 0;
+            }
+            if (cand >= 0 && run >= (known->confirm[cand] < 1 ? 1 : known->confirm[cand])) {
+                o.label = cand;
+                o.status = BATCH_MATCHED;
+                break;
+            }
         }
-        if (cand >= 0 && run >= (known->confirm[cand] < 1 ? 1 : known->confirm[cand])) {
-            o.label = cand;
-            o.status = BATCH_MATCHED;
+        if (ap->tol > 0.0 && k > n_transient && k < total && aperiodic(ap, us, vs, imp, k - n_transient - 1) &&
+            !may_confirm(known, cand, run, k, total)) {
+            o.status = BATCH_APERIODIC;
             break;
         }
     }
@@ -265,7 +318,8 @@ BATCH_EXPORT int impact_batch_threads(void) {
  * Runs n starts (u0[i], v0[i]) at t = theta for n_transient + n_samples periods each, or until
  * recognised as one of the n_known attractors (file comment; n_known = 0: no early stop;
  * confirm[a] < 1 counts as 1), or until their last n_samples states repeat (recur_tol > 0, shifts
- * up to max_period, at most n_samples - 1; file comment).
+ * up to max_period, at most n_samples - 1; file comment), or until their samples rule out a
+ * period (aperiodic_tol > 0, the same shifts; file comment).
  * Outputs per start: label (the attractor, or -1), periods run, status (BATCH_*), and the
  * samples of the last n_samples periods (u, v, wall entries, sticking at the sample), left as
  * they were for periods not reached. Returns 0, or -1 with err set: the parameters are refused
@@ -276,15 +330,19 @@ BATCH_EXPORT int impact_batch_run(int n_params, const char *const *names, const 
                                   int n_transient, int n_samples, int n_known, int width,
                                   const int *known_period, const double *known_points,
                                   const int *known_entries, double tol, const int *confirm,
-                                  double recur_tol, int max_period, int threads, int *label,
+                                  double recur_tol, int max_period, double aperiodic_tol, int threads, int *label,
                                   int *periods, int *status, double *u_out, double *v_out,
                                   int *imp_out, unsigned char *stuck_out, char *err, int errlen) {
     ModelData m0;
     err[0] = '\0';
     if (batch_build_model(&m0, n_params, names, values, err, errlen) != 0) return -1;
-    const Known known = {n_known, width, known_period, known_points, known_entries, tol, confirm};
+    Known known = {n_known, width, known_period, known_points, known_entries, tol, confirm, 0};
+    for (int a = 0; a < n_known; ++a) {
+        const int c = confirm[a] < 1 ? 1 : confirm[a];
+        if (a == 0 || c < known.min_confirm) known.min_confirm = c;
+    }
     if (max_period > n_samples - 1) max_period = n_samples - 1;
-    if (max_period < 1 || n_samples < 2) recur_tol = 0.0;
+    if (max_period < 1 || n_samples < 2) recur_tol = 0.0, aperiodic_tol = 0.0;
     int failed = 0;
 #ifdef _OPENMP
 #pragma omp parallel for schedule(dynamic, 8) num_threads(threads > 0 ? threads : 1)
@@ -304,10 +362,13 @@ BATCH_EXPORT int impact_batch_run(int n_params, const char *const *names, const 
             rec.imp = (int *)(rec.v + n_samples);
             rec.stuck = (unsigned char *)(rec.imp + n_samples);
         }
-        const Outcome o = run_start(&m0, u0[i], v0[i], theta, n_transient, n_samples, &known, &rec,
+        Aperiodic ap = {0.0, max_period, 0, NULL, INFINITY, -INFINITY, INFINITY, -INFINITY};
+        if (aperiodic_tol > 0.0 && (ap.out = calloc((size_t)max_period + 1, 1)) != NULL) ap.tol = aperiodic_tol;
+        const Outcome o = run_start(&m0, u0[i], v0[i], theta, n_transient, n_samples, &known, &rec, &ap,
                                     u_out + off, v_out + off, imp_out + off, stuck_out + off, msg,
                                     (int)sizeof msg);
         free(ring);
+        free(ap.out);
         label[i] = o.label;
         periods[i] = o.periods;
         status[i] = o.status;

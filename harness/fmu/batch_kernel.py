@@ -20,9 +20,9 @@ from ..errors import HarnessInputError
 from ..config.defaults import WALLS
 
 #: Per-start status codes of the kernel (``fmu_src/batch.c``).
-RAN, MATCHED, INVALID, FAILED, ESCAPED = 0, 1, 2, 3, 4
+RAN, MATCHED, INVALID, FAILED, ESCAPED, APERIODIC = 0, 1, 2, 3, 4, 5
 LIBRARY_NAME = "libimpact_batch.so"
-_VERSION = 4
+_VERSION = 5
 _LIBS: dict[str, ctypes.CDLL] = {}
 
 
@@ -55,7 +55,8 @@ def load_library(path: str | Path | None = None) -> ctypes.CDLL:
     i32, f64, ptr = ctypes.c_int, ctypes.c_double, ctypes.c_void_p
     lib.impact_batch_run.restype = i32
     lib.impact_batch_run.argtypes = [i32, ptr, ptr, ctypes.c_long, ptr, ptr, f64, i32, i32, i32, i32, ptr, ptr, ptr,
-                                     f64, ptr, f64, i32, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, ctypes.c_char_p, i32]
+                                     f64, ptr, f64, i32, f64, i32, ptr, ptr, ptr, ptr, ptr, ptr, ptr, ctypes.c_char_p,
+                                     i32]
     _LIBS[key] = lib
     return lib
 
@@ -71,7 +72,8 @@ class BatchResult:
     periods : numpy.ndarray of int, shape (n,)
         Forcing periods run.
     status : numpy.ndarray of int, shape (n,)
-        :data:`RAN`, :data:`MATCHED`, :data:`INVALID`, :data:`FAILED` or :data:`ESCAPED`.
+        :data:`RAN`, :data:`MATCHED`, :data:`INVALID`, :data:`FAILED`, :data:`ESCAPED` or
+        :data:`APERIODIC` (stopped once its samples ruled out a period: ``aperiodic_tol``).
     u, v : numpy.ndarray, shape (n, samples)
         The stroboscopic samples after the transient (NaN where not reached).
     impacts : numpy.ndarray of int, shape (n, samples)
@@ -132,7 +134,8 @@ def default_threads() -> int:
 
 def run_batch(params: Mapping[str, Any], u0: np.ndarray, v0: np.ndarray, theta: float, n_transient: int,
               n_samples: int, known: KnownAttractors | None = None, threads: int | None = None,
-              library: str | Path | None = None, recur_tol: float = 0.0, max_period: int | None = None) -> BatchResult:
+              library: str | Path | None = None, recur_tol: float = 0.0, max_period: int | None = None,
+              aperiodic_tol: float = 0.0) -> BatchResult:
     """Run every start (u0[i], v0[i]) at t = theta through the closed form.
 
     Parameters
@@ -155,6 +158,12 @@ def run_batch(params: Mapping[str, Any], u0: np.ndarray, v0: np.ndarray, theta: 
         largest peak-to-peak range (the test of
         :func:`harness.dynamics.maps.classify.classify_orbit`); those states are its samples
         (status :data:`RAN`, ``periods`` says when it stopped).
+    aperiodic_tol : float
+        > 0: a start also stops (status :data:`APERIODIC`, its samples so far filled in) once
+        they rule out every shift up to ``max_period`` -- for each a pair of samples with other
+        wall entries or farther apart than this tolerance times 1 + their largest range so far
+        -- and no known attractor can recognise it before its last period
+        (``fmu_src/batch.c``).
 
     Raises
     ------
@@ -180,7 +189,7 @@ def run_batch(params: Mapping[str, Any], u0: np.ndarray, v0: np.ndarray, theta: 
     a = lambda x: x.ctypes.data  # noqa: E731 - the arrays outlive the call
     rc = lib.impact_batch_run(len(names), c_names, a(c_values), n, a(u0), a(v0), float(theta), int(n_transient),
                               int(n_samples), per.size, pts.shape[1], a(per), a(pts), a(ent), float(known.tol),
-                              a(confirm), float(recur_tol), int(max_period or n_samples // 2),
+                              a(confirm), float(recur_tol), int(max_period or n_samples // 2), float(aperiodic_tol),
                               int(threads or default_threads()), a(out.label), a(out.periods),
                               a(out.status), a(out.u), a(out.v), a(out.impacts), a(out.stuck), err, len(err))
     out.error = err.value.decode(errors="replace")

@@ -159,6 +159,73 @@ def test_the_recurrence_stop_ends_a_start_on_its_orbit(case: str) -> None:
     assert early > 0 and np.all(stop.periods <= full.periods)
 
 
+#: the lightly damped oscillator of bench/global_search_bench.py: most starts converge slowly onto a
+#: period-8 orbit, a quarter are still settling after 74 periods
+LIGHTLY_DAMPED = (dict(nu=0.1, Omega=2.25, r=0.8, Gamma=100.0, wall=1, sigma=-0.005), 0.5, (-2.5, 0.5, -9, 9))
+
+
+@pytest.mark.parametrize("case, sigma", [("fig9-compliant", 0.05), ("lightly-damped", None), ("fig7-compliant", None),
+                                         ("chatter-rigid", None)])
+def test_the_aperiodic_stop_changes_no_label(case: str, sigma: float | None) -> None:
+    """A start stopped once its samples rule out every period, with no attractor able to recognise
+    it any more (the global search's margin: the tolerance times 1 + ten times the starts' spread),
+    is one that the same run in full leaves unmatched and not periodic: every label, with the
+    attractors of a seed known (the strict rule), is the full run's; the stopped starts' samples so
+    far are the full run's bit for bit, the others' whole results too.  Figure 9's chaos at
+    sigma = 0.05 stops most starts at their 13th sample."""
+    from dataclasses import replace
+
+    from harness.runs.basins.registry import Registry
+
+    params, theta, box = LIGHTLY_DAMPED if case == "lightly-damped" else CASES[case]
+    params = {**params, "solver": 1, **({} if sigma is None else {"sigma": sigma})}
+    u0, v0 = _starts(box, 160, seed=5)
+    s, seed_s = (SamplingSpec(theta=theta, n_transient=n, n_samples=24, tol=1e-6) for n in (50, 200))
+    seed = bk.run_batch(params, u0[:16], v0[:16], theta, 200, 24)
+    reg = Registry(1e-2 * max(1.0, float(np.nanmax(np.abs(np.concatenate([seed.u.ravel(), seed.v.ravel()]))))))
+    reg.merge(label_result(seed, seed_s, reg.known()))
+    known = reg.known(strict=True)
+    known = replace(known, confirm=np.maximum(4, 2 * known.period).astype(np.int32))
+    full = bk.run_batch(params, u0, v0, theta, 50, 24, known)
+    spread = max(float(np.ptp(u0)), float(np.ptp(v0)))
+    stop = bk.run_batch(params, u0, v0, theta, 50, 24, known, aperiodic_tol=1e-6 * (1.0 + 10.0 * spread))
+    a, b = label_result(full, s, known), label_result(stop, s, known)
+    assert np.array_equal(a["label"], b["label"])
+    assert [(c.period, c.impacts) for c in a["candidates"]] == [(c.period, c.impacts) for c in b["candidates"]]
+    ap = stop.status == bk.APERIODIC
+    assert np.all(full.status[ap] == bk.RAN) and np.all(stop.periods[ap] < 74)
+    for i in np.flatnonzero(ap):
+        k = stop.periods[i] - 50
+        assert np.array_equal(stop.u[i, :k], full.u[i, :k]) and np.array_equal(stop.v[i, :k], full.v[i, :k])
+        assert np.all(np.isnan(stop.u[i, k:]))
+    rest = ~ap
+    for name in ("label", "periods", "status", "u", "v", "impacts", "stuck"):
+        x, y = getattr(full, name)[rest], getattr(stop, name)[rest]
+        assert np.array_equal(x, y, equal_nan=name in ("u", "v")), name
+    if (case, sigma) == ("fig9-compliant", 0.05):
+        assert ap.mean() > 0.5 and np.min(stop.periods[ap]) == 63
+
+
+@pytest.mark.parametrize("case, sigma, tol, max_period", [
+    ("fig9-compliant", 0.3, 1e-6, None), ("fig9-compliant", 0.05, 1e-3, 5), ("chatter-rigid", None, 1e-6, None)])
+def test_orbit_periods_are_classify_orbits(case: str, sigma: float | None, tol: float, max_period: int | None) -> None:
+    """All starts' periods at once (:func:`harness.runs.basins.tiles.orbit_periods`) are
+    :func:`harness.dynamics.maps.classify.classify_orbit`'s, row by row, periodic or not."""
+    from harness.dynamics.maps.classify import classify_orbit
+    from harness.runs.basins.tiles import orbit_periods
+
+    params, theta, box = CASES[case]
+    params = {**params, "solver": 1, **({} if sigma is None else {"sigma": sigma})}
+    u0, v0 = _starts(box, 120, seed=9)
+    res = bk.run_batch(params, u0, v0, theta, 40, 24)
+    period, entries = orbit_periods(res.u, res.v, res.impacts, SamplingSpec(theta=theta, n_transient=40, n_samples=24,
+                                                                            tol=tol, max_period=max_period))
+    got = [classify_orbit(res.u[i], res.v[i], res.impacts[i], tol, max_period) for i in range(u0.size)]
+    want = [(c.period, c.impacts) if c.periodic else (0, -1) for c in got]
+    assert want == list(zip(period.tolist(), entries.tolist()))
+    assert case == "chatter-rigid" or 0 < np.sum(period > 0) < period.size  # periodic rows and not
+
+
 def test_a_start_still_chattering_at_its_samples_is_sticking_not_an_attractor() -> None:
     p, theta, box = CASES["chatter-rigid"]
     s = SamplingSpec(theta=0.0, n_transient=0, n_samples=4)  # no transient: not yet periodic
@@ -167,6 +234,10 @@ def test_a_start_still_chattering_at_its_samples_is_sticking_not_an_attractor() 
     lab = label_result(res, s, bk.KnownAttractors.none())
     chatter = res.impacts.max(axis=1) >= 8
     assert chatter.any() and np.all(lab["label"][chatter] == STICKING)
+    # stopped as soon as its samples rule out a period: sticking all the same, from the samples it has
+    stop = bk.run_batch({**p, "solver": 1}, u0, v0, 0.0, 0, 4, aperiodic_tol=1e-6)
+    assert np.any(stop.status == bk.APERIODIC)
+    assert np.array_equal(label_result(stop, s, bk.KnownAttractors.none())["label"], lab["label"])
 
 
 def test_the_kernel_refuses_what_it_cannot_run() -> None:

@@ -8,8 +8,9 @@ each parameter set, fresh starts spread over the state region the attractors occ
 their attractors with the basin scans' machinery (:mod:`.kernel_scan`, :mod:`.registry`): a seed
 run until its samples repeat or in full, the attractors it finds told apart by their stroboscopic
 point sets (:func:`harness.dynamics.attractors.identity.hausdorff`), then the other starts with the
-early stop on them, two rounds of each orbit (docs/basins.md).  Each attractor found comes back with its basin
-share: the fraction of the starts that reached it.
+early stop on them, two rounds of each orbit, every start also stopping once its samples rule out a
+period and no attractor can recognise it any more (docs/basins.md).  Each attractor found comes back
+with its basin share: the fraction of the starts that reached it.
 
 Two paths, as in ``basins``:
 

@@ -47,6 +47,15 @@ DEFAULT_TILE = 32768
 #: and continued from them, are those of the whole run (at 1e-3 of the tolerance the shooting
 #: from a period-10 orbit's points missed the branch switching at its flip).
 SEED_RECUR = 1e-6
+#: :func:`run_starts` stops a start once its samples so far rule out every period and no attractor
+#: can recognise it any more (``aperiodic_tol`` of :func:`harness.fmu.batch_kernel.run_batch`: the
+#: periodicity tolerance times 1 + this many times the starts' spread, the largest of their ranges
+#: in u and v).  The rest of its samples could only make it periodic by widening their range by
+#: more than this many times the spread of all the starts (so far beyond every orbit the region
+#: was drawn around that the start would be escaping), so it ends not periodic as its whole run
+#: would, but for sticking, chatter or a failure in the periods it does not run (none of the
+#: cases of bench/global_search_bench.py has any: its labels there are the whole runs').
+APERIODIC_SPREAD = 10.0
 
 
 def _shooter(model: Any, params: Mapping[str, Any], theta: float) -> Any:
@@ -90,32 +99,40 @@ def run_starts(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, s: Sam
     costs more than it saves on one tile); returns (labels: registry indices or the negative
     codes, the registry).  No Newton shooting: the caller shoots what it keeps.
     ``tile_sampling``: the other starts' sampling (default ``s``; a shorter transient is cheaper
-    where starts do not settle, and a start that reaches a seed's attractor stops anyway)."""
+    where starts do not settle, and a start that reaches a seed's attractor stops anyway).
+    Every start, seed or not, also stops once its samples so far rule out a period and no
+    attractor can recognise it any more (:data:`APERIODIC_SPREAD`): not periodic, as its whole
+    run would say (a chaotic start: from the twelfth of 24 samples on instead of the last)."""
     idx = np.unique(np.linspace(0, us.size - 1, min(us.size, n_seed)).round().astype(int))
+    aperiodic = 1.0 + APERIODIC_SPREAD * max(float(np.ptp(us)), float(np.ptp(vs)))
     reg = Registry(match_tol)
     seed = bk.run_batch(params, us[idx], vs[idx], s.theta, s.n_transient, s.n_samples, None, threads,
-                        recur_tol=SEED_RECUR * s.tol, max_period=s.max_period)
+                        recur_tol=SEED_RECUR * s.tol, max_period=s.max_period, aperiodic_tol=aperiodic * s.tol)
     labels = np.empty(us.size, dtype=np.int32)
     labels[idx] = reg.merge(label_result(seed, s, reg.known()))
-    _full_points(params, us[idx], vs[idx], labels[idx], s, reg, threads)
+    _full_points(params, us[idx], vs[idx], labels[idx], seed.periods < s.n_transient + s.n_samples, s, reg,
+                 threads)
     rest = np.setdiff1d(np.arange(us.size), idx)
     if rest.size:
         known = reg.known(strict=True)
         known = replace(known, confirm=np.maximum(MIN_CONFIRM, CONFIRM_ROUNDS * known.period).astype(np.int32))
         ts = tile_sampling or s
-        res = bk.run_batch(params, us[rest], vs[rest], ts.theta, ts.n_transient, ts.n_samples, known, threads)
+        res = bk.run_batch(params, us[rest], vs[rest], ts.theta, ts.n_transient, ts.n_samples, known, threads,
+                           max_period=ts.max_period, aperiodic_tol=aperiodic * ts.tol)
         labels[rest] = reg.merge(label_result(res, ts, known))
     return labels, reg
 
 
-def _full_points(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, labels: np.ndarray, s: SamplingSpec,
-                 reg: Registry, threads: int) -> None:
+def _full_points(params: Mapping[str, Any], us: np.ndarray, vs: np.ndarray, labels: np.ndarray, stopped: np.ndarray,
+                 s: SamplingSpec, reg: Registry, threads: int) -> None:
     """Each attractor's points as the whole transient gives them: the seed start that registered it
-    (the first labelled with it) run again in full.  What ``windows`` shoots and continues from
+    (the first labelled with it) run again in full, if it ``stopped`` early (one that ran the whole
+    transient registered those points already).  What ``windows`` shoots and continues from
     an attractor's points is sensitive far below the periodicity tolerance (from points converged
     to 1e-12 instead of the whole run's, a period-2 orbit's edge came out 0.02 off), and one start
     per attractor costs little beside the seed's periods saved."""
     first = [int(np.flatnonzero(labels == j)[0]) for j in range(len(reg.found)) if np.any(labels == j)]
+    first = [i for i in first if stopped[i]]
     if not first:
         return
     full = bk.run_batch(params, us[first], vs[first], s.theta, s.n_transient, s.n_samples, None, threads)

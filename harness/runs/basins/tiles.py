@@ -86,24 +86,29 @@ def classify_start(res: bk.BatchResult, i: int, s: SamplingSpec) -> tuple[int, C
     return NOT_PERIODIC, None
 
 
-def may_be_periodic(u: np.ndarray, v: np.ndarray, s: SamplingSpec) -> np.ndarray:
-    """Per row of samples (starts, samples): whether some shift m <= the largest period repeats
-    them to :func:`harness.dynamics.maps.classify.classify_orbit`'s threshold -- its necessary
-    condition for a period, checked for all starts at once (rows with a NaN: True, left to it)."""
-    n = u.shape[1] if u.ndim == 2 else 0
-    out = np.ones(u.shape[0], dtype=bool)
-    if n < 2 or u.shape[0] == 0:
-        return out
+def orbit_periods(u: np.ndarray, v: np.ndarray, impacts: np.ndarray, s: SamplingSpec) -> tuple[np.ndarray, np.ndarray]:
+    """Per row of samples (starts, samples): :func:`harness.dynamics.maps.classify.classify_orbit`'s
+    period (0: not periodic) and wall entries per period, for all rows at once -- the same test
+    on the same numbers (the smallest shift m <= the largest period whose residual, the largest
+    |difference| of u and v m samples apart, is within tol (1 + the largest peak-to-peak range)
+    and whose wall entries repeat; a row with a NaN is not periodic), so the same verdicts."""
+    rows, n = u.shape if u.ndim == 2 else (u.shape[0], 0)
+    period = np.zeros(rows, dtype=np.int64)
+    entries = np.full(rows, -1, dtype=np.int64)
+    if n < 2 or rows == 0:
+        return period, entries
     finite = np.all(np.isfinite(u), axis=1) & np.all(np.isfinite(v), axis=1)
     mp = max(1, min(s.max_period if s.max_period is not None else n // 2, n - 1))
     with np.errstate(invalid="ignore"):
         thr = s.tol * (1.0 + np.maximum(np.ptp(u, axis=1), np.ptp(v, axis=1)))
-        hit = np.zeros(u.shape[0], dtype=bool)
+        open_ = finite.copy()
         for m in range(1, mp + 1):
             r = np.maximum(np.max(np.abs(u[:, m:] - u[:, :-m]), axis=1), np.max(np.abs(v[:, m:] - v[:, :-m]), axis=1))
-            hit |= r <= thr
-    out[finite] = hit[finite]
-    return out
+            hit = open_ & (r <= thr) & np.all(impacts[:, m:] == impacts[:, :-m], axis=1)
+            period[hit] = m
+            entries[hit] = impacts[hit, n - m:].sum(axis=1)
+            open_ &= ~hit
+    return period, entries
 
 
 def run_tile(tile: BasinTile, source: Any = None, progress: Any = None) -> dict[str, Any]:
@@ -135,15 +140,14 @@ def label_result(res: bk.BatchResult, s: SamplingSpec, known: bk.KnownAttractors
     label[(res.status == bk.FAILED) | (res.status == bk.ESCAPED)] = ESCAPED
     candidates: list[Candidate] = []
     ran = np.flatnonzero(res.status == bk.RAN)
-    hope = may_be_periodic(res.u[ran], res.v[ran], s)
-    never = ran[~hope]  # no shift repeats to the tolerance: classify_start's verdict, for all at once
+    period, entries = orbit_periods(res.u[ran], res.v[ran], res.impacts[ran], s)
+    # classify_start's verdict on a start that reached no period, and on one stopped as soon as its
+    # samples ruled a period out (its samples so far say whether it stuck or chattered)
+    never = np.concatenate([ran[period == 0], np.flatnonzero(res.status == bk.APERIODIC)])
     slow = np.any(res.stuck[never], axis=1) | (np.max(res.impacts[never], axis=1, initial=-1) >= CHATTER_ENTRIES)
     label[never] = np.where(slow, STICKING, NOT_PERIODIC)
-    for i in ran[hope]:
-        code, cand = classify_start(res, int(i), s)
-        if cand is None:
-            label[i] = code
-            continue
+    for i, p, e in zip(ran[period > 0], period[period > 0], entries[period > 0]):
+        cand = candidate_of(res.u[i], res.v[i], res.impacts[i], res.stuck[i].astype(bool), int(p), int(e))
         a = match_known(cand, known)
         if a < 0:
             for k, other in enumerate(candidates):
