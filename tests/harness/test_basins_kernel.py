@@ -303,6 +303,7 @@ def test_cli_interrupted_at_a_tile_resumes_it_and_keeps_the_rest(tmp_path) -> No
     np.testing.assert_array_equal(resumed["attractor"].values, xr.open_dataset(fresh)["attractor"].values)
 
 
+@pytest.mark.slow  # a CLI basins run with its zoom and its check through the FMU
 def test_cli_zoom_check_and_figure(tmp_path, capsys) -> None:
     import xarray as xr
 

@@ -85,6 +85,7 @@ def test_model_exchange_fmu_is_refused(me_fmu: Path, capsys) -> None:
     assert err.count("\n") == 1 and "argument --fmu" in err and "not a Co-Simulation FMU" in err
 
 
+@pytest.mark.slow  # two real CLI processes
 @pytest.mark.parametrize("launcher", [[sys.executable, "-m", "harness"], [str(Path(sys.executable).with_name("impact-harness"))]],
                          ids=["python -m harness", "impact-harness"])
 def test_real_processes_exit_2_without_traceback(launcher: list[str], tmp_path: Path) -> None:
@@ -183,6 +184,7 @@ def test_stale_default_checkpoint_is_discarded_explicit_one_refused(tmp_path: Pa
     assert code == 2 and "argument --checkpoint" in err and "different run" in err
 
 
+@pytest.mark.slow  # the default sweep, in full
 def test_default_sweep_shows_the_period_adding_windows(tmp_path: Path, capsys) -> None:
     """The default `impact-harness sweep` (Figure 9, up and down), on a coarser grid: in both
     directions the maximal orbits come as period 1, 2, 3 with decreasing sigma."""

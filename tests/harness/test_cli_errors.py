@@ -130,6 +130,7 @@ def test_atomic_write_cleans_up_on_failure(tmp_path: Path) -> None:
             pass
 
 
+@pytest.mark.slow  # a real CLI process
 def test_broken_fmu_in_a_real_process(garbage_fmu: Path, tmp_path: Path) -> None:
     res = subprocess.run([sys.executable, "-m", "harness", "simulate", "--fmu", str(garbage_fmu), "--t-end", "1",
                           "--out", str(tmp_path / "x.nc"), "--no-progress"],

@@ -288,6 +288,7 @@ def test_an_impact_added_to_a_chatter_is_located_not_lost(sim, model) -> None:
     assert c == 4
 
 
+@pytest.mark.slow  # a continuation into sticking, each point shot
 def test_sticking_onset_is_located_where_the_orbit_stops_sticking(sim, model) -> None:
     """A rigid wall, r = 0.3: the period-1 orbit chatters into sticking (its D(F) is exactly 0)
     for sigma above ~2.419; followed down, its chatter loses impacts in a cascade and the orbit

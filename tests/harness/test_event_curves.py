@@ -94,6 +94,7 @@ def _point(curve, i):
     return curve.points[i]
 
 
+@pytest.mark.slow  # two-parameter continuations of Figure 9's edges
 def test_turning_point_closes_the_period_2_window(m2, fig9) -> None:
     fc, _ = m2
     closing = window_closing({"lower": fc.as_dict(), "upper": None}, (10.0, 1e4), SIGMA_RANGE)
@@ -110,6 +111,7 @@ def test_turning_point_closes_the_period_2_window(m2, fig9) -> None:
             assert bool(np.all(np.abs(orb.multipliers) < 1.0)) == stable or (stable and ds != 1.0), (factor, ds)
 
 
+@pytest.mark.slow  # two-parameter continuations of Figure 9's edges
 def test_graze_curve_points_graze_in_the_exact_flow(m2, fig9) -> None:
     _, gc = m2
     assert gc.kind == "graze" and len(gc.sigma) >= 5
@@ -143,6 +145,7 @@ def test_period_3_closes_where_flip_meets_graze(sim, fig9) -> None:
     assert closing["closes"] == pytest.approx(loss["p2"]) and "loses stability" in closing["how"]
 
 
+@pytest.mark.slow  # two-parameter continuations of Figure 9's edges
 def test_period_1_flip_runs_off_to_large_sigma(sim, fig9) -> None:
     flip, _ = _edges(sim, fig9, 1.0, 1)
     assert flip.kind == "flip"
@@ -191,6 +194,7 @@ def test_period_4_closes_at_the_tip_of_its_thin_window(sim, fig9) -> None:
         assert any(ok) == present, factor
 
 
+@pytest.mark.slow  # two-parameter continuations of Figure 9's edges
 def test_the_period_2_closing_is_the_same_with_cvode(m2, sim, fig9) -> None:
     """The FMU's other solver (CVODE, located crossings and variational equations) continues the flip
     from a point of the closed-form curve below the turn and finds the same turning point."""
@@ -218,6 +222,7 @@ def test_noise_turns_are_dropped_and_real_ones_kept() -> None:
     assert [x["side"] for x in kept] == ["max", "loses"] and kept[0]["p2"] == 1652.58
 
 
+@pytest.mark.slow  # two-parameter continuations of Figure 9's edges
 def test_a_flip_curve_in_r_on_a_linear_axis(sim, fig9) -> None:
     """Any FMU parameter as the second one, on a linear axis: Figure 9's period-2 flip continued in
     the restitution coefficient r; its points are flips of the exact flow at their r."""

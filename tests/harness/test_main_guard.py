@@ -25,6 +25,7 @@ def _run(tmp_path: Path, body: str) -> subprocess.CompletedProcess:
     return subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
 
 
+@pytest.mark.slow  # real scripts started with worker pools
 @pytest.mark.parametrize("layout", ["top level", "in a function called at top level"])
 def test_unguarded_script_gets_one_line(tmp_path: Path, layout: str) -> None:
     call = CALL.format(fmu=str(ROOT / "build" / "fmu" / "ImpactOscillator.fmu"))

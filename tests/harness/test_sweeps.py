@@ -158,6 +158,7 @@ def test_checkpoint_of_another_run_is_refused(tmp_path: Path, model: FmuModel) -
                   checkpoint=str(tmp_path / "c"), progress=False)
 
 
+@pytest.mark.slow  # a real pool worker killed
 def test_process_pool_loses_no_point_when_a_worker_dies(model: FmuModel, tmp_path: Path,
                                                         monkeypatch: pytest.MonkeyPatch) -> None:
     """A worker is SIGKILLed at a known point (the test hook, just before point 5 starts, once):
