@@ -23,7 +23,6 @@ CROSS = ROOT / "build" / "cross"
 WINEPREFIX = Path(os.environ.get("IMPACT_WINEPREFIX")
                   or Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "impact-grazing" / "wineprefix")
 WINE = "/usr/lib/wine/wine64"
-WINESERVER = "/usr/lib/wine/wineserver64"
 AARCH64_SYSROOT = "/usr/aarch64-linux-gnu"
 TOKEN = "{6c1f8a52-3d0e-4b8e-9a57-1e0f0b7c2a11}"
 
