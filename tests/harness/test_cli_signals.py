@@ -240,11 +240,29 @@ def test_folder_of_a_killed_serial_run_is_swept_by_the_next_run(tmp_path: Path) 
     assert not left[0].exists()
 
 
+def _child_goes_with_its_killed_parent(tmp_path: Path, source: str, what: str) -> None:
+    """Run ``source`` as a script that prints its child's pid and holds it; SIGKILL the script;
+    the child must exit (``what`` names it in a timeout).  A failed check leaves no process."""
+    script = tmp_path / "parent.py"
+    script.write_text(source)
+    proc = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE, text=True)
+    child = None
+    try:
+        child = psutil.Process(int(proc.stdout.readline()))
+        assert _alive(child)
+        proc.kill()
+        proc.wait(timeout=60)
+        _wait_for(lambda: _gone([child]), what, limit=60)
+    finally:
+        proc.kill()
+        if child is not None and _alive(child):
+            child.kill()
+
+
 def test_other_pools_of_the_harness_die_with_their_parent(tmp_path: Path) -> None:
     """The parallel shooting's pool uses init_child_process: its workers go with a SIGKILLed
     parent too."""
-    script = tmp_path / "parent.py"
-    script.write_text(
+    _child_goes_with_its_killed_parent(tmp_path, (
         "import multiprocessing, os, time\n"
         "from concurrent.futures import ProcessPoolExecutor\n"
         "from harness.io.children import init_child_process\n"
@@ -252,24 +270,14 @@ def test_other_pools_of_the_harness_die_with_their_parent(tmp_path: Path) -> Non
         "    ctx = multiprocessing.get_context('spawn')\n"
         "    pool = ProcessPoolExecutor(1, mp_context=ctx, initializer=init_child_process, initargs=(os.getpid(),))\n"
         "    print(pool.submit(os.getpid).result(), flush=True)\n"
-        "    time.sleep(600)  # hold the pool until killed\n")
-    proc = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE, text=True)
-    try:
-        worker = psutil.Process(int(proc.stdout.readline()))
-        assert _alive(worker)
-        proc.kill()
-        proc.wait(timeout=60)
-        _wait_for(lambda: _gone([worker]), "the pool worker to exit", limit=60)
-    finally:
-        proc.kill()
+        "    time.sleep(600)  # hold the pool until killed\n"), "the pool worker to exit")
 
 
 def test_a_worker_that_misses_the_death_signal_still_goes(tmp_path: Path) -> None:
     """The death signal can come too late to be handled (the kernel closes the dead parent's
     pipes first, and a worker already finalizing runs no Python handler): the watchdog thread
     sees the parent gone and ends the worker without it.  Here the worker ignores SIGTERM."""
-    script = tmp_path / "parent.py"
-    script.write_text(
+    _child_goes_with_its_killed_parent(tmp_path, (
         "import multiprocessing, os, signal, time\n"
         "from harness.io.children import die_with_parent\n"
         "def child(parent):\n"
@@ -280,16 +288,4 @@ def test_a_worker_that_misses_the_death_signal_still_goes(tmp_path: Path) -> Non
         "if __name__ == '__main__':\n"
         "    ctx = multiprocessing.get_context('spawn')\n"
         "    ctx.Process(target=child, args=(os.getpid(),)).start()\n"
-        "    time.sleep(600)  # hold the child until killed\n")
-    proc = subprocess.Popen([sys.executable, str(script)], cwd=ROOT, stdout=subprocess.PIPE, text=True)
-    worker = None
-    try:
-        worker = psutil.Process(int(proc.stdout.readline()))
-        assert _alive(worker)
-        proc.kill()
-        proc.wait(timeout=60)
-        _wait_for(lambda: _gone([worker]), "the worker to exit without its death signal", limit=60)
-    finally:
-        proc.kill()
-        if worker is not None and _alive(worker):
-            worker.kill()  # a failed test leaves no process behind
+        "    time.sleep(600)  # hold the child until killed\n"), "the worker to exit without its death signal")
