@@ -28,7 +28,7 @@ ARGS = ["--alpha", "0.5", "--gamma", "0.05", "--r", "0.8", "--wall", "compliant"
 def run(tmp_path_factory):
     out = tmp_path_factory.mktemp("windows")
     assert main(["windows", *ARGS, "--M-max", "3", "--quick", "--workers", "2", "--no-progress",
-                 "--out", str(out)]) == 0
+                 "--global-starts", "250", "--out", str(out)]) == 0  # the search's own coverage: test_global_search_windows
     return out, json.loads((out / "windows.json").read_text())
 
 
