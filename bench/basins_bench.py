@@ -112,7 +112,19 @@ def _measures(model, ds, params: dict, s, check: int) -> dict:
             "multiplier": [float(x) for x in ds["attractor_multiplier"].values]}
 
 
+_RUNS: dict[str, dict] = {}
+
+
 def run_child(spec: dict) -> dict:
+    """``child(spec)`` in a fresh process; a spec measured already in this run is not run again
+    (--quick's README grid is also its smallest grid, and its middle grid is the workers' one)."""
+    key = json.dumps(spec, sort_keys=True)
+    if key not in _RUNS:
+        _RUNS[key] = _run_child(spec)
+    return _RUNS[key]
+
+
+def _run_child(spec: dict) -> dict:
     proc = subprocess.run([sys.executable, __file__, "--child", json.dumps(spec)], capture_output=True, text=True,
                           timeout=3600, cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
     if proc.returncode != 0:
