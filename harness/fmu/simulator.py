@@ -94,13 +94,19 @@ class _DerivativeChain:
         """Start accumulating the derivatives afresh at the current time."""
         self._J = np.eye(2)
         self._S = np.zeros(2)
+        self._fresh = True
 
     def derivatives(self) -> tuple[np.ndarray, np.ndarray]:
         """(J, S): d(u, v)/d(u, v) and d(u, v)/d sigma from the last mark to now (copies)."""
         return self._J.copy(), self._S.copy()
 
     def _chain(self, Jk: np.ndarray, Sk: np.ndarray) -> None:
-        """Append one step's Jacobian ``Jk`` and sigma-derivative ``Sk`` to the chain."""
+        """Append one step's Jacobian ``Jk`` and sigma-derivative ``Sk`` to the chain (arrays of
+        the caller's own, kept).  The first step after a reset is the chain (Jk I = Jk and
+        Jk 0 + Sk = Sk to the bit): a period in one ``doStep`` takes no product."""
+        if self._fresh:
+            self._J, self._S, self._fresh = Jk, Sk, False
+            return
         self._S = Jk @ self._S + Sk
         self._J = Jk @ self._J
 
@@ -134,6 +140,7 @@ class FmuSimulator(_DerivativeChain):
         self._get_impacts = self._slave.getter([v[IMPACT_COUNTER]])
         self._init_vars: tuple[VariableInfo, VariableInfo] = (v[INITIAL_STATE[0]], v[INITIAL_STATE[1]])
         self._params: dict[str, Any] = {}
+        self._settable: dict[str, VariableInfo] = {}
         self._impact_offset = 0
         self.time = math.nan
         self.restarts = 0  # re-initializations to carry the state across a non-tunable change
@@ -160,7 +167,10 @@ class FmuSimulator(_DerivativeChain):
         for name, value in self._params.items():
             if name in INITIAL_STATE:
                 continue  # the state argument wins
-            values[self.model.check_settable(name)] = value
+            var = self._settable.get(name)
+            if var is None:  # checked once per name (a restart sets the same names again)
+                var = self._settable[name] = self.model.check_settable(name)
+            values[var] = value
         if self.derivatives_available:  # the harness decides (variational equations cost time)
             values[self.model.variables[SENSITIVITY_SWITCH]] = self._track
         values[self._init_vars[0]] = float(state[0])
@@ -281,8 +291,8 @@ class MappingSimulator(_DerivativeChain):
         for _ in range(k):
             if self._track:
                 Jk, Sk = self._derivative(self._u, self._v, self.time, self._params)
-                self._chain(np.asarray(Jk, dtype=float),
-                            np.zeros(2) if Sk is None else np.asarray(Sk, dtype=float))
+                self._chain(np.array(Jk, dtype=float),
+                            np.zeros(2) if Sk is None else np.array(Sk, dtype=float))
             self._u, self._v, m = self._step(self._u, self._v, self.time, self._params)
             self._n += int(m)
             self.time += 1.0
