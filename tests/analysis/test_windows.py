@@ -27,8 +27,9 @@ ARGS = ["--alpha", "0.5", "--gamma", "0.05", "--r", "0.8", "--wall", "compliant"
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
     out = tmp_path_factory.mktemp("windows")
+    # 250 fresh starts per sigma: the search's coverage at its default is test_global_search_windows'
     assert main(["windows", *ARGS, "--M-max", "3", "--quick", "--workers", "2", "--no-progress",
-                 "--global-starts", "250", "--out", str(out)]) == 0  # the search's own coverage: test_global_search_windows
+                 "--global-starts", "250", "--out", str(out)]) == 0
     return out, json.loads((out / "windows.json").read_text())
 
 

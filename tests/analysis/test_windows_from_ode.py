@@ -25,7 +25,7 @@ pytestmark = pytest.mark.slow
 OSC = ["--nu", "0.8", "--Omega", "2.5", "--r", "0.8"]
 #: Fresh starts of the global search per sigma: the edges checked here are those of the windows
 #: every route finds; the search's own coverage (1000 starts, the default) is
-#: test_global_search_windows' subject.  At the default it took 7 of each run's 11 s of CPU.
+#: test_global_search_windows' subject.  At the default it took 7 of the rigid run's 24 s of CPU.
 GLOBAL_STARTS = 250
 
 
