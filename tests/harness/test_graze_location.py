@@ -78,6 +78,26 @@ def test_entry_velocity_is_the_closed_form_orbits(sim, model, omega: float, v: f
     assert got == pytest.approx(v, rel=1e-9, abs=2e-11)
 
 
+def test_a_section_point_inside_a_compliant_wall_has_no_entry_velocity(sim, model) -> None:
+    """A compliant wall's orbit may be in contact at the section (u > 0): no free flight starts
+    there, so its period has no entry velocity (NaN), whatever the state.  (Random seed 171: the
+    free flight from such a point had a maximum above the wall with no sign change before it, and
+    the root search raised, ending the continuation of a flip; its bisection was 5e-5 off.)  A point
+    just outside the wall still gets its entry velocity."""
+    nu, Om = coco(1.0)
+    pmap = PeriodMap(sim, {**model.defaults(), "nu": nu, "Omega": Om, "r": 0.8, "wall": 1, "Gamma": 151.0,
+                           "solver": 1}, "sigma")
+    for u in (1e-12, 1e-6, 1e-3, 0.1, 0.5):
+        for v in np.linspace(-8.0, 8.0, 9):
+            assert math.isnan(entry_velocity(pmap, np.array([u, v]), 0.77))
+    nu_s, Om_s = coco(1.32)
+    orb = one_impact_orbit(nu_s, Om_s, 0.8, 0.5)
+    z = section_state(nu_s, Om_s, orb)
+    assert z[0] < 0.0
+    rigid = PeriodMap(sim, {**model.defaults(), "nu": nu_s, "Omega": Om_s, "r": 0.8, "wall": 2, "solver": 1}, "sigma")
+    assert entry_velocity(rigid, z, orb.sigma) == pytest.approx(0.5, rel=1e-9)
+
+
 @pytest.mark.parametrize("gamma_w,omega", [(10.0, 1.32), (100.0, 0.8), (1e4, 1.0)])
 def test_compliant_wall_free_orbit_grazes_at_sigma_zero(sim, model, gamma_w: float, omega: float) -> None:
     """The wall-free orbit of a compliant wall, continued up in sigma: its graze (gap = 0) within

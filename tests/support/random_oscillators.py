@@ -30,8 +30,9 @@ TWO_PI = 2.0 * math.pi
 #: Seeds of the fast tier (a few) and the slow tier (30 or more); IMPACT_RANDOM_SEEDS=N widens the
 #: slow tier to seeds 0..N-1 for a sweep by hand.
 FAST_SEEDS = (3, 12)
-#: 28: a summary's "does not agree ... is 0.011" read as a difference of 0 by the test's own check
-SLOW_SEEDS = (28, *range(100, 132))
+#: 28: a summary's "does not agree ... is 0.011" read as a difference of 0 by the test's own check;
+#: 171: a compliant wall's orbit in contact at the section ended a flip's continuation (graze_location)
+SLOW_SEEDS = (28, 171, *range(100, 132))
 
 
 def slow_seeds() -> tuple[int, ...]:

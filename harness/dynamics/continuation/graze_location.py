@@ -171,7 +171,7 @@ class _Flight:
         for i in range(1, t.size):
             if u[i] > 0.0 and u[i - 1] <= 0.0:
                 return brentq(lambda s: self.state(s)[0], t[i - 1], t[i], xtol=1e-16, rtol=1e-15)
-            if i < t.size - 1 and u[i] >= u[i - 1] and u[i] >= u[i + 1]:
+            if i < t.size - 1 and u[i] >= u[i - 1] and u[i] >= u[i + 1] and u[i - 1] <= 0.0:
                 # a maximum between samples may reach the wall by less than their spacing shows
                 tm = self.highest_near(t[i - 1], t[i + 1])
                 if self.state(tm)[0] > 0.0:
@@ -188,7 +188,10 @@ class _Flight:
 
 def entry_velocity(pmap: PeriodMap, z: np.ndarray, p: float) -> float:
     """Velocity at the first wall entry (u = 0 upward) of the free flight from the section point
-    ``z`` within one period; NaN when the flight does not reach the wall."""
+    ``z`` within one period; NaN when the flight does not reach the wall, or when ``z`` lies
+    inside it (a compliant wall's contact across the section: no free flight starts there)."""
+    if float(z[0]) > 0.0:
+        return math.nan
     fl = _Flight(pmap, z, p)
     tc = fl.first_entry(1.0)
     return math.nan if tc is None else fl.state(tc)[1]
